@@ -1,0 +1,28 @@
+# install(): static libraries, public headers, the CLI, an exported CMake
+# package (find_package(keygraph) -> keygraph::core, keygraph::build) and a
+# pkg-config file for the core.
+include(CMakePackageConfigHelpers)
+
+set(_kg_targets keygraph_core)
+if(KG_BUILD_TOOLS)
+  list(APPEND _kg_targets keygraph_build keygraph)
+endif()
+
+install(TARGETS ${_kg_targets}
+  EXPORT keygraphTargets
+  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/keygraph DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+
+set(_kg_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/keygraph)
+install(EXPORT keygraphTargets NAMESPACE keygraph:: DESTINATION ${_kg_cmake_dir})
+configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/keygraphConfig.cmake.in
+  ${PROJECT_BINARY_DIR}/keygraphConfig.cmake INSTALL_DESTINATION ${_kg_cmake_dir})
+write_basic_package_version_file(${PROJECT_BINARY_DIR}/keygraphConfigVersion.cmake
+  COMPATIBILITY SameMinorVersion)
+install(FILES ${PROJECT_BINARY_DIR}/keygraphConfig.cmake ${PROJECT_BINARY_DIR}/keygraphConfigVersion.cmake
+  DESTINATION ${_kg_cmake_dir})
+
+configure_file(${PROJECT_SOURCE_DIR}/cmake/keygraph.pc.in ${PROJECT_BINARY_DIR}/keygraph.pc @ONLY)
+install(FILES ${PROJECT_BINARY_DIR}/keygraph.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

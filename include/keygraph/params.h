@@ -1,0 +1,76 @@
+// Pipeline parameters. Defaults are the paper's values (Hashimoto & Cesar,
+// "Object Detection Using Keygraphs") where the paper gives one; the rest are
+// documented choices. Every field is stored in the model index, so the scene
+// side always processes frames exactly as the models were processed.
+#pragma once
+
+#include <cstdint>
+
+namespace kg {
+
+enum class KeypointDetector : std::uint8_t {
+  kHessian = 0,  // determinant of Hessian over scales (built into the core)
+  kMser = 1,     // OpenCV MSER region centroids (desktop only: needs OpenCV)
+};
+
+// Keygraph structure: number of vertices of the circuit (paper Fig. 6).
+enum class Structure : std::uint8_t {
+  kArc = 2,       // two vertices, one arc
+  kCircuit3 = 3,  // three-vertex circuit (paper's choice)
+  kCircuit4 = 4,  // four-vertex circuit
+};
+
+struct KeypointParams {
+  KeypointDetector detector = KeypointDetector::kHessian;
+  // Hessian detector: relative threshold on the scale-normalised
+  // determinant (images normalised to [0,1]).
+  float hessian_threshold = 0.0004f;
+  int hessian_octaves = 4;
+  int hessian_levels = 3;  // scale levels per octave
+  // MSER (OpenCV defaults besides the area limits).
+  int mser_delta = 5;
+  int mser_min_area = 30;
+  int mser_max_area = 14400;
+  // Model images are also processed at these scales (1, 1/sqrt2, 1/2 ...)
+  // and the keypoints mapped back, so scene instances smaller than the model
+  // still find their keypoints. Count of scales, each 1/sqrt(2) smaller.
+  int model_scales = 3;
+  // Model keypoints closer than this (pixels) are merged.
+  float model_merge_distance = 2.0f;
+};
+
+struct GraphParams {
+  Structure structure = Structure::kCircuit3;
+  float min_distance = 10.f;         // Chebyshev, model and scene arcs
+  float max_distance = 100.f;        // Chebyshev, model arcs only
+  float scene_sample_distance = 10.f;  // Chebyshev, scene keypoint sampling
+};
+
+struct DescriptorParams {
+  float blur_sigma = 1.0f;     // Gaussian blur before profiles
+  int profile_length = 30;     // l: mean profile resampled to this length
+  int coefficients = 3;        // m: DFT coefficients 1..m kept (<= kMaxCoefficients)
+  int parallel_offset = 1;     // pixels between the three parallel profiles
+  float similarity_threshold = 0.5f;  // Euclidean distance between arc descriptors
+};
+
+struct RansacParams {
+  double confidence = 0.99;        // P in log(1-P)/log(1-p^h)
+  int max_iterations = 2000;       // cap on iterations
+  double inlier_threshold = 4.0;   // reprojection error in scene pixels
+  int min_inliers = 12;            // distinct keypoint correspondences
+  int min_inlier_keygraphs = 3;    // keygraph correspondences fully inlier
+  double max_scale_change = 8.0;   // model-to-scene area scale, either way
+  double max_perspective = 0.005;  // |h31|,|h32| after normalising to model size
+  int max_instances = 4;           // instances of one model per frame
+  std::uint64_t seed = 0x6b657967;  // RANSAC random state, fixed for reproducibility
+};
+
+struct Params {
+  KeypointParams keypoints;
+  GraphParams graph;
+  DescriptorParams descriptor;
+  RansacParams ransac;
+};
+
+}  // namespace kg

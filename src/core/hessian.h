@@ -1,0 +1,35 @@
+// Determinant-of-Hessian keypoint detector over scales (the blob part of
+// Hessian-Affine without the affine adaptation): scale-normalised
+// det(H) = sigma^4 (Lxx Lyy - Lxy^2) on a Gaussian scale space, local maxima
+// in a 3x3x3 neighbourhood of (x, y, scale) above a threshold, refined to
+// sub-pixel position by a quadratic fit. The keypoint is the blob centre,
+// which for these symmetric regions is the region centroid.
+#pragma once
+
+#include <vector>
+
+#include "core/plane.h"
+#include "keygraph/image.h"
+#include "keygraph/params.h"
+#include "keygraph/types.h"
+
+namespace kg {
+
+class HessianDetector {
+ public:
+  // Clears `out` and fills it with at most `max_keypoints` keypoints, the
+  // strongest first (ties broken by position so the result is
+  // deterministic). Uses params.hessian_threshold, hessian_octaves and
+  // hessian_levels. Buffers are kept between calls and reused.
+  void detect(ImageView image, const KeypointParams& params, int max_keypoints,
+              std::vector<Keypoint>& out);
+
+ private:
+  Plane<float> base_;
+  std::vector<Plane<float>> levels_;       // Gaussian levels of one octave
+  std::vector<Plane<float>> responses_;    // det(H) of those levels
+  Plane<float> scratch_;
+  Plane<float> next_octave_;
+};
+
+}  // namespace kg

@@ -1,0 +1,109 @@
+// One RANSAC loop for every estimator (PoseLib style). An estimator
+// provides, for a pool of `sample_count()` samples (for keygraphs: keygraph
+// correspondences), minimal hypotheses from `sample_size()` distinct samples,
+// and a score:
+//
+//   struct Estimator {
+//     using Model = ...;
+//     int sample_count() const;
+//     int sample_size() const;                       // h in log(1-P)/log(1-p^h)
+//     bool hypothesis(const int* samples, Model& out);  // false: degenerate
+//     RansacScore score(const Model& m);             // see below
+//   };
+//
+// The adaptive iteration count uses the fraction of *samples* that are
+// inliers (score.sample_inliers / sample_count): for keygraphs, a keygraph
+// correspondence is an inlier when all keypoint correspondences it implies
+// are. Hypotheses are compared by score.point_inliers, then by lower
+// score.cost.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "core/rng.h"
+
+namespace kg {
+
+struct RansacScore {
+  int point_inliers = 0;   // e.g. distinct keypoint correspondences within threshold
+  int sample_inliers = 0;  // samples (keygraph correspondences) entirely inlier
+  double cost = 0.0;       // tie-breaker, lower is better (e.g. truncated error)
+};
+
+struct RansacOptions {
+  double confidence = 0.99;
+  int max_iterations = 2000;
+  int min_iterations = 0;
+};
+
+struct RansacStats {
+  int iterations = 0;          // hypotheses drawn
+  int valid_hypotheses = 0;    // hypotheses that were not degenerate
+  int required_iterations = 0; // adaptive bound at the end
+  RansacScore best;
+};
+
+// Iterations needed to draw one all-inlier sample of size h with
+// probability `confidence` when a fraction `inlier_ratio` of samples are
+// inliers: log(1 - P) / log(1 - p^h), clamped to [0, cap].
+inline int required_iterations(double inlier_ratio, int h, double confidence, int cap) {
+  if (inlier_ratio <= 0.0) return cap;
+  if (inlier_ratio >= 1.0) return 1;
+  const double good = std::pow(inlier_ratio, h);
+  if (good <= std::numeric_limits<double>::min()) return cap;
+  const double denom = std::log1p(-good);
+  if (denom >= 0.0) return cap;
+  const double n = std::ceil(std::log1p(-confidence) / denom);
+  if (!(n < static_cast<double>(cap))) return cap;
+  return n < 1.0 ? 1 : static_cast<int>(n);
+}
+
+// Draws `k` distinct integers from [0, n) into out (k <= n, small k).
+inline void draw_distinct(Rng& rng, int n, int k, int* out) {
+  for (int i = 0; i < k; ++i) {
+    for (;;) {
+      const int v = static_cast<int>(rng.uniform(static_cast<std::uint32_t>(n)));
+      bool fresh = true;
+      for (int j = 0; j < i; ++j) fresh = fresh && out[j] != v;
+      if (fresh) {
+        out[i] = v;
+        break;
+      }
+    }
+  }
+}
+
+template <class Estimator>
+RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
+                   typename Estimator::Model& best_model) {
+  RansacStats stats;
+  const int n = estimator.sample_count();
+  const int h = estimator.sample_size();
+  stats.required_iterations = options.max_iterations;
+  if (n < h || h <= 0 || h > 8) return stats;
+  int sample[8];
+  typename Estimator::Model model;
+  bool have_best = false;
+  while (stats.iterations < options.max_iterations &&
+         (stats.iterations < options.min_iterations ||
+          stats.iterations < stats.required_iterations)) {
+    ++stats.iterations;
+    draw_distinct(rng, n, h, sample);
+    if (!estimator.hypothesis(sample, model)) continue;
+    ++stats.valid_hypotheses;
+    const RansacScore s = estimator.score(model);
+    const bool better = !have_best || s.point_inliers > stats.best.point_inliers ||
+                        (s.point_inliers == stats.best.point_inliers && s.cost < stats.best.cost);
+    if (!better) continue;
+    have_best = true;
+    stats.best = s;
+    best_model = model;
+    stats.required_iterations = required_iterations(
+        static_cast<double>(s.sample_inliers) / n, h, options.confidence, options.max_iterations);
+  }
+  return stats;
+}
+
+}  // namespace kg
