@@ -37,6 +37,14 @@ struct KeypointParams {
   int model_scales = 3;
   // Model keypoints closer than this (pixels) are merged.
   float model_merge_distance = 2.0f;
+  // Strongest model keypoints kept per model (bounds arcs: ~n * neighbours).
+  int max_model_keypoints = 1500;
+};
+
+// Order in which scene keypoints are offered to the Chebyshev sampler.
+enum class SceneSampling : std::uint8_t {
+  kRandom = 0,     // random maximal subset (paper)
+  kStrongest = 1,  // strongest response first: repeatable across frames
 };
 
 struct GraphParams {
@@ -44,6 +52,7 @@ struct GraphParams {
   float min_distance = 10.f;         // Chebyshev, model and scene arcs
   float max_distance = 100.f;        // Chebyshev, model arcs only
   float scene_sample_distance = 10.f;  // Chebyshev, scene keypoint sampling
+  SceneSampling scene_sampling = SceneSampling::kRandom;
 };
 
 struct DescriptorParams {

@@ -1,0 +1,239 @@
+#include "build/model_builder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <system_error>
+
+#include <opencv2/imgproc.hpp>
+
+#include "build/image_io.h"
+#include "build/keypoints.h"
+#include "core/arc_descriptor.h"
+#include "core/blur.h"
+#include "core/crc32.h"
+#include "core/index_format.h"
+#include "core/kdtree.h"
+#include "core/keygraph.h"
+#include "core/plane.h"
+#include "core/sampling.h"
+
+namespace kg {
+
+namespace {
+
+// Model keypoints: the detector on the image at several scales, mapped back
+// to model pixels, near-duplicates merged (strongest kept).
+void model_keypoints(const cv::Mat& gray, const KeypointParams& params,
+                     std::vector<Keypoint>& out) {
+  KeypointExtractor extractor;
+  std::vector<Keypoint> all, level;
+  cv::Mat scaled;
+  for (int s = 0; s < params.model_scales; ++s) {
+    const double scale = std::pow(std::sqrt(0.5), s);
+    const int w = static_cast<int>(std::lround(gray.cols * scale));
+    const int h = static_cast<int>(std::lround(gray.rows * scale));
+    if (w < 32 || h < 32) break;
+    if (s == 0) {
+      scaled = gray;
+    } else {
+      cv::resize(gray, scaled, cv::Size(w, h), 0, 0, cv::INTER_AREA);
+    }
+    extractor.extract(scaled, params, 1 << 20, level);
+    const double sx = static_cast<double>(gray.cols) / w, sy = static_cast<double>(gray.rows) / h;
+    for (Keypoint k : level) {
+      // Pixel centres: x_model + 0.5 = (x_scaled + 0.5) * sx.
+      k.x = static_cast<float>((k.x + 0.5) * sx - 0.5);
+      k.y = static_cast<float>((k.y + 0.5) * sy - 0.5);
+      k.scale = static_cast<float>(k.scale * sx);
+      all.push_back(k);
+    }
+  }
+  std::stable_sort(all.begin(), all.end(),
+                   [](const Keypoint& a, const Keypoint& b) { return a.response > b.response; });
+  std::vector<int> kept;
+  SeparatedSampler sampler;
+  sampler.sample(all.data(), static_cast<int>(all.size()), std::max(params.model_merge_distance, 1e-3f),
+                 nullptr, kept);
+  std::sort(kept.begin(), kept.end());  // strongest first (all is sorted)
+  if (static_cast<int>(kept.size()) > params.max_model_keypoints)
+    kept.resize(static_cast<std::size_t>(params.max_model_keypoints));
+  out.clear();
+  for (int i : kept) out.push_back(all[i]);
+}
+
+}  // namespace
+
+Status build_model(const cv::Mat& gray, const std::string& name, const Params& params,
+                   BuiltModel& out) {
+  Status s = format::validate_params(params);
+  if (!s) return s;
+  if (gray.empty() || gray.type() != CV_8UC1)
+    return {StatusCode::kInvalidArgument, name + ": model image must be 8-bit gray"};
+  out = BuiltModel{};
+  out.name = name;
+  out.width = gray.cols;
+  out.height = gray.rows;
+
+  std::vector<Keypoint> keypoints;
+  model_keypoints(gray, params.keypoints, keypoints);
+  // Sort by position so arcs and files do not depend on response ties.
+  std::sort(keypoints.begin(), keypoints.end(), [](const Keypoint& a, const Keypoint& b) {
+    return a.y < b.y || (a.y == b.y && a.x < b.x);
+  });
+  for (const Keypoint& k : keypoints) out.keypoints.push_back({k.x, k.y});
+
+  Plane<std::uint8_t> blurred;
+  Plane<float> scratch;
+  gaussian_blur(view_of(gray), params.descriptor.blur_sigma, blurred, scratch);
+  const ImageView bv = view_of(blurred);
+  std::vector<float> profile;
+  const auto n = static_cast<std::uint32_t>(out.keypoints.size());
+  std::vector<std::uint32_t> offsets(n + 1, 0), to;
+  for (std::uint32_t a = 0; a < n; ++a) {
+    offsets[a] = static_cast<std::uint32_t>(out.arcs.size());
+    for (std::uint32_t b = 0; b < n; ++b) {
+      if (a == b || !is_model_arc(out.keypoints[a], out.keypoints[b], params.graph)) continue;
+      ArcDescriptor d;
+      if (!arc_descriptor(bv, out.keypoints[a], out.keypoints[b], params.descriptor, profile, d))
+        continue;
+      out.arcs.push_back({a, b});
+      out.descriptors.push_back(d);
+    }
+  }
+  offsets[n] = static_cast<std::uint32_t>(out.arcs.size());
+  to.reserve(out.arcs.size());
+  for (const ModelArc& arc : out.arcs) to.push_back(arc.to);
+  // Keygraphs over arcs that have descriptors (the ones selection can find).
+  GraphParams graph = params.graph;
+  out.keygraphs = count_model_keygraphs(out.keypoints.data(), static_cast<int>(n), offsets.data(),
+                                        to.data(), graph);
+  if (out.arcs.empty())
+    return {StatusCode::kInvalidArgument,
+            name + ": no model arcs (" + std::to_string(n) + " keypoints); image too small or flat"};
+  return Status::ok();
+}
+
+Status serialize_index(const std::vector<BuiltModel>& models, const Params& params,
+                       std::vector<std::uint8_t>& bytes) {
+  using namespace format;
+  Status s = validate_params(params);
+  if (!s) return s;
+  if (models.empty()) return {StatusCode::kInvalidArgument, "no models to write"};
+
+  // Gather global arrays.
+  std::vector<std::uint8_t> records(models.size() * kModelRecordSize, 0);
+  std::string strings;
+  std::vector<Point2f> keypoints;
+  std::vector<ModelArc> arcs;
+  std::vector<ArcDescriptor> descriptors;
+  for (std::size_t m = 0; m < models.size(); ++m) {
+    const BuiltModel& model = models[m];
+    if (model.name.empty()) return {StatusCode::kInvalidArgument, "model with an empty name"};
+    std::uint8_t* r = records.data() + m * kModelRecordSize;
+    const auto kp_begin = static_cast<std::uint32_t>(keypoints.size());
+    store<std::uint32_t>(r + kModNameOffset, static_cast<std::uint32_t>(strings.size()));
+    store<std::uint32_t>(r + kModNameLength, static_cast<std::uint32_t>(model.name.size()));
+    store<float>(r + kModWidth, static_cast<float>(model.width));
+    store<float>(r + kModHeight, static_cast<float>(model.height));
+    store<std::uint32_t>(r + kModKeypointBegin, kp_begin);
+    store<std::uint32_t>(r + kModKeypointCount, static_cast<std::uint32_t>(model.keypoints.size()));
+    store<std::uint32_t>(r + kModArcBegin, static_cast<std::uint32_t>(arcs.size()));
+    store<std::uint32_t>(r + kModArcCount, static_cast<std::uint32_t>(model.arcs.size()));
+    store<std::uint64_t>(r + kModKeygraphCount, model.keygraphs);
+    // Outline: the image rectangle through the pixel centres of its corners,
+    // clockwise on screen.
+    const float w = static_cast<float>(model.width - 1), h = static_cast<float>(model.height - 1);
+    const float outline[8] = {0.f, 0.f, w, 0.f, w, h, 0.f, h};
+    for (int c = 0; c < 8; ++c) store<float>(r + kModOutline + 4 * c, outline[c]);
+    strings += model.name;
+    keypoints.insert(keypoints.end(), model.keypoints.begin(), model.keypoints.end());
+    for (const ModelArc& a : model.arcs) arcs.push_back({a.from + kp_begin, a.to + kp_begin});
+    descriptors.insert(descriptors.end(), model.descriptors.begin(), model.descriptors.end());
+  }
+  std::vector<ArcDescriptor> tree_points;
+  std::vector<std::uint32_t> tree_ids;
+  std::vector<KdNode> tree_nodes;
+  build_kdtree(descriptors.data(), static_cast<std::uint32_t>(descriptors.size()), tree_points,
+               tree_ids, tree_nodes);
+
+  struct Payload {
+    std::uint32_t id;
+    const void* data;
+    std::size_t size;
+    std::uint32_t count;
+  };
+  const Payload payloads[kSectionCount] = {
+      {kSectionModels, records.data(), records.size(), static_cast<std::uint32_t>(models.size())},
+      {kSectionStrings, strings.data(), strings.size(), static_cast<std::uint32_t>(strings.size())},
+      {kSectionKeypoints, keypoints.data(), keypoints.size() * sizeof(Point2f),
+       static_cast<std::uint32_t>(keypoints.size())},
+      {kSectionArcs, arcs.data(), arcs.size() * sizeof(ModelArc), static_cast<std::uint32_t>(arcs.size())},
+      {kSectionDescriptors, tree_points.data(), tree_points.size() * sizeof(ArcDescriptor),
+       static_cast<std::uint32_t>(tree_points.size())},
+      {kSectionTreeIds, tree_ids.data(), tree_ids.size() * sizeof(std::uint32_t),
+       static_cast<std::uint32_t>(tree_ids.size())},
+      {kSectionTreeNodes, tree_nodes.data(), tree_nodes.size() * sizeof(KdNode),
+       static_cast<std::uint32_t>(tree_nodes.size())},
+  };
+  const std::size_t params_offset = kHeaderSize;
+  const std::size_t table_offset = params_offset + kParamsSize;
+  const std::size_t table_end = table_offset + kSectionCount * kSectionEntrySize;
+  std::size_t offset = align_up(table_end);
+  std::size_t offsets[kSectionCount];
+  for (std::uint32_t i = 0; i < kSectionCount; ++i) {
+    offsets[i] = offset;
+    offset = align_up(offset + payloads[i].size);
+  }
+  bytes.assign(offset, 0);
+  std::uint8_t* d = bytes.data();
+  std::copy(std::begin(kMagic), std::end(kMagic), d + kOffMagic);
+  store<std::uint16_t>(d + kOffMajor, kVersionMajor);
+  store<std::uint16_t>(d + kOffMinor, kVersionMinor);
+  store<std::uint32_t>(d + kOffHeaderSize, static_cast<std::uint32_t>(kHeaderSize));
+  store<std::uint64_t>(d + kOffFileSize, static_cast<std::uint64_t>(bytes.size()));
+  store<std::uint32_t>(d + kOffParamsOffset, static_cast<std::uint32_t>(params_offset));
+  store<std::uint32_t>(d + kOffParamsSize, static_cast<std::uint32_t>(kParamsSize));
+  store<std::uint32_t>(d + kOffTableOffset, static_cast<std::uint32_t>(table_offset));
+  store<std::uint32_t>(d + kOffSectionCount, kSectionCount);
+  serialize_params(params, d + params_offset);
+  for (std::uint32_t i = 0; i < kSectionCount; ++i) {
+    const Payload& p = payloads[i];
+    if (p.size > 0) std::memcpy(d + offsets[i], p.data, p.size);
+    std::uint8_t* e = d + table_offset + i * kSectionEntrySize;
+    store<std::uint32_t>(e + kEntId, p.id);
+    store<std::uint32_t>(e + kEntEncoding, p.id == kSectionDescriptors ? kFloat32 : 0U);
+    store<std::uint64_t>(e + kEntOffset, offsets[i]);
+    store<std::uint64_t>(e + kEntSize, p.size);
+    store<std::uint32_t>(e + kEntCount, p.count);
+    store<std::uint32_t>(e + kEntCrc, crc32(d + offsets[i], p.size));
+  }
+  store<std::uint32_t>(d + kOffHeaderCrc, crc32(d, table_end));
+  return Status::ok();
+}
+
+Status write_index(const std::vector<BuiltModel>& models, const Params& params,
+                   const std::string& path) {
+  std::vector<std::uint8_t> bytes;
+  Status s = serialize_index(models, params, bytes);
+  if (!s) return s;
+  const std::string tmp = path + ".tmp";
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (f == nullptr) return {StatusCode::kIoError, "cannot write " + path};
+  const bool written = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
+  const bool closed = std::fclose(f) == 0;
+  std::error_code ec;
+  if (!written || !closed) {
+    std::filesystem::remove(tmp, ec);
+    return {StatusCode::kIoError, "cannot write " + path + " (disk full?)"};
+  }
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    return {StatusCode::kIoError, "cannot rename into " + path};
+  }
+  return Status::ok();
+}
+
+}  // namespace kg

@@ -1,0 +1,89 @@
+// keygraph detect --index I.kgi [--json] [--draw OUT.png] SCENE...
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+#include "build/desktop_detect.h"
+#include "build/image_io.h"
+#include "cli/commands.h"
+#include "cli/json.h"
+
+namespace kg::cli {
+
+namespace {
+
+// With several scenes, --draw OUT.png becomes OUT_<scene stem>.png.
+std::string draw_path(const std::string& draw, const std::string& scene, bool several) {
+  if (!several) return draw;
+  const std::filesystem::path p(draw);
+  const std::string name =
+      p.stem().string() + "_" + std::filesystem::path(scene).stem().string() + p.extension().string();
+  return (p.parent_path() / name).string();
+}
+
+}  // namespace
+
+int cmd_detect(const Args& args) {
+  std::string index_path, draw;
+  bool json = false;
+  std::vector<std::string> scenes;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a == "--index" || a == "--draw") {
+      if (i + 1 >= args.size()) return fail("detect: " + a + " needs a value");
+      (a == "--index" ? index_path : draw) = args[++i];
+    } else if (a == "--json") {
+      json = true;
+    } else if (!a.empty() && a[0] == '-') {
+      return fail("detect: unknown option " + a);
+    } else {
+      scenes.push_back(a);
+    }
+  }
+  if (index_path.empty()) return fail("detect: no index given (--index I.kgi)");
+  if (scenes.empty()) return fail("detect: no scene images given");
+  ModelIndex index;
+  Status s = ModelIndex::open(index_path, index);
+  if (!s) return fail(s.message());
+  DesktopDetector detector(index);
+  int exit_code = 0;
+  DetectionList found;
+  for (const std::string& scene : scenes) {
+    cv::Mat gray;
+    s = load_gray(scene, gray);
+    if (!s) {
+      exit_code = fail(s.message());
+      continue;
+    }
+    const auto start = std::chrono::steady_clock::now();
+    s = detector.detect(gray, found);
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    if (!s) {
+      exit_code = fail(scene + ": " + s.message());
+      continue;
+    }
+    if (json) {
+      std::printf("%s\n",
+                  detection_json(scene, gray.cols, gray.rows, ms, found, detector.stats()).c_str());
+    } else {
+      std::printf("%s: %zu detection(s) in %.1f ms\n", scene.c_str(), found.size(), ms);
+      for (const Detection& d : found) {
+        std::printf("  %.*s: inliers %d, score %.3f, corners", static_cast<int>(d.model_name.size()),
+                    d.model_name.data(), d.inliers, d.score);
+        for (const Point2f& c : d.corners) std::printf(" (%.1f, %.1f)", c.x, c.y);
+        std::printf("\n");
+      }
+    }
+    std::fflush(stdout);
+    if (!draw.empty()) {
+      std::string error;
+      if (!write_image_atomically(draw_path(draw, scene, scenes.size() > 1),
+                                  draw_detections(gray, found), error))
+        exit_code = fail(error);
+    }
+  }
+  return exit_code;
+}
+
+}  // namespace kg::cli

@@ -1,1 +1,84 @@
-int main() { return 0; }
+// keygraph: build model indexes and detect models in images.
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <string>
+#include <system_error>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "cli/commands.h"
+
+namespace kg::cli {
+
+int fail(const std::string& message) {
+  std::fprintf(stderr, "keygraph: %s\n", message.c_str());
+  return 1;
+}
+
+bool write_image_atomically(const std::string& path, const cv::Mat& image, std::string& error) {
+  const std::filesystem::path target(path);
+  std::string ext = target.extension().string();
+  if (ext.empty()) {
+    error = path + ": output image needs an extension such as .png";
+    return false;
+  }
+  // Temporary name keeps the extension so the encoder is chosen from it.
+  const std::string tmp = (target.parent_path() / (".tmp-" + target.filename().string())).string();
+  bool ok = false;
+  try {
+    ok = cv::imwrite(tmp, image);
+  } catch (const cv::Exception&) {
+    ok = false;
+  }
+  std::error_code ec;
+  if (!ok) {
+    std::filesystem::remove(tmp, ec);
+    error = "cannot write image " + path;
+    return false;
+  }
+  std::filesystem::rename(tmp, target, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    error = "cannot write image " + path;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace kg::cli
+
+namespace {
+
+void usage(std::FILE* out) {
+  std::fprintf(out,
+               "usage: keygraph <command> [options]\n"
+               "\n"
+               "commands:\n"
+               "  build [--name NAME]... [--detector hessian|mser] [--structure 2|3|4]\n"
+               "        MODEL.png... -o OUT.kgi     compile model images into one index\n"
+               "  detect --index I.kgi [--json] [--draw OUT.png] SCENE...\n"
+               "                                    find the index's models in scene images\n"
+               "  demo [--out DIR]                  build box.png from opencv-doc and find it\n"
+               "                                    in box_in_scene.png\n"
+               "  help                              this text\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    usage(stderr);
+    return 2;
+  }
+  const std::string command = argv[1];
+  kg::cli::Args args(argv + 2, argv + argc);
+  if (command == "build") return kg::cli::cmd_build(args);
+  if (command == "detect") return kg::cli::cmd_detect(args);
+  if (command == "demo") return kg::cli::cmd_demo(args);
+  if (command == "help" || command == "--help" || command == "-h") {
+    usage(stdout);
+    return 0;
+  }
+  return kg::cli::fail("unknown command '" + command + "' (see keygraph help)");
+}

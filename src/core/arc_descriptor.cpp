@@ -1,0 +1,241 @@
+#include "core/arc_descriptor.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+
+namespace kg {
+namespace {
+
+// Longest resampled profile accepted: bounds the stack buffers below.
+constexpr int kMaxProfileLength = 256;
+// The paper's l; its DFT table is built once, other lengths use a fallback.
+constexpr int kTableLength = 30;
+// A profile whose kept coefficients have a norm below this fraction of
+// length * max|f| is flat: what is left is float rounding, not signal.
+constexpr float kFlatTolerance = 1e-5f;
+constexpr double kTwoPi = 6.283185307179586476925286766559;
+
+struct DftTable {
+  float cos[kMaxCoefficients][kTableLength];
+  float sin[kMaxCoefficients][kTableLength];
+};
+
+const DftTable& table30() {
+  static const DftTable table = [] {
+    DftTable t{};
+    for (int x = 0; x < kMaxCoefficients; ++x) {
+      for (int y = 0; y < kTableLength; ++y) {
+        // Reduce x*y mod l first so every entry is exactly periodic.
+        const double angle = kTwoPi * ((x + 1) * y % kTableLength) / kTableLength;
+        t.cos[x][y] = static_cast<float>(std::cos(angle));
+        t.sin[x][y] = static_cast<float>(std::sin(angle));
+      }
+    }
+    return t;
+  }();
+  return table;
+}
+
+// Rounds to the nearest pixel; false when that pixel is outside [0, size).
+// Written so NaN and huge values fail the test before any conversion.
+bool round_inside(float v, int size, int& out) {
+  const float shifted = v + 0.5f;
+  if (!(shifted >= 0.f && shifted < static_cast<float>(size))) return false;
+  out = static_cast<int>(std::floor(shifted));
+  return out < size;
+}
+
+}  // namespace
+
+bool mean_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset,
+                  std::vector<float>& profile) {
+  if (blurred.empty()) return false;
+  int ax, ay, bx, by;
+  if (!round_inside(a.x, blurred.width, ax) || !round_inside(a.y, blurred.height, ay) ||
+      !round_inside(b.x, blurred.width, bx) || !round_inside(b.y, blurred.height, by)) {
+    return false;
+  }
+  const int dx = bx - ax;
+  const int dy = by - ay;
+  const int adx = std::abs(dx);
+  const int ady = std::abs(dy);
+  if (adx == 0 && ady == 0) return false;
+
+  // Major axis x when the line is more horizontal than vertical; the
+  // parallel profiles are offset along the other (minor) axis.
+  const bool x_major = adx > ady;
+  const int par = std::abs(parallel_offset);
+  const int pdx = x_major ? 0 : par;
+  const int pdy = x_major ? par : 0;
+  // Every Bresenham pixel lies in the endpoints' bounding box, so one box
+  // test widened by the parallel offset covers all three profiles.
+  if (std::min(ax, bx) - pdx < 0 || std::max(ax, bx) + pdx >= blurred.width ||
+      std::min(ay, by) - pdy < 0 || std::max(ay, by) + pdy >= blurred.height) {
+    return false;
+  }
+
+  const std::ptrdiff_t stride = blurred.stride;
+  const std::ptrdiff_t sx = dx >= 0 ? 1 : -1;
+  const std::ptrdiff_t sy = dy >= 0 ? stride : -stride;
+  const std::ptrdiff_t major_step = x_major ? sx : sy;
+  const std::ptrdiff_t minor_step = x_major ? sy : sx;
+  const std::ptrdiff_t par_step = x_major ? par * stride : par;
+  const bool minor_positive = (x_major ? dy : dx) > 0;
+  const std::ptrdiff_t d = x_major ? adx : ady;   // Chebyshev length
+  const std::ptrdiff_t dm = x_major ? ady : adx;  // |minor delta|
+
+  const std::size_t n = static_cast<std::size_t>(d) + 1;
+  if (profile.capacity() < n) profile.reserve(std::max<std::size_t>({n, 2 * profile.capacity(), 128}));
+  profile.resize(n);
+  float* out = profile.data();
+
+  // Minor offset at step t is t*dm/d rounded to nearest. rem tracks
+  // (2*t*dm + d) mod 2d, so p sits on the round-half-up pixel and rem == 0
+  // flags an exact half. Ties go toward the nearer endpoint, and the one at
+  // the midpoint toward the smaller image coordinate: both are properties of
+  // the segment, not of the walking direction, so b -> a visits exactly the
+  // pixels of a -> b reversed.
+  const std::uint8_t* p = blurred.row(ay) + ax;
+  std::ptrdiff_t rem = d;
+  constexpr float kThird = 1.f / 3.f;
+  for (std::ptrdiff_t t = 0; t <= d; ++t) {
+    const std::uint8_t* q = p;
+    if (rem == 0 && (2 * t < d || (2 * t == d && minor_positive))) q -= minor_step;
+    const int sum = int{q[0]} + int{q[-par_step]} + int{q[par_step]};
+    out[t] = static_cast<float>(sum) * kThird;
+    p += major_step;
+    rem += 2 * dm;
+    if (rem >= 2 * d) {
+      rem -= 2 * d;
+      p += minor_step;
+    }
+  }
+  return true;
+}
+
+void resample_linear(const float* in, int n, float* out, int length) {
+  if (length <= 0) return;
+  if (n <= 0) {
+    std::fill(out, out + length, 0.f);
+    return;
+  }
+  if (n == 1 || length == 1) {
+    std::fill(out, out + length, in[0]);
+    return;
+  }
+  // Position i*(n-1)/L kept as integer j plus remainder r/L: no drift, the
+  // last sample lands exactly on in[n-1], and the weights (L-r)/L and r/L are
+  // mirror images for the reversed profile.
+  const int last = length - 1;
+  const float inv = 1.f / static_cast<float>(last);
+  const int step = (n - 1) / last;
+  const int step_rem = (n - 1) % last;
+  int j = 0;
+  int r = 0;
+  for (int i = 0; i < length; ++i) {
+    if (r == 0) {
+      out[i] = in[j];
+    } else {
+      const float w1 = static_cast<float>(r) * inv;
+      const float w0 = static_cast<float>(last - r) * inv;
+      out[i] = w0 * in[j] + w1 * in[j + 1];
+    }
+    j += step;
+    r += step_rem;
+    if (r >= last) {
+      r -= last;
+      ++j;
+    }
+  }
+}
+
+bool descriptor_from_profile(const float* profile, int length, int coefficients,
+                             ArcDescriptor& out) {
+  out.fill(0.f);
+  if (length < 2 || length > kMaxProfileLength || coefficients < 1 ||
+      coefficients > kMaxCoefficients || coefficients >= length) {
+    return false;
+  }
+
+  // F(0) is dropped anyway; removing the mean first keeps the float sums
+  // small, so a brightness offset changes the result only in the last bits.
+  float sum = 0.f;
+  float max_abs = 0.f;
+  for (int y = 0; y < length; ++y) {
+    sum += profile[y];
+    max_abs = std::max(max_abs, std::fabs(profile[y]));
+  }
+  const float mean = sum / static_cast<float>(length);
+  float dev[kMaxProfileLength];
+  for (int y = 0; y < length; ++y) dev[y] = profile[y] - mean;
+
+  float re[kMaxCoefficients] = {};
+  float im[kMaxCoefficients] = {};
+  if (length == kTableLength) {
+    // All kMaxCoefficients at once: six independent sums pipeline well, and
+    // the unused ones cost less than a loop over a runtime count.
+    const DftTable& t = table30();
+    float c[kMaxCoefficients] = {};
+    float s[kMaxCoefficients] = {};
+    for (int y = 0; y < kTableLength; ++y) {
+      for (int x = 0; x < kMaxCoefficients; ++x) {
+        c[x] += dev[y] * t.cos[x][y];
+        s[x] += dev[y] * t.sin[x][y];
+      }
+    }
+    for (int x = 0; x < coefficients; ++x) {
+      re[x] = c[x];
+      im[x] = -s[x];
+    }
+  } else {
+    float cos_k[kMaxProfileLength];
+    float sin_k[kMaxProfileLength];
+    for (int k = 0; k < length; ++k) {
+      const double angle = kTwoPi * k / length;
+      cos_k[k] = static_cast<float>(std::cos(angle));
+      sin_k[k] = static_cast<float>(std::sin(angle));
+    }
+    for (int x = 1; x <= coefficients; ++x) {
+      float c = 0.f, s = 0.f;
+      int k = 0;  // x*y mod length
+      for (int y = 0; y < length; ++y) {
+        c += dev[y] * cos_k[k];
+        s += dev[y] * sin_k[k];
+        k += x;
+        if (k >= length) k -= length;
+      }
+      re[x - 1] = c;
+      im[x - 1] = -s;
+    }
+  }
+
+  float energy = 0.f;
+  for (int x = 0; x < coefficients; ++x) energy += re[x] * re[x] + im[x] * im[x];
+  const float floor_norm = kFlatTolerance * static_cast<float>(length) * max_abs;
+  if (!(energy > floor_norm * floor_norm)) return false;  // also rejects NaN and zero
+  const float inv_norm = 1.f / std::sqrt(energy);
+  for (int x = 0; x < coefficients; ++x) {
+    out[2 * x] = re[x] * inv_norm;
+    out[2 * x + 1] = im[x] * inv_norm;
+  }
+  return true;
+}
+
+bool arc_descriptor(ImageView blurred, Point2f a, Point2f b, const DescriptorParams& params,
+                    std::vector<float>& scratch, ArcDescriptor& out) {
+  out.fill(0.f);
+  const int length = params.profile_length;
+  if (length < 2 || length > kMaxProfileLength || params.coefficients < 1 ||
+      params.coefficients > kMaxCoefficients || params.coefficients >= length) {
+    return false;
+  }
+  if (!mean_profile(blurred, a, b, params.parallel_offset, scratch)) return false;
+  float resampled[kMaxProfileLength];
+  resample_linear(scratch.data(), static_cast<int>(scratch.size()), resampled, length);
+  return descriptor_from_profile(resampled, length, params.coefficients, out);
+}
+
+}  // namespace kg

@@ -1,0 +1,239 @@
+#include "core/hessian.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+
+#include "core/blur.h"
+
+namespace kg {
+namespace {
+
+constexpr float kSigma0 = 1.6f;      // first level of each octave (Lowe's SIFT value)
+constexpr float kInputSigma = 0.5f;  // blur a camera image already has
+constexpr int kBorder = 2;           // det(H) reads 1 px around, the 3x3x3 test 1 more
+constexpr double kMaxOffset = 0.6;   // larger refinement offsets: not a stable extremum
+
+// Strongest first; ties by position so the order never depends on the scan.
+bool stronger(const Keypoint& a, const Keypoint& b) {
+  if (a.response != b.response) return a.response > b.response;
+  if (a.y != b.y) return a.y < b.y;
+  if (a.x != b.x) return a.x < b.x;
+  return a.scale < b.scale;
+}
+
+// Keeps the `max_keypoints` strongest in `out`, a heap whose front is the
+// weakest kept, so memory stays bounded however many extrema there are.
+void offer(const Keypoint& kp, int max_keypoints, std::vector<Keypoint>& out) {
+  if (static_cast<int>(out.size()) < max_keypoints) {
+    out.push_back(kp);
+    std::push_heap(out.begin(), out.end(), stronger);
+  } else if (stronger(kp, out.front())) {
+    std::pop_heap(out.begin(), out.end(), stronger);
+    out.back() = kp;
+    std::push_heap(out.begin(), out.end(), stronger);
+  }
+}
+
+void to_unit_float(ImageView image, Plane<float>& dst) {
+  dst.resize(image.width, image.height);
+  constexpr float kScale = 1.f / 255.f;
+  for (int y = 0; y < image.height; ++y) {
+    const std::uint8_t* s = image.row(y);
+    float* d = dst.row(y);
+    for (int x = 0; x < image.width; ++x) d[x] = kScale * static_cast<float>(s[x]);
+  }
+}
+
+// Scale-normalised sigma^4 (Lxx Lyy - Lxy^2) by central differences, for
+// every pixel with all 8 neighbours; the 1-px frame is never read.
+void hessian_response(const Plane<float>& L, float sigma, Plane<float>& R) {
+  const int w = L.width();
+  const int h = L.height();
+  R.resize(w, h);
+  const float norm = sigma * sigma * sigma * sigma;
+  for (int y = 1; y < h - 1; ++y) {
+    const float* a = L.row(y - 1);
+    const float* b = L.row(y);
+    const float* c = L.row(y + 1);
+    float* r = R.row(y);
+    for (int x = 1; x < w - 1; ++x) {
+      const float dxx = (b[x - 1] + b[x + 1]) - 2.f * b[x];
+      const float dyy = (a[x] + c[x]) - 2.f * b[x];
+      const float dxy = 0.25f * ((c[x + 1] - c[x - 1]) - (a[x + 1] - a[x - 1]));
+      r[x] = norm * (dxx * dyy - dxy * dxy);
+    }
+  }
+}
+
+// Every other pixel from (0, 0): octave pixel (x, y) is the previous octave's
+// pixel (2x, 2y), so positions scale by exactly 2 with no half-pixel shift.
+// The source level has twice the first level's sigma, so this does not alias.
+void decimate(const Plane<float>& src, Plane<float>& dst) {
+  const int w = (src.width() + 1) / 2;
+  const int h = (src.height() + 1) / 2;
+  dst.resize(w, h);
+  for (int y = 0; y < h; ++y) {
+    const float* s = src.row(2 * y);
+    float* d = dst.row(y);
+    for (int x = 0; x < w; ++x) d[x] = s[2 * x];
+  }
+}
+
+// Solves H o = -g (H symmetric 3x3) by Cramer's rule; false when singular.
+bool solve_offset(const double H[3][3], const double g[3], double o[3]) {
+  const double c00 = H[1][1] * H[2][2] - H[1][2] * H[2][1];
+  const double c01 = H[1][2] * H[2][0] - H[1][0] * H[2][2];
+  const double c02 = H[1][0] * H[2][1] - H[1][1] * H[2][0];
+  const double det = H[0][0] * c00 + H[0][1] * c01 + H[0][2] * c02;
+  if (!(std::fabs(det) > 0.0)) return false;
+  const double inv[3][3] = {
+      {c00, H[0][2] * H[2][1] - H[0][1] * H[2][2], H[0][1] * H[1][2] - H[0][2] * H[1][1]},
+      {c01, H[0][0] * H[2][2] - H[0][2] * H[2][0], H[0][2] * H[1][0] - H[0][0] * H[1][2]},
+      {c02, H[0][1] * H[2][0] - H[0][0] * H[2][1], H[0][0] * H[1][1] - H[0][1] * H[1][0]}};
+  for (int i = 0; i < 3; ++i)
+    o[i] = -(inv[i][0] * g[0] + inv[i][1] * g[1] + inv[i][2] * g[2]) / det;
+  return std::isfinite(o[0]) && std::isfinite(o[1]) && std::isfinite(o[2]);
+}
+
+struct LevelInfo {
+  int level;           // scale index inside the octave
+  float octave_scale;  // 2^octave: octave pixels to input pixels
+  float threshold;
+  float sigma0;
+  float log_k;  // log of the scale ratio between levels
+};
+
+// Local maxima of `mid` over its 26 neighbours in (lo, mid, hi), refined and
+// offered to `out`. A plateau yields one maximum: values must be strictly
+// above the neighbours before them in (scale, y, x) order, and at least
+// equal to those after.
+void scan_level(const Plane<float>& lo, const Plane<float>& mid, const Plane<float>& hi,
+                const LevelInfo& info, int max_keypoints, std::vector<std::uint8_t>& mask,
+                std::vector<Keypoint>& out) {
+  const int w = mid.width();
+  const int h = mid.height();
+  mask.resize(static_cast<std::size_t>(w) + 8);  // +8: the skip reads 8 bytes at a time
+  std::uint8_t* cand = mask.data();
+  const float thr = info.threshold;
+  for (int y = kBorder; y < h - kBorder; ++y) {
+    const float* m0 = mid.row(y - 1);
+    const float* m1 = mid.row(y);
+    const float* m2 = mid.row(y + 1);
+    // Branch-free pre-filter the compiler vectorises: above the threshold and
+    // above the 4 nearest neighbours. Few pixels pass, so the full test
+    // below runs rarely and its branches stay predictable.
+    for (int x = kBorder; x < w - kBorder; ++x) {
+      const float v = m1[x];
+      cand[x] = static_cast<std::uint8_t>((v > thr) & (v > m1[x - 1]) & (v >= m1[x + 1]) &
+                                          (v > m0[x]) & (v >= m2[x]));
+    }
+    std::fill(cand + (w - kBorder), cand + w + 8, std::uint8_t{0});
+    for (int x = kBorder; x < w - kBorder; ++x) {
+      if ((x & 7) == 0) {
+        std::uint64_t eight;
+        std::memcpy(&eight, cand + x, sizeof eight);
+        if (eight == 0) {
+          x += 7;
+          continue;
+        }
+      }
+      if (!cand[x]) continue;
+      const float v = m1[x];
+      if (!(v > m0[x - 1] && v > m0[x + 1] && v >= m2[x - 1] && v >= m2[x + 1])) continue;
+      const float* l0 = lo.row(y - 1);
+      const float* l1 = lo.row(y);
+      const float* l2 = lo.row(y + 1);
+      const float* h0 = hi.row(y - 1);
+      const float* h1 = hi.row(y);
+      const float* h2 = hi.row(y + 1);
+      bool is_max = true;
+      for (int dx = -1; dx <= 1 && is_max; ++dx)
+        is_max = v > l0[x + dx] && v > l1[x + dx] && v > l2[x + dx] && v >= h0[x + dx] &&
+                 v >= h1[x + dx] && v >= h2[x + dx];
+      if (!is_max) continue;
+
+      // Quadratic fit in (x, y, scale) from central differences.
+      const double c = v;
+      const double g[3] = {0.5 * (static_cast<double>(m1[x + 1]) - m1[x - 1]),
+                           0.5 * (static_cast<double>(m2[x]) - m0[x]),
+                           0.5 * (static_cast<double>(h1[x]) - l1[x])};
+      const double dxx = static_cast<double>(m1[x + 1]) + m1[x - 1] - 2.0 * c;
+      const double dyy = static_cast<double>(m2[x]) + m0[x] - 2.0 * c;
+      const double dss = static_cast<double>(h1[x]) + l1[x] - 2.0 * c;
+      const double dxy = 0.25 * ((static_cast<double>(m2[x + 1]) - m2[x - 1]) -
+                                 (static_cast<double>(m0[x + 1]) - m0[x - 1]));
+      const double dxs = 0.25 * ((static_cast<double>(h1[x + 1]) - h1[x - 1]) -
+                                 (static_cast<double>(l1[x + 1]) - l1[x - 1]));
+      const double dys =
+          0.25 * ((static_cast<double>(h2[x]) - h0[x]) - (static_cast<double>(l2[x]) - l0[x]));
+      const double H[3][3] = {{dxx, dxy, dxs}, {dxy, dyy, dys}, {dxs, dys, dss}};
+      double o[3];
+      if (!solve_offset(H, g, o)) continue;
+      if (std::fabs(o[0]) > kMaxOffset || std::fabs(o[1]) > kMaxOffset ||
+          std::fabs(o[2]) > kMaxOffset)
+        continue;
+      Keypoint kp;
+      kp.x = static_cast<float>((x + o[0]) * info.octave_scale);
+      kp.y = static_cast<float>((y + o[1]) * info.octave_scale);
+      kp.scale = static_cast<float>(info.sigma0 * std::exp((info.level + o[2]) * info.log_k) *
+                                    info.octave_scale);
+      kp.response = static_cast<float>(c + 0.5 * (g[0] * o[0] + g[1] * o[1] + g[2] * o[2]));
+      offer(kp, max_keypoints, out);
+    }
+  }
+}
+
+}  // namespace
+
+void HessianDetector::detect(ImageView image, const KeypointParams& params, int max_keypoints,
+                             std::vector<Keypoint>& out) {
+  out.clear();
+  if (image.empty() || max_keypoints <= 0 || params.hessian_octaves <= 0) return;
+  const int levels = std::max(1, params.hessian_levels);
+  const double k = std::pow(2.0, 1.0 / levels);
+  LevelInfo info;
+  info.threshold = std::max(params.hessian_threshold, 0.f);  // maxima are always positive
+  info.sigma0 = kSigma0;
+  info.log_k = static_cast<float>(std::log(k));
+
+  // Octave 0 starts at sigma0 from the input's assumed blur.
+  to_unit_float(image, levels_[1]);
+  gaussian_blur(levels_[1], std::sqrt(kSigma0 * kSigma0 - kInputSigma * kInputSigma), levels_[0],
+                scratch_);
+  const Plane<float>* first = &levels_[0];
+
+  for (int octave = 0; octave < params.hessian_octaves; ++octave) {
+    if (std::min(first->width(), first->height()) < 2 * kBorder + 3) break;
+    info.octave_scale = std::ldexp(1.f, octave);
+    const bool more = octave + 1 < params.hessian_octaves;
+    // Level j has sigma0 k^j (octave pixels); levels 0 and levels + 1 exist
+    // only as scale neighbours of levels 1..levels.
+    hessian_response(*first, kSigma0, responses_[0]);
+    const Plane<float>* prev = first;
+    for (int j = 1; j <= levels + 1; ++j) {
+      const double s_prev = kSigma0 * std::pow(k, j - 1);
+      const double s_cur = s_prev * k;
+      Plane<float>& cur = levels_[j % 2];
+      // Gaussians compose by adding variances: blur the previous level by the difference.
+      gaussian_blur(*prev, static_cast<float>(std::sqrt(s_cur * s_cur - s_prev * s_prev)), cur,
+                    scratch_);
+      hessian_response(cur, static_cast<float>(s_cur), responses_[j % 3]);
+      // Octave 0's first level lives in levels_[0], which level 2 overwrites,
+      // so the next octave's first level goes to its own plane.
+      if (j == levels && more) decimate(cur, next_octave_);
+      if (j >= 2) {
+        info.level = j - 1;
+        scan_level(responses_[(j - 2) % 3], responses_[(j - 1) % 3], responses_[j % 3], info,
+                   max_keypoints, mask_, out);
+      }
+      prev = &cur;
+    }
+    first = &next_octave_;
+  }
+  std::sort_heap(out.begin(), out.end(), stronger);
+}
+
+}  // namespace kg

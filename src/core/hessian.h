@@ -6,6 +6,8 @@
 // which for these symmetric regions is the region centroid.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <vector>
 
 #include "core/plane.h"
@@ -25,11 +27,14 @@ class HessianDetector {
               std::vector<Keypoint>& out);
 
  private:
-  Plane<float> base_;
-  std::vector<Plane<float>> levels_;       // Gaussian levels of one octave
-  std::vector<Plane<float>> responses_;    // det(H) of those levels
-  Plane<float> scratch_;
-  Plane<float> next_octave_;
+  // Only the planes in use at once are kept: two Gaussian levels (blurring
+  // ping-pongs between them), the next octave's first level, and the three
+  // response levels the 3x3x3 test reads (a ring).
+  std::array<Plane<float>, 2> levels_;
+  std::array<Plane<float>, 3> responses_;
+  Plane<float> scratch_;            // blur row buffers
+  Plane<float> next_octave_;        // decimated level, first level of the next octave
+  std::vector<std::uint8_t> mask_;  // extremum candidates of one row
 };
 
 }  // namespace kg

@@ -1,0 +1,215 @@
+#include "core/pose.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/homography.h"
+#include "core/keygraph.h"
+#include "core/ransac.h"
+
+namespace kg {
+
+// RANSAC estimator over the active keygraph correspondences.
+struct KeygraphEstimator {
+  using Model = Homography;
+  PoseEstimator& s;
+  int k;
+  int h;
+  float model_w, model_h;
+  const RansacParams& params;
+  double threshold2;
+
+  int sample_count() const { return static_cast<int>(s.active_.size()); }
+  int sample_size() const { return h; }
+
+  bool hypothesis(const int* sample, Homography& out) {
+    Point2f model[kMaxVertices * 4];
+    Point2f scene[kMaxVertices * 4];
+    std::uint32_t ids[kMaxVertices * 4];
+    int n = 0;
+    for (int i = 0; i < h; ++i) {
+      const std::uint32_t* pairs = &s.match_pairs_[static_cast<std::size_t>(s.active_[sample[i]]) * k];
+      for (int j = 0; j < k; ++j) {
+        const std::uint32_t p = pairs[j];
+        bool seen = false;
+        for (int q = 0; q < n && !seen; ++q) seen = ids[q] == p;
+        if (seen) continue;
+        // One model keypoint may not go to two scene keypoints, nor two to one.
+        const std::uint64_t key = s.pairs_[p];
+        for (int q = 0; q < n; ++q) {
+          const std::uint64_t other = s.pairs_[ids[q]];
+          if ((other >> 32) == (key >> 32) || (other & 0xFFFFFFFFu) == (key & 0xFFFFFFFFu)) return false;
+        }
+        ids[n] = p;
+        model[n] = s.pair_model_[p];
+        scene[n] = s.pair_scene_[p];
+        ++n;
+      }
+    }
+    if (n < 4) return false;
+    if (!fit_homography(model, scene, n, out)) return false;
+    return is_plausible_pose(out, model_w, model_h, params);
+  }
+
+  RansacScore score(const Homography& hom) {
+    RansacScore r;
+    const std::size_t pairs = s.pairs_.size();
+    for (std::size_t i = 0; i < pairs; ++i) {
+      const Point2f p = apply(hom, s.pair_model_[i]);
+      const double dx = p.x - s.pair_scene_[i].x, dy = p.y - s.pair_scene_[i].y;
+      const double e2 = dx * dx + dy * dy;
+      const bool in = e2 < threshold2 && !s.pair_dead_[i];
+      s.pair_inlier_[i] = in ? 1 : 0;
+      r.point_inliers += in ? 1 : 0;
+      r.cost += in ? e2 : threshold2;
+    }
+    for (int m : s.active_) {
+      const std::uint32_t* ids = &s.match_pairs_[static_cast<std::size_t>(m) * k];
+      bool all = true;
+      for (int j = 0; j < k && all; ++j) all = s.pair_inlier_[ids[j]] != 0;
+      r.sample_inliers += all ? 1 : 0;
+    }
+    return r;
+  }
+};
+
+int PoseEstimator::estimate(const ModelIndex& index, int model_id, const KeygraphMatch* matches,
+                            int n, const Point2f* scene_points, Rng& rng, int max_out,
+                            DetectionList& out, bool& truncated) {
+  const Params& params = index.params();
+  const RansacParams& rp = params.ransac;
+  const int k = vertex_count(params.graph.structure);
+  const int h = sample_size(params.graph.structure);
+  if (n < h) return 0;
+  const ModelInfo info = index.model(model_id);
+  const Point2f* model_points = index.keypoints();
+
+  // Distinct keypoint correspondences (model id << 32 | scene index).
+  pairs_.clear();
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < k; ++j) {
+      pairs_.push_back((static_cast<std::uint64_t>(matches[i].model_vertices[j]) << 32) |
+                       static_cast<std::uint32_t>(matches[i].scene_vertices[j]));
+    }
+  }
+  std::sort(pairs_.begin(), pairs_.end());
+  pairs_.erase(std::unique(pairs_.begin(), pairs_.end()), pairs_.end());
+  const std::size_t pair_count = pairs_.size();
+  pair_model_.resize(pair_count);
+  pair_scene_.resize(pair_count);
+  pair_inlier_.assign(pair_count, 0);
+  pair_dead_.assign(pair_count, 0);
+  for (std::size_t i = 0; i < pair_count; ++i) {
+    pair_model_[i] = model_points[pairs_[i] >> 32];
+    pair_scene_[i] = scene_points[pairs_[i] & 0xFFFFFFFFu];
+  }
+  match_pairs_.resize(static_cast<std::size_t>(n) * k);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < k; ++j) {
+      const std::uint64_t key = (static_cast<std::uint64_t>(matches[i].model_vertices[j]) << 32) |
+                                static_cast<std::uint32_t>(matches[i].scene_vertices[j]);
+      match_pairs_[static_cast<std::size_t>(i) * k + j] = static_cast<std::uint32_t>(
+          std::lower_bound(pairs_.begin(), pairs_.end(), key) - pairs_.begin());
+    }
+  }
+  match_active_.assign(static_cast<std::size_t>(n), 1);
+
+  KeygraphEstimator estimator{*this, k, h, info.width, info.height, rp,
+                              rp.inlier_threshold * rp.inlier_threshold};
+  RansacOptions options;
+  options.confidence = rp.confidence;
+  options.max_iterations = rp.max_iterations;
+  int iterations = 0;
+  for (int instance = 0; instance < rp.max_instances; ++instance) {
+    active_.clear();
+    for (int i = 0; i < n; ++i) {
+      if (match_active_[i]) active_.push_back(i);
+    }
+    if (static_cast<int>(active_.size()) < std::max(h, rp.min_inlier_keygraphs)) break;
+    Homography best{};
+    const RansacStats stats = ransac(estimator, options, rng, best);
+    iterations += stats.iterations;
+    if (stats.best.point_inliers < 4) break;
+
+    // Refine on the inliers, re-selecting them with the refined pose.
+    Homography refined = best;
+    double rms = 0.0;
+    RansacScore final_score = estimator.score(refined);
+    for (int round = 0; round < 2; ++round) {
+      inlier_model_.clear();
+      inlier_scene_.clear();
+      for (std::size_t i = 0; i < pair_count; ++i) {
+        if (!pair_inlier_[i]) continue;
+        inlier_model_.push_back(pair_model_[i]);
+        inlier_scene_.push_back(pair_scene_[i]);
+      }
+      if (inlier_model_.size() < 4) break;
+      Homography candidate = refined;
+      rms = refine_homography(inlier_model_.data(), inlier_scene_.data(),
+                              static_cast<int>(inlier_model_.size()), candidate);
+      const RansacScore s = estimator.score(candidate);
+      if (s.point_inliers < final_score.point_inliers) {
+        estimator.score(refined);  // restore the inlier flags of the kept pose
+        break;
+      }
+      refined = candidate;
+      final_score = s;
+    }
+
+    // Distinct scene keypoints among the inliers (a scene point explained
+    // twice counts once).
+    int distinct = 0;
+    {
+      inlier_scene_.clear();
+      for (std::size_t i = 0; i < pair_count; ++i) {
+        if (pair_inlier_[i]) inlier_scene_.push_back(pair_scene_[i]);
+      }
+      std::sort(inlier_scene_.begin(), inlier_scene_.end(), [](Point2f a, Point2f b) {
+        return a.x < b.x || (a.x == b.x && a.y < b.y);
+      });
+      for (std::size_t i = 0; i < inlier_scene_.size(); ++i) {
+        if (i == 0 || inlier_scene_[i].x != inlier_scene_[i - 1].x ||
+            inlier_scene_[i].y != inlier_scene_[i - 1].y)
+          ++distinct;
+      }
+    }
+    const bool accepted = distinct >= rp.min_inliers &&
+                          final_score.sample_inliers >= rp.min_inlier_keygraphs &&
+                          is_plausible_pose(refined, info.width, info.height, rp);
+    if (!accepted) break;
+    if (static_cast<int>(out.size()) >= max_out) {
+      truncated = true;
+      break;
+    }
+    Detection d;
+    d.model_id = model_id;
+    d.model_name = info.name;
+    d.homography = refined;
+    for (int c = 0; c < 4; ++c) d.corners[c] = apply(refined, info.outline[c]);
+    d.inliers = distinct;
+    d.inlier_keygraphs = final_score.sample_inliers;
+    d.score = static_cast<double>(final_score.sample_inliers) / static_cast<double>(active_.size());
+    d.rms_error = rms;
+    d.ransac_iterations = stats.iterations;
+    out.push_back(d);
+
+    // Remove every correspondence that touches this instance's inliers.
+    for (int i : active_) {
+      const std::uint32_t* ids = &match_pairs_[static_cast<std::size_t>(i) * k];
+      for (int j = 0; j < k; ++j) {
+        if (pair_inlier_[ids[j]]) {
+          match_active_[i] = 0;
+          break;
+        }
+      }
+    }
+    // Its keypoint correspondences no longer count for later instances.
+    for (std::size_t i = 0; i < pair_count; ++i) {
+      if (pair_inlier_[i]) pair_dead_[i] = 1;
+      pair_inlier_[i] = 0;
+    }
+  }
+  return iterations;
+}
+
+}  // namespace kg

@@ -1,0 +1,140 @@
+#include "core/selection.h"
+
+#include <algorithm>
+
+#include "core/arc_descriptor.h"
+#include "core/sampling.h"
+
+namespace kg {
+namespace {
+
+inline std::uint64_t key(std::uint32_t from, std::uint32_t to) {
+  return (static_cast<std::uint64_t>(from) << 32) | to;
+}
+inline std::uint32_t from_of(std::uint64_t k) { return static_cast<std::uint32_t>(k >> 32); }
+inline std::uint32_t to_of(std::uint64_t k) { return static_cast<std::uint32_t>(k); }
+
+// Keys of `list` whose arc starts at `from`.
+inline std::pair<const std::uint64_t*, const std::uint64_t*> starting_at(const std::uint64_t* list,
+                                                                         std::uint32_t n,
+                                                                         std::uint32_t from) {
+  const std::uint64_t* lo = std::lower_bound(list, list + n, key(from, 0));
+  const std::uint64_t* hi = std::lower_bound(lo, list + n, key(from + 1, 0));
+  if (from == 0xFFFFFFFFu) hi = list + n;
+  return {lo, hi};
+}
+
+inline bool contains(const std::uint64_t* list, std::uint32_t n, std::uint64_t k) {
+  return std::binary_search(list, list + n, k);
+}
+
+}  // namespace
+
+void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, const Limits& limits,
+                      DetectStats& stats) {
+  if (state_[e] == kLooked) {
+    count = count_[e];
+    return;
+  }
+  state_[e] = kLooked;
+  begin_[e] = static_cast<std::uint32_t>(pool_.size());
+  count_[e] = 0;
+  count = 0;
+  const std::vector<int>& tri = in.triangulation->triangles();
+  const Point2f a = in.scene_points[tri[e]];
+  const Point2f b = in.scene_points[tri[Delaunay::next(e)]];
+  const Params& params = in.index->params();
+  if (chebyshev(a, b) < params.graph.min_distance) return;
+  ArcDescriptor d;
+  if (!arc_descriptor(in.blurred, a, b, params.descriptor, profile_, d)) return;
+  ++stats.arcs_described;
+  const float r = params.descriptor.similarity_threshold;
+  const auto cap = static_cast<std::uint32_t>(limits.max_arc_matches);
+  found_.resize(cap);
+  const std::uint32_t total = in.tree.radius_search(d, r * r, found_.data(), cap);
+  if (total > cap) stats.truncated_arc_matches = true;
+  const std::uint32_t n = std::min(total, cap);
+  const ModelArc* arcs = in.index->arcs();
+  for (std::uint32_t i = 0; i < n; ++i) pool_.push_back(key(arcs[found_[i]].from, arcs[found_[i]].to));
+  std::sort(pool_.begin() + begin_[e], pool_.end());
+  count_[e] = n;
+  count = n;
+}
+
+void Selector::select(const SelectionInput& in, const Limits& limits,
+                      std::vector<KeygraphMatch>& matches, DetectStats& stats) {
+  matches.clear();
+  const std::size_t edges = in.triangulation->triangles().size();
+  state_.assign(edges, kUnseen);
+  begin_.resize(edges);
+  count_.resize(edges);
+  pool_.clear();
+  const Structure structure = in.index->params().graph.structure;
+  const int k = vertex_count(structure);
+  const Point2f* model_points = in.index->keypoints();
+  const std::vector<int>& tri = in.triangulation->triangles();
+  const auto cap = static_cast<std::size_t>(limits.max_correspondences);
+
+  auto emit = [&](const std::uint32_t* model, const SceneKeygraph& g) {
+    if (matches.size() >= cap) {
+      stats.truncated_correspondences = true;
+      return false;
+    }
+    KeygraphMatch m;
+    m.model_id = in.index->model_of_keypoint(model[0]);
+    for (int i = 0; i < k; ++i) {
+      m.model_vertices[i] = model[i];
+      m.scene_vertices[i] = tri[g.edges[i]];
+    }
+    matches.push_back(m);
+    return true;
+  };
+
+  for (const SceneKeygraph& g : *in.keygraphs) {
+    std::uint32_t n[kMaxVertices] = {0, 0, 0, 0};
+    const std::uint64_t* r[kMaxVertices] = {nullptr, nullptr, nullptr, nullptr};
+    bool empty = false;
+    for (int i = 0; i < k && !empty; ++i) {
+      lookup(in, g.edges[i], n[i], limits, stats);
+      empty = n[i] == 0;
+    }
+    if (empty) continue;
+    // Resolve after all lookups: a lookup may grow (move) the pool.
+    for (int i = 0; i < k; ++i) r[i] = pool_.data() + begin_[g.edges[i]];
+    bool room = true;
+    for (std::uint32_t i0 = 0; i0 < n[0] && room; ++i0) {
+      std::uint32_t v[kMaxVertices] = {from_of(r[0][i0]), to_of(r[0][i0]), 0, 0};
+      if (k == 2) {
+        room = emit(v, g);
+        continue;
+      }
+      // Join (a_m, b_m) with the similar arcs leaving b_m.
+      auto [b_lo, b_hi] = starting_at(r[1], n[1], v[1]);
+      for (const std::uint64_t* p1 = b_lo; p1 != b_hi && room; ++p1) {
+        v[2] = to_of(*p1);
+        if (v[2] == v[0]) continue;
+        if (k == 3) {
+          // (c_m, a_m) must be similar to (c_s, a_s), and the triple clockwise.
+          if (!contains(r[2], n[2], key(v[2], v[0]))) continue;
+          if (!(orient(model_points[v[0]], model_points[v[1]], model_points[v[2]]) > 0.f)) continue;
+          room = emit(v, g);
+          continue;
+        }
+        auto [c_lo, c_hi] = starting_at(r[2], n[2], v[2]);
+        for (const std::uint64_t* p2 = c_lo; p2 != c_hi && room; ++p2) {
+          v[3] = to_of(*p2);
+          if (v[3] == v[0] || v[3] == v[1]) continue;
+          if (!contains(r[3], n[3], key(v[3], v[0]))) continue;
+          const Point2f q[4] = {model_points[v[0]], model_points[v[1]], model_points[v[2]],
+                                model_points[v[3]]};
+          if (!is_clockwise_circuit(q, 4)) continue;
+          room = emit(v, g);
+        }
+      }
+    }
+    if (!room) break;
+  }
+  stats.correspondences = static_cast<int>(matches.size());
+}
+
+}  // namespace kg

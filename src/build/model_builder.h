@@ -1,0 +1,43 @@
+// Desktop side of the pipeline (paper sections 5-6, model half): keypoints
+// of a model image over several scales, every model arc (Chebyshev distance
+// within [min, max]) with its descriptor, and the keygraph count; then one
+// .kgi index for a set of models.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "keygraph/model_index.h"
+#include "keygraph/params.h"
+#include "keygraph/status.h"
+#include "keygraph/types.h"
+
+namespace kg {
+
+struct BuiltModel {
+  std::string name;
+  int width = 0;
+  int height = 0;
+  std::vector<Point2f> keypoints;         // model pixels
+  std::vector<ModelArc> arcs;             // local keypoint ids, sorted by (from, to)
+  std::vector<ArcDescriptor> descriptors; // one per arc
+  std::uint64_t keygraphs = 0;
+};
+
+// Builds one model from an 8-bit gray image.
+Status build_model(const cv::Mat& gray, const std::string& name, const Params& params,
+                   BuiltModel& out);
+
+// Serialises models into the .kgi layout (docs/FORMAT.md). Deterministic.
+Status serialize_index(const std::vector<BuiltModel>& models, const Params& params,
+                       std::vector<std::uint8_t>& bytes);
+
+// Writes the index to `path` through a temporary file renamed into place,
+// so a failure never leaves a partial index behind.
+Status write_index(const std::vector<BuiltModel>& models, const Params& params,
+                   const std::string& path);
+
+}  // namespace kg

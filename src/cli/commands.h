@@ -1,0 +1,23 @@
+// The keygraph subcommands. Each returns the process exit code and reports
+// any failure as one line on stderr.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace kg::cli {
+
+using Args = std::vector<std::string>;
+
+int cmd_build(const Args& args);
+int cmd_detect(const Args& args);
+int cmd_demo(const Args& args);
+
+// "keygraph: <message>" on stderr; returns 1.
+int fail(const std::string& message);
+// Writes an image via a temporary file and a rename (no partial output).
+bool write_image_atomically(const std::string& path, const cv::Mat& image, std::string& error);
+
+}  // namespace kg::cli

@@ -1,0 +1,146 @@
+#include "core/index_format.h"
+
+#include <cmath>
+#include <string>
+#include <type_traits>
+
+namespace kg::format {
+namespace {
+
+// The one place that lists the parameters' order in the file: writer and
+// reader both walk it, so they cannot disagree.
+template <class P, class F>
+void visit_params(P& p, F&& f) {
+  f(p.keypoints.detector);
+  f(p.graph.structure);
+  f(p.graph.scene_sampling);
+  f(p.keypoints.hessian_threshold);
+  f(p.keypoints.hessian_octaves);
+  f(p.keypoints.hessian_levels);
+  f(p.keypoints.mser_delta);
+  f(p.keypoints.mser_min_area);
+  f(p.keypoints.mser_max_area);
+  f(p.keypoints.model_scales);
+  f(p.keypoints.model_merge_distance);
+  f(p.keypoints.max_model_keypoints);
+  f(p.graph.min_distance);
+  f(p.graph.max_distance);
+  f(p.graph.scene_sample_distance);
+  f(p.descriptor.blur_sigma);
+  f(p.descriptor.profile_length);
+  f(p.descriptor.coefficients);
+  f(p.descriptor.parallel_offset);
+  f(p.descriptor.similarity_threshold);
+  f(p.ransac.confidence);
+  f(p.ransac.max_iterations);
+  f(p.ransac.inlier_threshold);
+  f(p.ransac.min_inliers);
+  f(p.ransac.min_inlier_keygraphs);
+  f(p.ransac.max_scale_change);
+  f(p.ransac.max_perspective);
+  f(p.ransac.max_instances);
+  f(p.ransac.seed);
+}
+
+template <class T>
+constexpr std::size_t stored_size() {
+  if constexpr (std::is_enum_v<T>) {
+    return 1;
+  } else {
+    return sizeof(T);
+  }
+}
+
+bool finite_positive(double v) { return std::isfinite(v) && v > 0.0; }
+
+Status bad(const std::string& field, const std::string& why) {
+  return {StatusCode::kCorruptData, "parameter " + field + " " + why};
+}
+
+}  // namespace
+
+void serialize_params(const Params& params, std::uint8_t* out) {
+  std::memset(out, 0, kParamsSize);
+  std::size_t at = 0;
+  visit_params(params, [&](const auto& field) {
+    using T = std::decay_t<decltype(field)>;
+    if constexpr (std::is_enum_v<T>) {
+      out[at] = static_cast<std::uint8_t>(field);
+    } else {
+      store<T>(out + at, field);
+    }
+    at += stored_size<T>();
+  });
+}
+
+Status parse_params(const std::uint8_t* in, std::size_t size, Params& params) {
+  std::size_t needed = 0;
+  visit_params(params, [&](auto& field) { needed += stored_size<std::decay_t<decltype(field)>>(); });
+  if (size < needed) return {StatusCode::kCorruptData, "parameter block too small"};
+  std::size_t at = 0;
+  visit_params(params, [&](auto& field) {
+    using T = std::decay_t<decltype(field)>;
+    if constexpr (std::is_enum_v<T>) {
+      field = static_cast<T>(in[at]);
+    } else {
+      field = load<T>(in + at);
+    }
+    at += stored_size<T>();
+  });
+  return validate_params(params);
+}
+
+Status validate_params(const Params& p) {
+  const auto detector = static_cast<unsigned>(p.keypoints.detector);
+  if (detector > 1) return bad("detector", "is unknown (" + std::to_string(detector) + ")");
+  const int k = static_cast<int>(p.graph.structure);
+  if (k < 2 || k > 4) return bad("structure", "must have 2, 3 or 4 vertices");
+  if (static_cast<unsigned>(p.graph.scene_sampling) > 1) return bad("scene_sampling", "is unknown");
+  if (!(std::isfinite(p.keypoints.hessian_threshold) && p.keypoints.hessian_threshold >= 0.f))
+    return bad("hessian_threshold", "must be >= 0");
+  if (p.keypoints.hessian_octaves < 1 || p.keypoints.hessian_octaves > 8)
+    return bad("hessian_octaves", "must be in 1..8");
+  if (p.keypoints.hessian_levels < 1 || p.keypoints.hessian_levels > 8)
+    return bad("hessian_levels", "must be in 1..8");
+  if (p.keypoints.mser_delta < 1 || p.keypoints.mser_min_area < 1 ||
+      p.keypoints.mser_max_area < p.keypoints.mser_min_area)
+    return bad("mser", "delta/areas out of range");
+  if (p.keypoints.model_scales < 1 || p.keypoints.model_scales > 8)
+    return bad("model_scales", "must be in 1..8");
+  if (!(std::isfinite(p.keypoints.model_merge_distance) && p.keypoints.model_merge_distance >= 0.f))
+    return bad("model_merge_distance", "must be >= 0");
+  if (p.keypoints.max_model_keypoints < 4 || p.keypoints.max_model_keypoints > 1000000)
+    return bad("max_model_keypoints", "must be in 4..10^6");
+  if (!finite_positive(p.graph.min_distance) || !finite_positive(p.graph.max_distance) ||
+      p.graph.max_distance < p.graph.min_distance)
+    return bad("min/max_distance", "must be positive with min <= max");
+  if (!finite_positive(p.graph.scene_sample_distance))
+    return bad("scene_sample_distance", "must be positive");
+  if (!(std::isfinite(p.descriptor.blur_sigma) && p.descriptor.blur_sigma >= 0.f &&
+        p.descriptor.blur_sigma <= 20.f))
+    return bad("blur_sigma", "must be in [0, 20]");
+  if (p.descriptor.profile_length < 4 || p.descriptor.profile_length > 256)
+    return bad("profile_length", "must be in 4..256");
+  if (p.descriptor.coefficients < 1 || p.descriptor.coefficients > kMaxCoefficients ||
+      2 * p.descriptor.coefficients >= p.descriptor.profile_length)
+    return bad("coefficients", "must be in 1.." + std::to_string(kMaxCoefficients));
+  if (p.descriptor.parallel_offset < 0 || p.descriptor.parallel_offset > 8)
+    return bad("parallel_offset", "must be in 0..8");
+  if (!finite_positive(p.descriptor.similarity_threshold) || p.descriptor.similarity_threshold > 2.f)
+    return bad("similarity_threshold", "must be in (0, 2]");
+  if (!(p.ransac.confidence > 0.0 && p.ransac.confidence < 1.0))
+    return bad("confidence", "must be in (0, 1)");
+  if (p.ransac.max_iterations < 1 || p.ransac.max_iterations > 10000000)
+    return bad("max_iterations", "must be in 1..10^7");
+  if (!finite_positive(p.ransac.inlier_threshold)) return bad("inlier_threshold", "must be positive");
+  if (p.ransac.min_inliers < 4) return bad("min_inliers", "must be >= 4");
+  if (p.ransac.min_inlier_keygraphs < 1) return bad("min_inlier_keygraphs", "must be >= 1");
+  if (!(std::isfinite(p.ransac.max_scale_change) && p.ransac.max_scale_change >= 1.0))
+    return bad("max_scale_change", "must be >= 1");
+  if (!finite_positive(p.ransac.max_perspective)) return bad("max_perspective", "must be positive");
+  if (p.ransac.max_instances < 1 || p.ransac.max_instances > 64)
+    return bad("max_instances", "must be in 1..64");
+  return Status::ok();
+}
+
+}  // namespace kg::format

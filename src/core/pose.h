@@ -1,0 +1,44 @@
+// Pose estimation (paper section 7): RANSAC whose samples are keygraph
+// correspondences. A hypothesis is the homography through the keypoint
+// correspondences of sample_size(structure) keygraph correspondences; it is
+// scored over the set of distinct keypoint correspondences they all imply
+// (paper eq. 2). The best is refined by Levenberg-Marquardt on its inliers
+// and accepted only if it is a plausible pose with enough support. Found
+// instances' correspondences are removed and the search repeats, so one
+// model can be found several times in a frame.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/rng.h"
+#include "keygraph/detector.h"
+#include "keygraph/model_index.h"
+
+namespace kg {
+
+class PoseEstimator {
+ public:
+  // Appends the instances of `model_id` found among matches[0..n) (all of
+  // that model) to `out`, at most `max_out` in total in `out`. Returns the
+  // RANSAC iterations run.
+  int estimate(const ModelIndex& index, int model_id, const KeygraphMatch* matches, int n,
+               const Point2f* scene_points, Rng& rng, int max_out, DetectionList& out,
+               bool& truncated);
+
+ private:
+  friend struct KeygraphEstimator;
+  // Distinct keypoint correspondences and, per keygraph match, its k indices into them.
+  std::vector<std::uint64_t> pairs_;
+  std::vector<Point2f> pair_model_;
+  std::vector<Point2f> pair_scene_;
+  std::vector<std::uint32_t> match_pairs_;
+  std::vector<std::uint8_t> pair_inlier_;
+  std::vector<std::uint8_t> pair_dead_;  // explained by an instance already found
+  std::vector<std::uint8_t> match_active_;
+  std::vector<int> active_;
+  std::vector<Point2f> inlier_model_;
+  std::vector<Point2f> inlier_scene_;
+};
+
+}  // namespace kg

@@ -1,0 +1,55 @@
+// Correspondence selection through keytuples (paper sections 4 and 8): for
+// the scene keytuple (a, b, c) of a keygraph, the model arcs similar to
+// (a, b) and to (b, c) are joined on their shared vertex, (c, a) must be
+// similar to a model arc (c_m, a_m), and (a_m, b_m, c_m) must be a model
+// keytuple (clockwise). Arcs and 4-circuits follow the same chain.
+//
+// Scene arcs are Delaunay half-edges; each is described and looked up in
+// the model search tree at most once per frame, on first use. Each lookup's
+// model arcs are kept sorted by (from, to) so the joins are binary searches.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/delaunay.h"
+#include "core/kdtree.h"
+#include "core/keygraph.h"
+#include "keygraph/detector.h"
+#include "keygraph/image.h"
+#include "keygraph/model_index.h"
+
+namespace kg {
+
+struct SelectionInput {
+  const ModelIndex* index = nullptr;
+  KdTreeView tree;
+  ImageView blurred;              // scene blurred for profiles
+  const Point2f* scene_points = nullptr;  // sampled scene keypoints
+  const Delaunay* triangulation = nullptr;
+  const std::vector<SceneKeygraph>* keygraphs = nullptr;
+};
+
+class Selector {
+ public:
+  // Clears and fills `matches`; updates stats.arcs_described, correspondences
+  // and the truncation flags.
+  void select(const SelectionInput& in, const Limits& limits, std::vector<KeygraphMatch>& matches,
+              DetectStats& stats);
+
+ private:
+  // Stores at pool_[begin_[e]..) the sorted model-arc keys (from << 32 | to)
+  // similar to half-edge e (none when the arc has no descriptor).
+  void lookup(const SelectionInput& in, int e, std::uint32_t& count, const Limits& limits,
+              DetectStats& stats);
+
+  enum : std::uint8_t { kUnseen = 0, kLooked = 1 };
+  std::vector<std::uint8_t> state_;
+  std::vector<std::uint32_t> begin_;
+  std::vector<std::uint32_t> count_;
+  std::vector<std::uint64_t> pool_;
+  std::vector<std::uint32_t> found_;
+  std::vector<float> profile_;
+};
+
+}  // namespace kg
