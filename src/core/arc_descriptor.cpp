@@ -88,7 +88,8 @@ bool mean_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset,
   const std::ptrdiff_t dm = x_major ? ady : adx;  // |minor delta|
 
   const std::size_t n = static_cast<std::size_t>(d) + 1;
-  if (profile.capacity() < n) profile.reserve(std::max<std::size_t>({n, 2 * profile.capacity(), 128}));
+  if (profile.capacity() < n)
+    profile.reserve(std::max<std::size_t>({n, 2 * profile.capacity(), 128}));
   profile.resize(n);
   float* out = profile.data();
 
@@ -101,17 +102,22 @@ bool mean_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset,
   const std::uint8_t* p = blurred.row(ay) + ax;
   std::ptrdiff_t rem = d;
   constexpr float kThird = 1.f / 3.f;
+  const std::ptrdiff_t two_d = 2 * d;
+  const std::ptrdiff_t two_dm = 2 * dm;
+  // Steps t with 2t < half_limit send a tie toward a; half_limit = d + 1
+  // puts the midpoint (2t == d) there too when the minor axis increases.
+  const std::ptrdiff_t half_limit = minor_positive ? d + 1 : d;
+  // Branch-free body (masks, not ?:, which compilers turn back into jumps):
+  // a Bresenham line's minor steps are unpredictable for the branch predictor.
   for (std::ptrdiff_t t = 0; t <= d; ++t) {
-    const std::uint8_t* q = p;
-    if (rem == 0 && (2 * t < d || (2 * t == d && minor_positive))) q -= minor_step;
+    const std::ptrdiff_t back = -static_cast<std::ptrdiff_t>((rem == 0) & (2 * t < half_limit));
+    const std::uint8_t* q = p - (minor_step & back);
     const int sum = int{q[0]} + int{q[-par_step]} + int{q[par_step]};
     out[t] = static_cast<float>(sum) * kThird;
-    p += major_step;
-    rem += 2 * dm;
-    if (rem >= 2 * d) {
-      rem -= 2 * d;
-      p += minor_step;
-    }
+    rem += two_dm;
+    const std::ptrdiff_t carry = -static_cast<std::ptrdiff_t>(rem >= two_d);
+    rem -= two_d & carry;
+    p += major_step + (minor_step & carry);
   }
   return true;
 }

@@ -14,6 +14,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/blur.h"
+#include "core/plane.h"
 #include "test_data.h"
 
 namespace kg {
@@ -27,13 +29,13 @@ struct Arc {
 };
 
 // Blur as the pipeline does before descriptors (sigma from DescriptorParams).
-// TODO: switch to kg::gaussian_blur (core/blur.h) once blur.cpp lands.
 cv::Mat blur(const cv::Mat& img) {
-  const float sigma = DescriptorParams{}.blur_sigma;
-  const int radius = static_cast<int>(std::ceil(3.f * sigma));
-  cv::Mat out;
-  cv::GaussianBlur(img, out, cv::Size(2 * radius + 1, 2 * radius + 1), sigma, sigma,
-                   cv::BORDER_REPLICATE);
+  Plane<std::uint8_t> dst;
+  Plane<float> scratch;
+  gaussian_blur(test::view(img), DescriptorParams{}.blur_sigma, dst, scratch);
+  cv::Mat out(dst.height(), dst.width(), CV_8U);
+  for (int y = 0; y < dst.height(); ++y)
+    std::copy(dst.row(y), dst.row(y) + dst.width(), out.ptr<std::uint8_t>(y));
   return out;
 }
 
@@ -118,15 +120,18 @@ std::vector<cv::Point> reference_line(cv::Point a, cv::Point b) {
     const long num = static_cast<long>(2) * t * dm + d;  // 2*(t*dm/d + 1/2) * d
     const long den = 2L * d;
     long fl = num / den;
-    if (num % den != 0 && num < 0) --fl;  // floor division
+    if (num % den != 0 && num < 0) --fl;    // floor division
     int minor = am + static_cast<int>(fl);  // round half up
     if (num % den == 0) {
       // ideal is minor - 0.5: choose minor-1 or minor.
       const int toward_a = dm > 0 ? minor - 1 : minor;
       const int toward_b = dm > 0 ? minor : minor - 1;
-      if (2 * t < d) minor = toward_a;
-      else if (2 * t > d) minor = toward_b;
-      else minor = minor - 1;  // smaller coordinate
+      if (2 * t < d)
+        minor = toward_a;
+      else if (2 * t > d)
+        minor = toward_b;
+      else
+        minor = minor - 1;  // smaller coordinate
     }
     const int major = (x_major ? a.x : a.y) + sM * t;
     pts.push_back(x_major ? cv::Point(major, minor) : cv::Point(minor, major));
@@ -145,7 +150,8 @@ TEST(MeanProfile, MatchesReferenceBresenhamAndParallelShift) {
   for (const cv::Point& v : {cv::Point(10, 3), cv::Point(12, 2), cv::Point(-12, 2),
                              cv::Point(3, -10), cv::Point(-2, -12), cv::Point(20, 20),
                              cv::Point(-14, 7), cv::Point(30, 0), cv::Point(0, -30)}) {
-    arcs.push_back({{200.f, 200.f}, {static_cast<float>(200 + v.x), static_cast<float>(200 + v.y)}});
+    arcs.push_back(
+        {{200.f, 200.f}, {static_cast<float>(200 + v.x), static_cast<float>(200 + v.y)}});
   }
   std::vector<float> profile, central;
   for (const Arc& arc : arcs) {
@@ -156,8 +162,8 @@ TEST(MeanProfile, MatchesReferenceBresenhamAndParallelShift) {
     const cv::Point shift = x_major ? cv::Point(0, 2) : cv::Point(2, 0);
     ASSERT_TRUE(mean_profile(test::view(img), arc.a, arc.b, 0, central));
     ASSERT_TRUE(mean_profile(test::view(img), arc.a, arc.b, 2, profile));
-    ASSERT_EQ(profile.size(), static_cast<std::size_t>(std::max(std::abs(b.x - a.x),
-                                                                std::abs(b.y - a.y)) + 1));
+    ASSERT_EQ(profile.size(),
+              static_cast<std::size_t>(std::max(std::abs(b.x - a.x), std::abs(b.y - a.y)) + 1));
     ASSERT_EQ(profile.size(), line.size());
     for (std::size_t t = 0; t < line.size(); ++t) {
       const cv::Point p = line[t];
@@ -366,7 +372,8 @@ TEST(ArcDescriptor, ReversedArcIsReversedProfile) {
   const int l = params.profile_length;
   std::vector<Arc> arcs = random_arcs(img.cols, img.rows, 500, 2, 15);
   for (const cv::Point& v : {cv::Point(10, 3), cv::Point(12, 2), cv::Point(-3, 14)})
-    arcs.push_back({{300.f, 300.f}, {static_cast<float>(300 + v.x), static_cast<float>(300 + v.y)}});
+    arcs.push_back(
+        {{300.f, 300.f}, {static_cast<float>(300 + v.x), static_cast<float>(300 + v.y)}});
   std::vector<float> forward, backward, scratch;
   float max_direct = 0.f, max_analytic = 0.f;
   int ok = 0;
@@ -397,8 +404,8 @@ TEST(ArcDescriptor, ReversedArcIsReversedProfile) {
     }
     max_analytic = std::max(max_analytic, max_abs_diff(bwd, analytic));
   }
-  std::printf("reversal over %d arcs: max |diff| vs reversed profile %.3g, vs analytic %.3g\n",
-              ok, max_direct, max_analytic);
+  std::printf("reversal over %d arcs: max |diff| vs reversed profile %.3g, vs analytic %.3g\n", ok,
+              max_direct, max_analytic);
   EXPECT_GT(ok, 490);
   EXPECT_LE(max_direct, 1e-5f);
   EXPECT_LE(max_analytic, 1e-5f);
@@ -490,9 +497,9 @@ TEST(ArcDescriptor, RightAngleRotationsAreExactOffTies) {
     const cv::Mat img = blur(load(name));
     ASSERT_FALSE(img.empty());
     const std::vector<Arc> arcs = random_arcs(img.cols, img.rows, 1000, 2, 18);
-    for (const Rotation rot : {Rotation{cv::ROTATE_90_CLOCKWISE, "90"},
-                               Rotation{cv::ROTATE_180, "180"},
-                               Rotation{cv::ROTATE_90_COUNTERCLOCKWISE, "270"}}) {
+    for (const Rotation rot :
+         {Rotation{cv::ROTATE_90_CLOCKWISE, "90"}, Rotation{cv::ROTATE_180, "180"},
+          Rotation{cv::ROTATE_90_COUNTERCLOCKWISE, "270"}}) {
       cv::Mat rotated;
       cv::rotate(img, rotated, rot.code);
       // The mapping itself, on a few pixels.
@@ -508,10 +515,9 @@ TEST(ArcDescriptor, RightAngleRotationsAreExactOffTies) {
       for (const Arc& arc : arcs) {
         ArcDescriptor d0, d1;
         const bool ok0 = arc_descriptor(test::view(img), arc.a, arc.b, params, scratch, d0);
-        const bool ok1 = arc_descriptor(test::view(rotated),
-                                        rotate_point(rot.code, arc.a, img.cols, img.rows),
-                                        rotate_point(rot.code, arc.b, img.cols, img.rows),
-                                        params, scratch, d1);
+        const bool ok1 =
+            arc_descriptor(test::view(rotated), rotate_point(rot.code, arc.a, img.cols, img.rows),
+                           rotate_point(rot.code, arc.b, img.cols, img.rows), params, scratch, d1);
         ASSERT_EQ(ok0, ok1);
         if (!ok0) continue;
         // Off midpoint ties (and, for quarter turns, off diagonals, whose
@@ -523,11 +529,14 @@ TEST(ArcDescriptor, RightAngleRotationsAreExactOffTies) {
           exact.add(distance(d0, d1));
         }
       }
-      std::printf("%s rot %s: %d exact-class arcs max %.3g; %d tie/diagonal arcs mean %.4f max %.4f\n",
-                  name, rot.name, exact.count, exact.max, rest.count, rest.mean(), rest.max);
+      std::printf(
+          "%s rot %s: %d exact-class arcs max %.3g; %d tie/diagonal arcs mean %.4f max %.4f\n",
+          name, rot.name, exact.count, exact.max, rest.count, rest.mean(), rest.max);
       EXPECT_GT(exact.count, 500);
       EXPECT_EQ(exact.max, 0.f);
-      EXPECT_LT(rest.mean(), 0.05);
+      // Measured: mean <= 0.0071, max <= 0.26 (one pixel moved in a profile).
+      EXPECT_LT(rest.mean(), 0.015);
+      EXPECT_LT(rest.max, 0.35f);
     }
   }
 }
@@ -542,13 +551,15 @@ TEST(ArcDescriptor, ArbitraryRotationKeepsArcsSimilar) {
     const cv::Point2f centre(static_cast<float>(raw.cols - 1) / 2.f,
                              static_cast<float>(raw.rows - 1) / 2.f);
     cv::Mat m = cv::getRotationMatrix2D(centre, angle, 1.0);
-    const cv::Rect2f box = cv::RotatedRect(centre, raw.size(), static_cast<float>(angle)).boundingRect2f();
+    const cv::Rect2f box =
+        cv::RotatedRect(centre, raw.size(), static_cast<float>(angle)).boundingRect2f();
     m.at<double>(0, 2) += box.width / 2.0 - centre.x;
     m.at<double>(1, 2) += box.height / 2.0 - centre.y;
     cv::Mat warped;
-    cv::warpAffine(raw, warped, m, cv::Size(static_cast<int>(std::ceil(box.width)),
-                                            static_cast<int>(std::ceil(box.height))),
-                   cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+    cv::warpAffine(
+        raw, warped, m,
+        cv::Size(static_cast<int>(std::ceil(box.width)), static_cast<int>(std::ceil(box.height))),
+        cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
     const cv::Mat img = blur(raw);
     const cv::Mat rotated = blur(warped);
     auto map = [&](Point2f p) {
@@ -574,14 +585,16 @@ TEST(ArcDescriptor, ArbitraryRotationKeepsArcsSimilar) {
     }
     Stats unrelated;
     const std::size_t n = originals.size();
-    for (std::size_t i = 0; i < n; ++i) unrelated.add(distance(originals[i], originals[(i + n / 2) % n]));
+    for (std::size_t i = 0; i < n; ++i)
+      unrelated.add(distance(originals[i], originals[(i + n / 2) % n]));
     std::printf(
         "%s rot 30: %d arcs, same arc mean distance %.4f (max %.3f, %.1f%% below threshold), "
         "unrelated arcs %.4f\n",
         name, same.count, same.mean(), same.max, 100.0 * similar / same.count, unrelated.mean());
     EXPECT_GT(same.count, 1900);
-    EXPECT_LT(same.mean(), 0.5 * params.similarity_threshold);
-    EXPECT_LT(same.mean(), 0.2 * unrelated.mean());
+    // Measured: 0.093 (box), 0.064 (graf1) against 1.36 for unrelated arcs.
+    EXPECT_LT(same.mean(), 0.3 * params.similarity_threshold);
+    EXPECT_LT(same.mean(), 0.1 * unrelated.mean());
   }
 }
 
