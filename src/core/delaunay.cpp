@@ -180,6 +180,10 @@ double InCircle(const Point2f& a, const Point2f& b, const Point2f& c, const Poin
 
 // ---- Sweep ------------------------------------------------------------------
 
+inline bool Finite(const Point2f& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y);
+}
+
 inline double Dist2(const Point2f& a, const Point2f& b) {
   const double dx = static_cast<double>(a.x) - b.x;
   const double dy = static_cast<double>(a.y) - b.y;
@@ -332,6 +336,7 @@ void Delaunay::triangulate(const Point2f* points, int n) {
   double max_x = -min_x;
   double max_y = -min_x;
   for (int i = 0; i < n; ++i) {
+    if (!Finite(points[i])) continue;
     min_x = std::min(min_x, static_cast<double>(points[i].x));
     min_y = std::min(min_y, static_cast<double>(points[i].y));
     max_x = std::max(max_x, static_cast<double>(points[i].x));
@@ -339,18 +344,21 @@ void Delaunay::triangulate(const Point2f* points, int n) {
   }
   const Point2f box_center{static_cast<float>(0.5 * (min_x + max_x)),
                            static_cast<float>(0.5 * (min_y + max_y))};
-  int i0 = 0;
+  int i0 = -1;
   double best = std::numeric_limits<double>::infinity();
   for (int i = 0; i < n; ++i) {
+    if (!Finite(points[i])) continue;
     const double d = Dist2(points[i], box_center);
     if (d < best) {
       best = d;
       i0 = i;
     }
   }
+  if (i0 < 0) return;  // no finite point
   int i1 = -1;
   best = std::numeric_limits<double>::infinity();
   for (int i = 0; i < n; ++i) {
+    if (!Finite(points[i])) continue;
     const double d = Dist2(points[i], points[i0]);
     if (d > kDuplicateDist2 && d < best) {
       best = d;
@@ -361,7 +369,12 @@ void Delaunay::triangulate(const Point2f* points, int n) {
   int i2 = -1;
   best = std::numeric_limits<double>::infinity();
   for (int i = 0; i < n; ++i) {
-    if (Orient(points[i0], points[i1], points[i]) == 0.0) continue;
+    if (!Finite(points[i]) || Orient(points[i0], points[i1], points[i]) == 0.0) continue;
+    // A near-duplicate of i0 or i1 would make a tiny, bogus circle.
+    if (Dist2(points[i], points[i0]) <= kDuplicateDist2 ||
+        Dist2(points[i], points[i1]) <= kDuplicateDist2) {
+      continue;
+    }
     const double r2 = Circumradius2(points[i0], points[i1], points[i]);
     if (r2 < best) {
       best = r2;
@@ -377,6 +390,8 @@ void Delaunay::triangulate(const Point2f* points, int n) {
 
   // Insertion order: distance from the centre; ties broken by coordinates so
   // exact duplicates end up adjacent, then by index for determinism.
+  // Non-finite points sort last (and are skipped) without breaking the
+  // ordering, which NaN keys would.
   const std::size_t count = static_cast<std::size_t>(n);
   ids_.resize(count);
   dists_.resize(count);
@@ -384,10 +399,11 @@ void Delaunay::triangulate(const Point2f* points, int n) {
     ids_[i] = i;
     const double dx = points[i].x - cx;
     const double dy = points[i].y - cy;
-    dists_[i] = dx * dx + dy * dy;
+    dists_[i] = Finite(points[i]) ? dx * dx + dy * dy : std::numeric_limits<double>::infinity();
   }
   std::sort(ids_.begin(), ids_.end(), [&](int a, int b) {
     if (dists_[a] != dists_[b]) return dists_[a] < dists_[b];
+    if (!Finite(points[a]) || !Finite(points[b])) return a < b;
     if (points[a].x != points[b].x) return points[a].x < points[b].x;
     if (points[a].y != points[b].y) return points[a].y < points[b].y;
     return a < b;
@@ -424,6 +440,7 @@ void Delaunay::triangulate(const Point2f* points, int n) {
     const int i = ids_[k];
     if (i == i0 || i == i1 || i == i2) continue;
     const Point2f& p = points[i];
+    if (!Finite(p)) continue;
     if (last >= 0 && Dist2(p, points[last]) <= kDuplicateDist2) continue;
     if (Dist2(p, points[i0]) <= kDuplicateDist2 || Dist2(p, points[i1]) <= kDuplicateDist2 ||
         Dist2(p, points[i2]) <= kDuplicateDist2) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <set>
 #include <utility>
@@ -355,6 +356,31 @@ TEST(Delaunay, NearDuplicatesAreIgnored) {
   for (int t = 0; t < d.triangle_count(); ++t) {
     EXPECT_GT(Orient(pts[tri[3 * t]], pts[tri[3 * t + 1]], pts[tri[3 * t + 2]]), 0.0);
   }
+}
+
+TEST(Delaunay, NonFinitePointsAreIgnored) {
+  const Points base = Uniform(31, 200);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  Points pts = base;
+  const std::vector<int> bad = {0, 50, 120, 203};  // 203: appended last
+  pts.insert(pts.begin() + bad[0], Point2f{nan, 10.f});
+  pts.insert(pts.begin() + bad[1], Point2f{inf, -inf});
+  pts.insert(pts.begin() + bad[2], Point2f{nan, nan});
+  pts.insert(pts.begin() + bad[3], Point2f{5.f, -inf});
+  const Delaunay d = Triangulate(pts);
+  EXPECT_EQ(d.triangle_count(), Triangulate(base).triangle_count());
+  const std::vector<int>& tri = d.triangles();
+  for (int b : bad) EXPECT_EQ(std::count(tri.begin(), tri.end(), b), 0) << b;
+  std::set<int> used(tri.begin(), tri.end());
+  EXPECT_EQ(used.size(), base.size());
+  for (int t = 0; t < d.triangle_count(); ++t) {
+    EXPECT_GT(Orient(pts[tri[3 * t]], pts[tri[3 * t + 1]], pts[tri[3 * t + 2]]), 0.0);
+  }
+  CheckLocallyDelaunay(pts, d);
+
+  const Points only_bad = {{nan, 1.f}, {inf, 2.f}, {3.f, nan}};
+  EXPECT_EQ(Triangulate(only_bad).triangle_count(), 0);
 }
 
 TEST(Delaunay, RegularGridIsFullyTriangulated) {
