@@ -23,7 +23,9 @@ enum class Structure : std::uint8_t {
 struct KeypointParams {
   KeypointDetector detector = KeypointDetector::kHessian;
   // Hessian detector: relative threshold on the scale-normalised
-  // determinant (images normalised to [0,1]).
+  // determinant (images normalised to [0,1]; a blob of contrast A peaks at
+  // A^2/16, so this keeps blobs above ~0.08, 20 gray levels). Gives about
+  // 550-1850 keypoints on typical 640x480 photos (opencv-doc, Oxford).
   float hessian_threshold = 0.0004f;
   int hessian_octaves = 4;
   int hessian_levels = 3;  // scale levels per octave
@@ -53,6 +55,12 @@ struct GraphParams {
   float max_distance = 100.f;        // Chebyshev, model arcs only
   float scene_sample_distance = 10.f;  // Chebyshev, scene keypoint sampling
   SceneSampling scene_sampling = SceneSampling::kRandom;
+  // Not in the paper: a keygraph correspondence is only selected when the
+  // affine map of its first three vertices (model -> scene) has singular
+  // values whose ratio is at most max_anisotropy and whose product (area
+  // scale) is within [1/(2 s), 2 s] for s = RansacParams::max_scale_change.
+  // Arcs are checked on their length ratio. 0 disables the check.
+  float max_anisotropy = 2.5f;
 };
 
 struct DescriptorParams {
@@ -60,7 +68,7 @@ struct DescriptorParams {
   int profile_length = 30;     // l: mean profile resampled to this length
   int coefficients = 3;        // m: DFT coefficients 1..m kept (<= kMaxCoefficients)
   int parallel_offset = 1;     // pixels between the three parallel profiles
-  float similarity_threshold = 0.5f;  // Euclidean distance between arc descriptors
+  float similarity_threshold = 0.3f;  // Euclidean distance between arc descriptors
 };
 
 struct RansacParams {

@@ -78,47 +78,39 @@ void vertical_row(RowFn row, int y, int w, int h, const Kernel& k, float* out) {
   }
 }
 
-// Pixels [x0, x1) of the horizontal pass with clamped (replicated) reads.
-void horizontal_clamped(const float* in, int w, const Kernel& k, int x0, int x1, float* out) {
-  for (int x = x0; x < x1; ++x) {
-    float s = k.w[0] * in[x];
-    for (int i = 1; i <= k.radius; ++i)
-      s += k.w[i] * (in[std::max(x - i, 0)] + in[std::min(x + i, w - 1)]);
-    out[x] = s;
-  }
-}
-
-// Horizontal pass of one row; `out` must not alias `in`.
+// Horizontal pass of one row. `in` points at pixel 0 of a row padded with
+// `radius` replicated pixels on both sides, so no read needs a clamp; `out`
+// must not alias it.
 void horizontal_row(const float* in, int w, const Kernel& k, float* out) {
   const int r = k.radius;
-  if (w <= 2 * r) {
-    horizontal_clamped(in, w, k, 0, w, out);
-    return;
-  }
   const float k0 = k.w[0];
-  for (int x = r; x < w - r; ++x) out[x] = k0 * in[x];
+  for (int x = 0; x < w; ++x) out[x] = k0 * in[x];
   int i = 1;
   for (; i + 3 <= r; i += 4) {
     const float ka = k.w[i];
     const float kb = k.w[i + 1];
     const float kc = k.w[i + 2];
     const float kd = k.w[i + 3];
-    for (int x = r; x < w - r; ++x)
+    for (int x = 0; x < w; ++x)
       out[x] += (ka * (in[x - i] + in[x + i]) + kb * (in[x - i - 1] + in[x + i + 1])) +
                 (kc * (in[x - i - 2] + in[x + i + 2]) + kd * (in[x - i - 3] + in[x + i + 3]));
   }
   for (; i + 1 <= r; i += 2) {
     const float ka = k.w[i];
     const float kb = k.w[i + 1];
-    for (int x = r; x < w - r; ++x)
+    for (int x = 0; x < w; ++x)
       out[x] += ka * (in[x - i] + in[x + i]) + kb * (in[x - i - 1] + in[x + i + 1]);
   }
   if (i <= r) {
     const float ki = k.w[i];
-    for (int x = r; x < w - r; ++x) out[x] += ki * (in[x - i] + in[x + i]);
+    for (int x = 0; x < w; ++x) out[x] += ki * (in[x - i] + in[x + i]);
   }
-  horizontal_clamped(in, w, k, 0, r, out);
-  horizontal_clamped(in, w, k, w - r, w, out);
+}
+
+// Replicates the end pixels of the row [0, w) into its `radius` padding.
+void pad_row(float* row, int w, int radius) {
+  std::fill(row - radius, row, row[0]);
+  std::fill(row + w, row + w + radius, row[w - 1]);
 }
 
 }  // namespace
@@ -137,13 +129,16 @@ void gaussian_blur(ImageView src, float sigma, Plane<std::uint8_t>& dst, Plane<f
   }
   Kernel k;
   make_kernel(sigma, k);
-  // Two row buffers: the vertical result, then the horizontal one before rounding.
-  scratch.resize(w, 2);
-  float* vert = scratch.row(0);
+  // Two row buffers: the padded vertical result, then the horizontal one
+  // before rounding.
+  const int padded = w + 2 * k.radius;
+  scratch.resize(padded, 2);
+  float* vert = scratch.row(0) + k.radius;
   float* horz = scratch.row(1);
   const auto row = [&src](int y) { return src.row(y); };
   for (int y = 0; y < h; ++y) {
     vertical_row<std::uint8_t>(row, y, w, h, k, vert);
+    pad_row(vert, w, k.radius);
     horizontal_row(vert, w, k, horz);
     std::uint8_t* d = dst.row(y);
     for (int x = 0; x < w; ++x) {
@@ -169,13 +164,14 @@ void gaussian_blur(const Plane<float>& src, float sigma, Plane<float>& dst, Plan
   }
   Kernel k;
   make_kernel(sigma, k);
-  // Row by row (vertical into one buffer row, then horizontal straight into
-  // dst) so the source rows in use stay in cache.
-  scratch.resize(w, 1);
-  float* vert = scratch.row(0);
+  // Row by row (vertical into a padded buffer row, then horizontal straight
+  // into dst) so the source rows in use stay in cache.
+  scratch.resize(w + 2 * k.radius, 1);
+  float* vert = scratch.row(0) + k.radius;
   const auto row = [&src](int y) { return src.row(y); };
   for (int y = 0; y < h; ++y) {
     vertical_row<float>(row, y, w, h, k, vert);
+    pad_row(vert, w, k.radius);
     horizontal_row(vert, w, k, dst.row(y));
   }
 }

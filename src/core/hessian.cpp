@@ -11,10 +11,11 @@
 namespace kg {
 namespace {
 
-constexpr float kSigma0 = 1.6f;      // first level of each octave (Lowe's SIFT value)
-constexpr float kInputSigma = 0.5f;  // blur a camera image already has
-constexpr int kBorder = 2;           // det(H) reads 1 px around, the 3x3x3 test 1 more
-constexpr double kMaxOffset = 0.6;   // larger refinement offsets: not a stable extremum
+constexpr float kSigma0 = 1.6f;                  // first level of each octave (Lowe's SIFT value)
+constexpr float kInputSigma = 0.5f;              // blur a camera image already has
+constexpr int kBorder = 2;                       // det(H) reads 1 px around, the 3x3x3 test 1 more
+constexpr double kMaxOffset = 0.6;               // larger refinement offsets: not a stable extremum
+constexpr double kHalvingVariance = 1.0 / 16.0;  // 2x2 box, in the halved image's pixels
 
 // Strongest first; ties by position so the order never depends on the scan.
 bool stronger(const Keypoint& a, const Keypoint& b) {
@@ -47,12 +48,47 @@ void to_unit_float(ImageView image, Plane<float>& dst) {
   }
 }
 
+// Appends (x, y) of the pixels of row y (rows m0, m1, m2 around it) that
+// are above the threshold and above their 4 nearest neighbours. The test is
+// branch-free so the compiler vectorises it; few pixels pass, so the
+// remaining checks run rarely and their branches stay predictable.
+void collect_candidates(const float* m0, const float* m1, const float* m2, int y, int w, float thr,
+                        std::uint8_t* mask, std::vector<std::int32_t>& cand) {
+  for (int x = kBorder; x < w - kBorder; ++x) {
+    const float v = m1[x];
+    mask[x] = static_cast<std::uint8_t>((v > thr) & (v > m1[x - 1]) & (v >= m1[x + 1]) &
+                                        (v > m0[x]) & (v >= m2[x]));
+  }
+  std::fill(mask + std::max(w - kBorder, 0), mask + w + 8, std::uint8_t{0});
+  for (int x = kBorder; x < w - kBorder; ++x) {
+    if ((x & 7) == 0) {  // skip 8 empty bytes at once
+      std::uint64_t eight;
+      std::memcpy(&eight, mask + x, sizeof eight);
+      if (eight == 0) {
+        x += 7;
+        continue;
+      }
+    }
+    if (mask[x]) {
+      cand.push_back(x);
+      cand.push_back(y);
+    }
+  }
+}
+
 // Scale-normalised sigma^4 (Lxx Lyy - Lxy^2) by central differences, for
-// every pixel with all 8 neighbours; the 1-px frame is never read.
-void hessian_response(const Plane<float>& L, float sigma, Plane<float>& R) {
+// every pixel with all 8 neighbours; the 1-px frame is never read. With
+// `cand`, also collects the level's extremum candidates while the rows are
+// still in cache.
+void hessian_response(const Plane<float>& L, float sigma, float threshold, Plane<float>& R,
+                      std::vector<std::uint8_t>& mask, std::vector<std::int32_t>* cand) {
   const int w = L.width();
   const int h = L.height();
   R.resize(w, h);
+  if (cand) {
+    cand->clear();
+    mask.resize(static_cast<std::size_t>(w) + 8);  // +8: the skip reads 8 bytes at a time
+  }
   const float norm = sigma * sigma * sigma * sigma;
   for (int y = 1; y < h - 1; ++y) {
     const float* a = L.row(y - 1);
@@ -65,20 +101,29 @@ void hessian_response(const Plane<float>& L, float sigma, Plane<float>& R) {
       const float dxy = 0.25f * ((c[x + 1] - c[x - 1]) - (a[x + 1] - a[x - 1]));
       r[x] = norm * (dxx * dyy - dxy * dxy);
     }
+    // Row y - 1 has both response neighbours now.
+    if (cand && y - 1 >= kBorder && y - 1 < h - kBorder)
+      collect_candidates(R.row(y - 2), R.row(y - 1), r, y - 1, w, threshold, mask.data(), *cand);
   }
 }
 
-// Every other pixel from (0, 0): octave pixel (x, y) is the previous octave's
-// pixel (2x, 2y), so positions scale by exactly 2 with no half-pixel shift.
-// The source level has twice the first level's sigma, so this does not alias.
-void decimate(const Plane<float>& src, Plane<float>& dst) {
-  const int w = (src.width() + 1) / 2;
-  const int h = (src.height() + 1) / 2;
+// Halves the image by averaging 2x2 blocks (a trailing odd row or column is
+// dropped). Output pixel x covers input pixels 2x and 2x + 1, so its centre
+// is input 2x + 0.5: the half-pixel shift is undone when keypoints are mapped
+// back. Averaging (unlike taking every other pixel) commutes with 90-degree
+// rotations of even-sized images, and adds a variance of 1/16 in output
+// pixels, which the caller accounts for. The source level has twice the
+// octave's first sigma, so this does not alias.
+void halve(const Plane<float>& src, Plane<float>& dst) {
+  const int w = src.width() / 2;
+  const int h = src.height() / 2;
   dst.resize(w, h);
   for (int y = 0; y < h; ++y) {
-    const float* s = src.row(2 * y);
+    const float* a = src.row(2 * y);
+    const float* b = src.row(2 * y + 1);
     float* d = dst.row(y);
-    for (int x = 0; x < w; ++x) d[x] = s[2 * x];
+    for (int x = 0; x < w; ++x)
+      d[x] = 0.25f * ((a[2 * x] + a[2 * x + 1]) + (b[2 * x] + b[2 * x + 1]));
   }
 }
 
@@ -106,83 +151,61 @@ struct LevelInfo {
   float log_k;  // log of the scale ratio between levels
 };
 
-// Local maxima of `mid` over its 26 neighbours in (lo, mid, hi), refined and
-// offered to `out`. A plateau yields one maximum: values must be strictly
-// above the neighbours before them in (scale, y, x) order, and at least
-// equal to those after.
-void scan_level(const Plane<float>& lo, const Plane<float>& mid, const Plane<float>& hi,
-                const LevelInfo& info, int max_keypoints, std::vector<std::uint8_t>& mask,
-                std::vector<Keypoint>& out) {
-  const int w = mid.width();
-  const int h = mid.height();
-  mask.resize(static_cast<std::size_t>(w) + 8);  // +8: the skip reads 8 bytes at a time
-  std::uint8_t* cand = mask.data();
-  const float thr = info.threshold;
-  for (int y = kBorder; y < h - kBorder; ++y) {
+// Local maxima of `mid` over its 26 neighbours in (lo, mid, hi), among the
+// candidates collected with it; refined and offered to `out`. A plateau
+// yields one maximum: values must be strictly above the neighbours before
+// them in (scale, y, x) order, and at least equal to those after.
+void scan_level(const std::vector<std::int32_t>& cand, const Plane<float>& lo,
+                const Plane<float>& mid, const Plane<float>& hi, const LevelInfo& info,
+                int max_keypoints, std::vector<Keypoint>& out) {
+  for (std::size_t i = 0; i + 1 < cand.size(); i += 2) {
+    const int x = cand[i];
+    const int y = cand[i + 1];
     const float* m0 = mid.row(y - 1);
     const float* m1 = mid.row(y);
     const float* m2 = mid.row(y + 1);
-    // Branch-free pre-filter the compiler vectorises: above the threshold and
-    // above the 4 nearest neighbours. Few pixels pass, so the full test
-    // below runs rarely and its branches stay predictable.
-    for (int x = kBorder; x < w - kBorder; ++x) {
-      const float v = m1[x];
-      cand[x] = static_cast<std::uint8_t>((v > thr) & (v > m1[x - 1]) & (v >= m1[x + 1]) &
-                                          (v > m0[x]) & (v >= m2[x]));
-    }
-    std::fill(cand + (w - kBorder), cand + w + 8, std::uint8_t{0});
-    for (int x = kBorder; x < w - kBorder; ++x) {
-      if ((x & 7) == 0) {
-        std::uint64_t eight;
-        std::memcpy(&eight, cand + x, sizeof eight);
-        if (eight == 0) {
-          x += 7;
-          continue;
-        }
-      }
-      if (!cand[x]) continue;
-      const float v = m1[x];
-      if (!(v > m0[x - 1] && v > m0[x + 1] && v >= m2[x - 1] && v >= m2[x + 1])) continue;
-      const float* l0 = lo.row(y - 1);
-      const float* l1 = lo.row(y);
-      const float* l2 = lo.row(y + 1);
-      const float* h0 = hi.row(y - 1);
-      const float* h1 = hi.row(y);
-      const float* h2 = hi.row(y + 1);
-      bool is_max = true;
-      for (int dx = -1; dx <= 1 && is_max; ++dx)
-        is_max = v > l0[x + dx] && v > l1[x + dx] && v > l2[x + dx] && v >= h0[x + dx] &&
-                 v >= h1[x + dx] && v >= h2[x + dx];
-      if (!is_max) continue;
+    const float v = m1[x];
+    if (!(v > m0[x - 1] && v > m0[x + 1] && v >= m2[x - 1] && v >= m2[x + 1])) continue;
+    const float* l0 = lo.row(y - 1);
+    const float* l1 = lo.row(y);
+    const float* l2 = lo.row(y + 1);
+    const float* h0 = hi.row(y - 1);
+    const float* h1 = hi.row(y);
+    const float* h2 = hi.row(y + 1);
+    bool is_max = true;
+    for (int dx = -1; dx <= 1 && is_max; ++dx)
+      is_max = v > l0[x + dx] && v > l1[x + dx] && v > l2[x + dx] && v >= h0[x + dx] &&
+               v >= h1[x + dx] && v >= h2[x + dx];
+    if (!is_max) continue;
 
-      // Quadratic fit in (x, y, scale) from central differences.
-      const double c = v;
-      const double g[3] = {0.5 * (static_cast<double>(m1[x + 1]) - m1[x - 1]),
-                           0.5 * (static_cast<double>(m2[x]) - m0[x]),
-                           0.5 * (static_cast<double>(h1[x]) - l1[x])};
-      const double dxx = static_cast<double>(m1[x + 1]) + m1[x - 1] - 2.0 * c;
-      const double dyy = static_cast<double>(m2[x]) + m0[x] - 2.0 * c;
-      const double dss = static_cast<double>(h1[x]) + l1[x] - 2.0 * c;
-      const double dxy = 0.25 * ((static_cast<double>(m2[x + 1]) - m2[x - 1]) -
-                                 (static_cast<double>(m0[x + 1]) - m0[x - 1]));
-      const double dxs = 0.25 * ((static_cast<double>(h1[x + 1]) - h1[x - 1]) -
-                                 (static_cast<double>(l1[x + 1]) - l1[x - 1]));
-      const double dys =
-          0.25 * ((static_cast<double>(h2[x]) - h0[x]) - (static_cast<double>(l2[x]) - l0[x]));
-      const double H[3][3] = {{dxx, dxy, dxs}, {dxy, dyy, dys}, {dxs, dys, dss}};
-      double o[3];
-      if (!solve_offset(H, g, o)) continue;
-      if (std::fabs(o[0]) > kMaxOffset || std::fabs(o[1]) > kMaxOffset ||
-          std::fabs(o[2]) > kMaxOffset)
-        continue;
-      Keypoint kp;
-      kp.x = static_cast<float>((x + o[0]) * info.octave_scale);
-      kp.y = static_cast<float>((y + o[1]) * info.octave_scale);
-      kp.scale = static_cast<float>(info.sigma0 * std::exp((info.level + o[2]) * info.log_k) *
-                                    info.octave_scale);
-      kp.response = static_cast<float>(c + 0.5 * (g[0] * o[0] + g[1] * o[1] + g[2] * o[2]));
-      offer(kp, max_keypoints, out);
-    }
+    // Quadratic fit in (x, y, scale) from central differences.
+    const double c = v;
+    const double g[3] = {0.5 * (static_cast<double>(m1[x + 1]) - m1[x - 1]),
+                         0.5 * (static_cast<double>(m2[x]) - m0[x]),
+                         0.5 * (static_cast<double>(h1[x]) - l1[x])};
+    const double dxx = static_cast<double>(m1[x + 1]) + m1[x - 1] - 2.0 * c;
+    const double dyy = static_cast<double>(m2[x]) + m0[x] - 2.0 * c;
+    const double dss = static_cast<double>(h1[x]) + l1[x] - 2.0 * c;
+    const double dxy = 0.25 * ((static_cast<double>(m2[x + 1]) - m2[x - 1]) -
+                               (static_cast<double>(m0[x + 1]) - m0[x - 1]));
+    const double dxs = 0.25 * ((static_cast<double>(h1[x + 1]) - h1[x - 1]) -
+                               (static_cast<double>(l1[x + 1]) - l1[x - 1]));
+    const double dys =
+        0.25 * ((static_cast<double>(h2[x]) - h0[x]) - (static_cast<double>(l2[x]) - l0[x]));
+    const double H[3][3] = {{dxx, dxy, dxs}, {dxy, dyy, dys}, {dxs, dys, dss}};
+    double o[3];
+    if (!solve_offset(H, g, o)) continue;
+    if (std::fabs(o[0]) > kMaxOffset || std::fabs(o[1]) > kMaxOffset ||
+        std::fabs(o[2]) > kMaxOffset)
+      continue;
+    Keypoint kp;
+    // Octave pixel x has its centre at input (x + 0.5) 2^octave - 0.5 (see halve()).
+    kp.x = static_cast<float>((x + o[0] + 0.5) * info.octave_scale - 0.5);
+    kp.y = static_cast<float>((y + o[1] + 0.5) * info.octave_scale - 0.5);
+    kp.scale = static_cast<float>(info.sigma0 * std::exp((info.level + o[2]) * info.log_k) *
+                                  info.octave_scale);
+    kp.response = static_cast<float>(c + 0.5 * (g[0] * o[0] + g[1] * o[1] + g[2] * o[2]));
+    offer(kp, max_keypoints, out);
   }
 }
 
@@ -211,23 +234,29 @@ void HessianDetector::detect(ImageView image, const KeypointParams& params, int 
     const bool more = octave + 1 < params.hessian_octaves;
     // Level j has sigma0 k^j (octave pixels); levels 0 and levels + 1 exist
     // only as scale neighbours of levels 1..levels.
-    hessian_response(*first, kSigma0, responses_[0]);
+    // After octave 0 the first level also carries halve()'s box blur.
+    const double first_sigma =
+        octave == 0 ? kSigma0 : std::sqrt(kSigma0 * kSigma0 + kHalvingVariance);
+    hessian_response(*first, static_cast<float>(first_sigma), info.threshold, responses_[0], mask_,
+                     nullptr);
     const Plane<float>* prev = first;
     for (int j = 1; j <= levels + 1; ++j) {
-      const double s_prev = kSigma0 * std::pow(k, j - 1);
-      const double s_cur = s_prev * k;
+      const double s_prev = j == 1 ? first_sigma : kSigma0 * std::pow(k, j - 1);
+      const double s_cur = kSigma0 * std::pow(k, j);
       Plane<float>& cur = levels_[j % 2];
       // Gaussians compose by adding variances: blur the previous level by the difference.
       gaussian_blur(*prev, static_cast<float>(std::sqrt(s_cur * s_cur - s_prev * s_prev)), cur,
                     scratch_);
-      hessian_response(cur, static_cast<float>(s_cur), responses_[j % 3]);
+      // Candidates only where maxima are taken: levels 1..levels.
+      hessian_response(cur, static_cast<float>(s_cur), info.threshold, responses_[j % 3], mask_,
+                       j <= levels ? &candidates_[j % 2] : nullptr);
       // Octave 0's first level lives in levels_[0], which level 2 overwrites,
       // so the next octave's first level goes to its own plane.
-      if (j == levels && more) decimate(cur, next_octave_);
+      if (j == levels && more) halve(cur, next_octave_);
       if (j >= 2) {
         info.level = j - 1;
-        scan_level(responses_[(j - 2) % 3], responses_[(j - 1) % 3], responses_[j % 3], info,
-                   max_keypoints, mask_, out);
+        scan_level(candidates_[(j - 1) % 2], responses_[(j - 2) % 3], responses_[(j - 1) % 3],
+                   responses_[j % 3], info, max_keypoints, out);
       }
       prev = &cur;
     }

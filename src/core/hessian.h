@@ -33,8 +33,10 @@ class HessianDetector {
   std::array<Plane<float>, 2> levels_;
   std::array<Plane<float>, 3> responses_;
   Plane<float> scratch_;            // blur row buffers
-  Plane<float> next_octave_;        // decimated level, first level of the next octave
-  std::vector<std::uint8_t> mask_;  // extremum candidates of one row
+  Plane<float> next_octave_;        // halved level: first level of the next octave
+  std::vector<std::uint8_t> mask_;  // candidate flags of one row
+  // Extremum candidates, (x, y) pairs, of the two levels last computed.
+  std::array<std::vector<std::int32_t>, 2> candidates_;
 };
 
 }  // namespace kg

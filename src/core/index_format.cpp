@@ -26,6 +26,7 @@ void visit_params(P& p, F&& f) {
   f(p.graph.min_distance);
   f(p.graph.max_distance);
   f(p.graph.scene_sample_distance);
+  f(p.graph.max_anisotropy);
   f(p.descriptor.blur_sigma);
   f(p.descriptor.profile_length);
   f(p.descriptor.coefficients);
@@ -114,6 +115,8 @@ Status validate_params(const Params& p) {
   if (!finite_positive(p.graph.min_distance) || !finite_positive(p.graph.max_distance) ||
       p.graph.max_distance < p.graph.min_distance)
     return bad("min/max_distance", "must be positive with min <= max");
+  if (!(std::isfinite(p.graph.max_anisotropy) && (p.graph.max_anisotropy == 0.f || p.graph.max_anisotropy >= 1.f)))
+    return bad("max_anisotropy", "must be 0 (off) or >= 1");
   if (!finite_positive(p.graph.scene_sample_distance))
     return bad("scene_sample_distance", "must be positive");
   if (!(std::isfinite(p.descriptor.blur_sigma) && p.descriptor.blur_sigma >= 0.f &&

@@ -9,6 +9,7 @@
 
 #include "keygraph/params.h"
 #include "keygraph/status.h"
+#include "keygraph/types.h"
 
 namespace kg::format {
 
@@ -32,7 +33,7 @@ inline constexpr std::size_t kOffTableOffset = 32;
 inline constexpr std::size_t kOffSectionCount = 36;
 inline constexpr std::size_t kOffHeaderCrc = 40;  // CRC-32 of [0, table end) with this field 0
 
-inline constexpr std::size_t kParamsSize = 128;
+inline constexpr std::size_t kParamsSize = 256;  // room for later parameters
 inline constexpr std::size_t kSectionEntrySize = 32;
 // Section table entry fields (byte offsets within an entry).
 inline constexpr std::size_t kEntId = 0;

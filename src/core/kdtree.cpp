@@ -72,13 +72,52 @@ void build_kdtree(const ArcDescriptor* descriptors, std::uint32_t n,
 
 namespace {
 
+// A subtree still to visit. `offset` holds, per dimension, the distance
+// from the query to the subtree's cell along that axis; `bound` is the sum
+// of their squares, a lower bound of the squared distance to any point in
+// the cell (the incremental bound of Arya & Mount).
 struct Frame {
   std::uint32_t node;
   std::uint32_t begin;
   std::uint32_t end;
   int level;
-  float bound;  // lower bound of the squared distance to this subtree
+  float bound;
+  float offset[kDescriptorSize];
 };
+
+// Pushes the two children of `f`, the far one first so the near one is
+// searched first.
+inline void push_children(const Frame& f, const KdNode& node, const ArcDescriptor& q, Frame* stack,
+                          int& top) {
+  const std::uint32_t mid = f.begin + (f.end - f.begin) / 2;
+  const float diff = q[node.dim] - node.split;
+  const float old = f.offset[node.dim];
+  Frame& far = stack[top++];
+  far = f;
+  far.level = f.level + 1;
+  far.bound = f.bound - old * old + diff * diff;
+  far.offset[node.dim] = diff;
+  Frame& near = stack[top++];
+  near = f;
+  near.level = f.level + 1;
+  if (diff <= 0.f) {  // query on the left: far is the right child
+    far.node = 2 * f.node + 2;
+    far.begin = mid;
+    near.node = 2 * f.node + 1;
+    near.end = mid;
+  } else {
+    far.node = 2 * f.node + 1;
+    far.end = mid;
+    near.node = 2 * f.node + 2;
+    near.begin = mid;
+  }
+}
+
+inline Frame root_frame(std::uint32_t n) {
+  Frame f{};
+  f.end = n;
+  return f;
+}
 
 }  // namespace
 
@@ -88,7 +127,7 @@ std::uint32_t KdTreeView::radius_search(const ArcDescriptor& q, float radius2,
   if (n_ == 0) return 0;
   Frame stack[kMaxTreeDepth + 2];
   int top = 0;
-  stack[top++] = {0, 0, n_, 0, 0.f};
+  stack[top++] = root_frame(n_);
   while (top > 0) {
     const Frame f = stack[--top];
     if (f.bound >= radius2) continue;
@@ -101,20 +140,7 @@ std::uint32_t KdTreeView::radius_search(const ArcDescriptor& q, float radius2,
       }
       continue;
     }
-    const KdNode& node = nodes_[f.node];
-    const std::uint32_t mid = f.begin + (f.end - f.begin) / 2;
-    const float diff = q[node.dim] - node.split;
-    const float far_bound = std::max(f.bound, diff * diff);
-    const Frame left{2 * f.node + 1, f.begin, mid, f.level + 1, diff <= 0.f ? f.bound : far_bound};
-    const Frame right{2 * f.node + 2, mid, f.end, f.level + 1, diff <= 0.f ? far_bound : f.bound};
-    // Push the far child first so the near one is searched first.
-    if (diff <= 0.f) {
-      stack[top++] = right;
-      stack[top++] = left;
-    } else {
-      stack[top++] = left;
-      stack[top++] = right;
-    }
+    push_children(f, nodes_[f.node], q, stack, top);
   }
   return found;
 }
@@ -125,7 +151,7 @@ int KdTreeView::knn_search(const ArcDescriptor& q, int k, std::uint32_t* ids, fl
   int count = 0;  // ids/dist2 kept sorted ascending
   Frame stack[kMaxTreeDepth + 2];
   int top = 0;
-  stack[top++] = {0, 0, n_, 0, 0.f};
+  stack[top++] = root_frame(n_);
   while (top > 0) {
     const Frame f = stack[--top];
     if (count == k && f.bound >= dist2[count - 1]) continue;
@@ -144,19 +170,7 @@ int KdTreeView::knn_search(const ArcDescriptor& q, int k, std::uint32_t* ids, fl
       }
       continue;
     }
-    const KdNode& node = nodes_[f.node];
-    const std::uint32_t mid = f.begin + (f.end - f.begin) / 2;
-    const float diff = q[node.dim] - node.split;
-    const float far_bound = std::max(f.bound, diff * diff);
-    const Frame left{2 * f.node + 1, f.begin, mid, f.level + 1, diff <= 0.f ? f.bound : far_bound};
-    const Frame right{2 * f.node + 2, mid, f.end, f.level + 1, diff <= 0.f ? far_bound : f.bound};
-    if (diff <= 0.f) {
-      stack[top++] = right;
-      stack[top++] = left;
-    } else {
-      stack[top++] = left;
-      stack[top++] = right;
-    }
+    push_children(f, nodes_[f.node], q, stack, top);
   }
   return count;
 }

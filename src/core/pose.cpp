@@ -55,7 +55,7 @@ struct KeygraphEstimator {
     RansacScore r;
     const std::size_t pairs = s.pairs_.size();
     for (std::size_t i = 0; i < pairs; ++i) {
-      const Point2f p = apply(hom, s.pair_model_[i]);
+      const Point2f p = kg::apply(hom, s.pair_model_[i]);
       const double dx = p.x - s.pair_scene_[i].x, dy = p.y - s.pair_scene_[i].y;
       const double e2 = dx * dx + dy * dy;
       const bool in = e2 < threshold2 && !s.pair_dead_[i];
@@ -185,7 +185,7 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     d.model_id = model_id;
     d.model_name = info.name;
     d.homography = refined;
-    for (int c = 0; c < 4; ++c) d.corners[c] = apply(refined, info.outline[c]);
+    for (int c = 0; c < 4; ++c) d.corners[c] = kg::apply(refined, info.outline[c]);
     d.inliers = distinct;
     d.inlier_keygraphs = final_score.sample_inliers;
     d.score = static_cast<double>(final_score.sample_inliers) / static_cast<double>(active_.size());

@@ -49,6 +49,7 @@ struct RansacStats {
 // probability `confidence` when a fraction `inlier_ratio` of samples are
 // inliers: log(1 - P) / log(1 - p^h), clamped to [0, cap].
 inline int required_iterations(double inlier_ratio, int h, double confidence, int cap) {
+  if (cap <= 0) return 0;  // never above the cap, even for inlier_ratio 1
   if (inlier_ratio <= 0.0) return cap;
   if (inlier_ratio >= 1.0) return 1;
   const double good = std::pow(inlier_ratio, h);

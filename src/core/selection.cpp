@@ -1,6 +1,7 @@
 #include "core/selection.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "core/arc_descriptor.h"
 #include "core/sampling.h"
@@ -26,6 +27,36 @@ inline std::pair<const std::uint64_t*, const std::uint64_t*> starting_at(const s
 
 inline bool contains(const std::uint64_t* list, std::uint32_t n, std::uint64_t k) {
   return std::binary_search(list, list + n, k);
+}
+
+// Whether the model -> scene map of a correspondence is a plausible local
+// distortion (GraphParams::max_anisotropy): the affine map through the
+// first three vertices, or the length ratio for arcs.
+bool plausible_local_map(const Point2f* m, const Point2f* s, int k, const Params& params) {
+  const float max_aniso = params.graph.max_anisotropy;
+  if (max_aniso <= 0.f) return true;
+  const float max_area = 2.f * static_cast<float>(params.ransac.max_scale_change);
+  if (k == 2) {
+    const float lm = std::hypot(m[1].x - m[0].x, m[1].y - m[0].y);
+    const float ls = std::hypot(s[1].x - s[0].x, s[1].y - s[0].y);
+    const float r2 = (ls * ls) / (lm * lm);
+    return r2 * max_area >= 1.f && r2 <= max_area;
+  }
+  // A = S M^-1 with M, S the edge matrices of the two triangles.
+  const float m00 = m[1].x - m[0].x, m01 = m[2].x - m[0].x, m10 = m[1].y - m[0].y, m11 = m[2].y - m[0].y;
+  const float s00 = s[1].x - s[0].x, s01 = s[2].x - s[0].x, s10 = s[1].y - s[0].y, s11 = s[2].y - s[0].y;
+  const float det_m = m00 * m11 - m01 * m10;
+  if (det_m == 0.f) return false;
+  const float inv = 1.f / det_m;
+  const float a = (s00 * m11 - s01 * m10) * inv, b = (-s00 * m01 + s01 * m00) * inv;
+  const float c = (s10 * m11 - s11 * m10) * inv, d = (-s10 * m01 + s11 * m00) * inv;
+  const float det = a * d - b * c;  // area scale
+  if (!(det * max_area >= 1.f && det <= max_area)) return false;
+  // sigma1 / sigma2 from the Frobenius norm and the determinant.
+  const float f2 = a * a + b * b + c * c + d * d;
+  const float disc = std::sqrt(std::max(0.f, f2 * f2 - 4.f * det * det));
+  const float s1 = (f2 + disc) * 0.5f, s2 = (f2 - disc) * 0.5f;  // squared singular values
+  return s2 > 0.f && s1 <= max_aniso * max_aniso * s2;
 }
 
 }  // namespace
@@ -75,7 +106,14 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   const std::vector<int>& tri = in.triangulation->triangles();
   const auto cap = static_cast<std::size_t>(limits.max_correspondences);
 
+  const Params& params = in.index->params();
   auto emit = [&](const std::uint32_t* model, const SceneKeygraph& g) {
+    Point2f mp[kMaxVertices], sp[kMaxVertices];
+    for (int i = 0; i < k; ++i) {
+      mp[i] = model_points[model[i]];
+      sp[i] = in.scene_points[tri[g.edges[i]]];
+    }
+    if (!plausible_local_map(mp, sp, k, params)) return true;
     if (matches.size() >= cap) {
       stats.truncated_correspondences = true;
       return false;
