@@ -39,7 +39,10 @@ struct Detection {
   Point2f corners[4];           // model outline mapped into the scene
   int inliers = 0;              // distinct keypoint correspondences within threshold
   int inlier_keygraphs = 0;     // keygraph correspondences all of whose vertices are inliers
-  double score = 0.0;           // inlier_keygraphs / keygraph correspondences of this model
+  // Fraction of the model's keypoints that project inside the frame and
+  // find a frame keypoint within the inlier threshold under the final pose
+  // (chance level is the frame's keypoint density times the threshold disk).
+  double score = 0.0;
   double rms_error = 0.0;       // refined reprojection error of the inliers, pixels
   int ransac_iterations = 0;
 };

@@ -1,8 +1,12 @@
 // keygraph build [--name NAME]... [--detector hessian|mser] [--structure 2|3|4]
-//                MODEL... -o OUT.kgi
+//                [--roi X,Y,W,H] MODEL... -o OUT.kgi
+// --roi applies to the model image that follows it: the model is that
+// rectangle of the image (model pixel (0,0) is image pixel (X,Y)).
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <set>
+#include <sstream>
 
 #include "build/image_io.h"
 #include "build/model_builder.h"
@@ -10,18 +14,37 @@
 
 namespace kg::cli {
 
+namespace {
+
+bool parse_roi(const std::string& text, cv::Rect& roi) {
+  std::istringstream in(text);
+  char c1 = 0, c2 = 0, c3 = 0;
+  in >> roi.x >> c1 >> roi.y >> c2 >> roi.width >> c3 >> roi.height;
+  return in && in.peek() == EOF && c1 == ',' && c2 == ',' && c3 == ',' && roi.x >= 0 && roi.y >= 0 &&
+         roi.width > 0 && roi.height > 0;
+}
+
+}  // namespace
+
 int cmd_build(const Args& args) {
   std::vector<std::string> names, paths;
+  std::vector<std::optional<cv::Rect>> rois;
+  std::optional<cv::Rect> pending_roi;
   std::string output;
   Params params;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     const bool has_value = i + 1 < args.size();
-    if (a == "--name" || a == "-o" || a == "--output" || a == "--detector" || a == "--structure") {
+    if (a == "--name" || a == "-o" || a == "--output" || a == "--detector" || a == "--structure" ||
+        a == "--roi") {
       if (!has_value) return fail("build: " + a + " needs a value");
       const std::string& v = args[++i];
       if (a == "--name") {
         names.push_back(v);
+      } else if (a == "--roi") {
+        cv::Rect roi;
+        if (!parse_roi(v, roi)) return fail("build: --roi takes X,Y,W,H (pixels), got '" + v + "'");
+        pending_roi = roi;
       } else if (a == "--detector") {
         if (v == "hessian") {
           params.keypoints.detector = KeypointDetector::kHessian;
@@ -40,8 +63,11 @@ int cmd_build(const Args& args) {
       return fail("build: unknown option " + a);
     } else {
       paths.push_back(a);
+      rois.push_back(pending_roi);
+      pending_roi.reset();
     }
   }
+  if (pending_roi) return fail("build: --roi must come before the model image it applies to");
   if (paths.empty()) return fail("build: no model images given");
   if (output.empty()) return fail("build: no output given (-o OUT.kgi)");
   if (names.size() > paths.size()) return fail("build: more --name options than model images");
@@ -56,6 +82,14 @@ int cmd_build(const Args& args) {
     cv::Mat gray;
     Status s = load_gray(paths[i], gray);
     if (!s) return fail(s.message());
+    if (rois[i]) {
+      const cv::Rect r = *rois[i];
+      if (r.x + r.width > gray.cols || r.y + r.height > gray.rows)
+        return fail("build: --roi " + std::to_string(r.x) + "," + std::to_string(r.y) + "," +
+                    std::to_string(r.width) + "," + std::to_string(r.height) + " lies outside " +
+                    paths[i] + " (" + std::to_string(gray.cols) + "x" + std::to_string(gray.rows) + ")");
+      gray = gray(r).clone();
+    }
     BuiltModel model;
     s = build_model(gray, name, params, model);
     if (!s) return fail(s.message());

@@ -45,6 +45,7 @@ struct Detector::Impl {
   std::vector<KeygraphMatch> matches;
   std::vector<KeygraphMatch> model_matches;
   PoseEstimator pose;
+  PointGrid grid;
 
   Status run(ImageView frame, const Keypoint* keypoints, int count, DetectionList& out,
              Clock::time_point start);
@@ -149,6 +150,16 @@ Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count
 
   // Pose per model, over that model's correspondences.
   t = Clock::now();
+  FrameKeypoints frame_keypoints;
+  frame_keypoints.keypoints = keypoints;
+  frame_keypoints.count = count;
+  frame_keypoints.width = frame.width;
+  frame_keypoints.height = frame.height;
+  if (!matches.empty()) {
+    grid.build(keypoints, count, frame.width, frame.height,
+               std::max(4.f, static_cast<float>(params.ransac.inlier_threshold)));
+  }
+  frame_keypoints.grid = &grid;
   std::stable_sort(matches.begin(), matches.end(),
                    [](const KeygraphMatch& a, const KeygraphMatch& b) { return a.model_id < b.model_id; });
   std::size_t begin = 0;
@@ -158,7 +169,7 @@ Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count
     Rng model_rng(params.ransac.seed ^ (0x9e3779b97f4a7c15ULL * static_cast<std::uint64_t>(matches[begin].model_id + 1)));
     stats.ransac_iterations += pose.estimate(*index, matches[begin].model_id, matches.data() + begin,
                                              static_cast<int>(end - begin), scene_points.data(),
-                                             model_rng, limits.max_detections, out,
+                                             frame_keypoints, model_rng, limits.max_detections, out,
                                              stats.truncated_detections);
     begin = end;
   }

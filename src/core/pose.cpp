@@ -73,9 +73,41 @@ struct KeygraphEstimator {
   }
 };
 
+double PoseEstimator::guided_refine(const ModelIndex& index, const ModelInfo& info,
+                                    const FrameKeypoints& frame, Homography& h) {
+  const RansacParams& rp = index.params().ransac;
+  const auto radius = static_cast<float>(rp.inlier_threshold);
+  const Point2f* model_points = index.keypoints() + info.keypoint_begin;
+  double fraction = 0.0;
+  for (int round = 0; round < 2; ++round) {
+    guided_model_.clear();
+    guided_scene_.clear();
+    int inside = 0;
+    for (std::uint32_t i = 0; i < info.keypoint_count; ++i) {
+      const Point2f p = kg::apply(h, model_points[i]);
+      if (!(p.x >= 0.f && p.y >= 0.f && p.x <= static_cast<float>(frame.width - 1) &&
+            p.y <= static_cast<float>(frame.height - 1)))
+        continue;
+      ++inside;
+      const int j = frame.grid->nearest(p, radius);
+      if (j < 0) continue;
+      guided_model_.push_back(model_points[i]);
+      guided_scene_.push_back({frame.keypoints[j].x, frame.keypoints[j].y});
+    }
+    fraction = inside > 0 ? static_cast<double>(guided_model_.size()) / inside : 0.0;
+    if (guided_model_.size() < 8) break;
+    Homography candidate = h;
+    refine_homography(guided_model_.data(), guided_scene_.data(),
+                      static_cast<int>(guided_model_.size()), candidate);
+    if (!is_plausible_pose(candidate, info.width, info.height, rp)) break;
+    h = candidate;
+  }
+  return fraction;
+}
+
 int PoseEstimator::estimate(const ModelIndex& index, int model_id, const KeygraphMatch* matches,
-                            int n, const Point2f* scene_points, Rng& rng, int max_out,
-                            DetectionList& out, bool& truncated) {
+                            int n, const Point2f* scene_points, const FrameKeypoints& frame,
+                            Rng& rng, int max_out, DetectionList& out, bool& truncated) {
   const Params& params = index.params();
   const RansacParams& rp = params.ransac;
   const int k = vertex_count(params.graph.structure);
@@ -156,6 +188,11 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
       final_score = s;
     }
 
+    // Guided refinement over all model keypoints, then the support that
+    // the descriptors gave is recounted under the final pose.
+    const double guided_fraction = guided_refine(index, info, frame, refined);
+    final_score = estimator.score(refined);
+
     // Distinct scene keypoints among the inliers (a scene point explained
     // twice counts once).
     int distinct = 0;
@@ -188,7 +225,7 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     for (int c = 0; c < 4; ++c) d.corners[c] = kg::apply(refined, info.outline[c]);
     d.inliers = distinct;
     d.inlier_keygraphs = final_score.sample_inliers;
-    d.score = static_cast<double>(final_score.sample_inliers) / static_cast<double>(active_.size());
+    d.score = guided_fraction;
     d.rms_error = rms;
     d.ransac_iterations = stats.iterations;
     out.push_back(d);

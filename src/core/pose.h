@@ -11,11 +11,25 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/point_grid.h"
 #include "core/rng.h"
 #include "keygraph/detector.h"
 #include "keygraph/model_index.h"
 
 namespace kg {
+
+// All keypoints of the frame (before sampling), for guided refinement: once
+// a pose is found, every model keypoint is projected and paired with the
+// nearest frame keypoint within the inlier threshold; the pose is refined on
+// those pairs and the fraction of model keypoints so re-found is the
+// detection's score.
+struct FrameKeypoints {
+  const Keypoint* keypoints = nullptr;
+  int count = 0;
+  const PointGrid* grid = nullptr;
+  int width = 0;
+  int height = 0;
+};
 
 class PoseEstimator {
  public:
@@ -23,11 +37,15 @@ class PoseEstimator {
   // that model) to `out`, at most `max_out` in total in `out`. Returns the
   // RANSAC iterations run.
   int estimate(const ModelIndex& index, int model_id, const KeygraphMatch* matches, int n,
-               const Point2f* scene_points, Rng& rng, int max_out, DetectionList& out,
-               bool& truncated);
+               const Point2f* scene_points, const FrameKeypoints& frame, Rng& rng, int max_out,
+               DetectionList& out, bool& truncated);
 
  private:
   friend struct KeygraphEstimator;
+  // Refines h on guided pairs; returns the fraction of model keypoints
+  // projecting inside the frame that found a frame keypoint.
+  double guided_refine(const ModelIndex& index, const ModelInfo& info, const FrameKeypoints& frame,
+                       Homography& h);
   // Distinct keypoint correspondences and, per keygraph match, its k indices into them.
   std::vector<std::uint64_t> pairs_;
   std::vector<Point2f> pair_model_;
@@ -39,6 +57,8 @@ class PoseEstimator {
   std::vector<int> active_;
   std::vector<Point2f> inlier_model_;
   std::vector<Point2f> inlier_scene_;
+  std::vector<Point2f> guided_model_;
+  std::vector<Point2f> guided_scene_;
 };
 
 }  // namespace kg
