@@ -10,14 +10,23 @@
 namespace kg {
 
 // Least-squares homography from n >= 4 correspondences (Hartley
-// normalisation, SVD of the DLT system). Returns false when the points are
-// degenerate (collinear triples in a minimal set, coincident points) or the
-// result is not finite. The result is scaled so that h[8] == 1 when possible.
+// normalisation of both sets; n == 4: the 8x8 DLT system with h33 = 1,
+// n > 4 or a singular 8x8: the smallest eigenvector of the 9x9 A^T A).
+// Returns false when the points are degenerate or the result is not
+// finite. Degenerate: non-finite or all coincident points; for n == 4, any
+// three model or scene points within 1e-2 (twice the triangle area, in
+// coordinates normalised to mean centroid distance sqrt(2)) of collinear,
+// which includes coincident pairs; for n > 4, all points on one line or a
+// DLT null space of more than one dimension. The result is scaled so that
+// h[8] == 1, or to unit norm when |h[8]| is tiny.
 bool fit_homography(const Point2f* model, const Point2f* scene, int n, Homography& h);
 
-// Levenberg-Marquardt on the 8 free parameters (h[8] fixed to 1), minimising
+// Levenberg-Marquardt on the 8 free parameters (scale fixed by h33 = 1 in
+// Hartley-normalised coordinates, for conditioning), minimising
 // sum |scene_i - H(model_i)|^2. Never returns a result with a larger error
-// than the input. Returns the final RMS reprojection error in pixels.
+// than the input: h is left untouched unless the RMS error drops (also when
+// n < 4 or the input maps a point to infinity). The result has h[8] == 1.
+// Returns the RMS reprojection error in pixels of the returned h.
 double refine_homography(const Point2f* model, const Point2f* scene, int n, Homography& h,
                          int max_iterations = 20);
 
@@ -25,14 +34,18 @@ double refine_homography(const Point2f* model, const Point2f* scene, int n, Homo
 double rms_reprojection_error(const Point2f* model, const Point2f* scene, int n,
                               const Homography& h);
 
-// Whether H is a plausible pose of a planar model of the given size:
-// - the model rectangle maps to a convex quadrilateral with the same
-//   orientation (no mirroring, no fold-over, w > 0 at every corner);
-// - area scale between 1/max_scale_change^2... precisely: the mapped area over
-//   the model area lies in [1/max_scale_change, max_scale_change];
+// Whether H is a plausible pose of a planar model of size w x h, the model
+// rectangle having corners (0,0), (w,0), (w,h), (0,h). With H finite and
+// scaled so that h33 = 1 (a tiny |h33|, the origin at infinity, fails):
+// - w > 0 at every corner (nothing behind the camera, no fold-over);
+// - the mapped corners form a convex quadrilateral with the model's
+//   orientation: every turn has the model rectangle's sign (no mirroring);
+// - the mapped area over the model area lies in
+//   [1/max_scale_change, max_scale_change];
 // - no side of the mapped quadrilateral shorter than 4 px (collapse);
-// - the perspective terms, expressed for the model normalised to unit size,
-//   |h31 * w|, |h32 * h| (with H scaled so h33 = 1) below max_perspective * max(w,h).
+// - perspective: the change of w along each model side is bounded,
+//   |h31| * w <= max_perspective * max(w, h) and
+//   |h32| * h <= max_perspective * max(w, h).
 bool is_plausible_pose(const Homography& h, float model_width, float model_height,
                        const RansacParams& params);
 

@@ -21,6 +21,8 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
+#include <utility>
 
 #include "core/rng.h"
 
@@ -76,6 +78,15 @@ inline void draw_distinct(Rng& rng, int n, int k, int* out) {
   }
 }
 
+// An estimator may draw its own samples (e.g. neighbourhood-guided) by
+// providing `void draw(Rng&, int* sample)`; otherwise samples are uniform.
+template <class E, class = void>
+struct has_custom_draw : std::false_type {};
+template <class E>
+struct has_custom_draw<E, std::void_t<decltype(std::declval<E&>().draw(std::declval<Rng&>(),
+                                                                        std::declval<int*>()))>>
+    : std::true_type {};
+
 template <class Estimator>
 RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
                    typename Estimator::Model& best_model) {
@@ -91,7 +102,11 @@ RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
          (stats.iterations < options.min_iterations ||
           stats.iterations < stats.required_iterations)) {
     ++stats.iterations;
-    draw_distinct(rng, n, h, sample);
+    if constexpr (has_custom_draw<Estimator>::value) {
+      estimator.draw(rng, sample);
+    } else {
+      draw_distinct(rng, n, h, sample);
+    }
     if (!estimator.hypothesis(sample, model)) continue;
     ++stats.valid_hypotheses;
     const RansacScore s = estimator.score(model);

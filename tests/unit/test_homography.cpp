@@ -314,7 +314,15 @@ TEST(IsPlausiblePose, RejectsExtremePerspective) {
   // |h31| * 640 = 6.4 > 0.005 * 640: w runs from 1 to 7.4 across the model.
   EXPECT_FALSE(plausible({1, 0, 0, 0, 1, 0, 0.01, 0, 1}));
   EXPECT_FALSE(plausible({1, 0, 0, 0, 1, 0, 0, 0.01, 1}));
-  // Within the bound but the far corners are behind the camera (w < 0).
+  // Only the perspective bound fails: |h31| * 640 = 3.84 > 3.2, while w > 0,
+  // the quadrilateral is convex and its area ratio (about 0.78) is fine.
+  EXPECT_FALSE(plausible({2.5, 0, 0, 0, 2.5, 0, 0.006, 0, 1}));
+  EXPECT_TRUE(plausible({2.5, 0, 0, 0, 2.5, 0, 0.004, 0, 1}));
+  RansacParams loose;
+  loose.max_perspective = 0.01;
+  EXPECT_TRUE(is_plausible_pose({2.5, 0, 0, 0, 2.5, 0, 0.006, 0, 1}, kModelW, kModelH, loose));
+  // Within the bound but the far corners are behind the camera (w < 0;
+  // their images also reverse the quadrilateral's orientation).
   EXPECT_FALSE(plausible({1, 0, 0, 0, 1, 0, -0.003, 0, 1}));
   // Within the bound, w > 0 and convex: accepted.
   EXPECT_TRUE(plausible({1, 0, 0, 0, 1, 0, 0.001, 0, 1}));

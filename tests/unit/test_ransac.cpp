@@ -1,0 +1,281 @@
+// The generic RANSAC loop: a homography from point correspondences with
+// 80 % outliers, the adaptive iteration count, the cap and reproducibility.
+#include "core/ransac.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "core/homography.h"
+#include "core/rng.h"
+
+namespace kg {
+namespace {
+
+constexpr float kModelW = 640.f;
+constexpr float kModelH = 480.f;
+const Homography kTruth = {0.7629, -0.2992,  225.67,    0.3344, 1.0144,
+                           -77.0,  3.466e-4, -1.436e-5, 1.0};
+
+double gaussian(Rng& rng) {
+  const double u1 = 1.0 - rng.uniform01();
+  const double u2 = rng.uniform01();
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+}
+
+double reprojection(const Homography& h, Point2f m, Point2f s) {
+  const Point2f p = kg::apply(h, m);
+  return std::hypot(p.x - s.x, p.y - s.y);
+}
+
+// Each sample is one point correspondence; four give a homography.
+struct PointEstimator {
+  using Model = Homography;
+  const std::vector<Point2f>* model = nullptr;
+  const std::vector<Point2f>* scene = nullptr;
+  double threshold = 3.0;
+  int hypotheses = 0;
+
+  int sample_count() const { return static_cast<int>(model->size()); }
+  int sample_size() const { return 4; }
+  bool hypothesis(const int* samples, Model& out) {
+    ++hypotheses;
+    Point2f m[4];
+    Point2f s[4];
+    for (int i = 0; i < 4; ++i) {
+      m[i] = (*model)[samples[i]];
+      s[i] = (*scene)[samples[i]];
+    }
+    return fit_homography(m, s, 4, out);
+  }
+  RansacScore score(const Model& h) const {
+    RansacScore r;
+    for (std::size_t i = 0; i < model->size(); ++i) {
+      const double e = reprojection(h, (*model)[i], (*scene)[i]);
+      if (e < threshold) {
+        ++r.point_inliers;
+        r.cost += e * e;
+      } else {
+        r.cost += threshold * threshold;
+      }
+    }
+    r.sample_inliers = r.point_inliers;
+    return r;
+  }
+};
+
+struct Correspondences {
+  std::vector<Point2f> model;
+  std::vector<Point2f> scene;
+  int inliers = 0;
+};
+
+// `inliers` true correspondences with Gaussian noise, then `outliers`
+// random pairs, shuffled so that inliers are not a prefix.
+Correspondences make_correspondences(int inliers, int outliers, double sigma, std::uint64_t seed) {
+  Rng rng(seed);
+  Correspondences c;
+  c.inliers = inliers;
+  for (int i = 0; i < inliers + outliers; ++i) {
+    const Point2f m{static_cast<float>(rng.uniform01() * kModelW),
+                    static_cast<float>(rng.uniform01() * kModelH)};
+    Point2f s;
+    if (i < inliers) {
+      const Point2f t = kg::apply(kTruth, m);
+      s = {static_cast<float>(t.x + sigma * gaussian(rng)),
+           static_cast<float>(t.y + sigma * gaussian(rng))};
+    } else {
+      s = {static_cast<float>(rng.uniform01() * 900.0),
+           static_cast<float>(rng.uniform01() * 700.0)};
+    }
+    c.model.push_back(m);
+    c.scene.push_back(s);
+  }
+  for (int i = static_cast<int>(c.model.size()) - 1; i > 0; --i) {
+    const int j = static_cast<int>(rng.uniform(static_cast<std::uint32_t>(i + 1)));
+    std::swap(c.model[i], c.model[j]);
+    std::swap(c.scene[i], c.scene[j]);
+  }
+  return c;
+}
+
+TEST(Ransac, RecoversHomographyWithEightyPercentOutliers) {
+  const Correspondences c = make_correspondences(60, 240, 0.5, 21);
+  PointEstimator est;
+  est.model = &c.model;
+  est.scene = &c.scene;
+  RansacOptions options;
+  options.max_iterations = 20000;
+  Rng rng(99);
+  Homography best{};
+  const RansacStats stats = ransac(est, options, rng, best);
+  ASSERT_GT(stats.valid_hypotheses, 0);
+  // Nearly all 60 true correspondences, and few of the outliers by chance.
+  EXPECT_GE(stats.best.point_inliers, 55);
+  EXPECT_LE(stats.best.point_inliers, 70);
+  EXPECT_EQ(stats.iterations, est.hypotheses);
+  EXPECT_EQ(stats.required_iterations,
+            required_iterations(static_cast<double>(stats.best.sample_inliers) / 300, 4,
+                                options.confidence, options.max_iterations));
+  EXPECT_LE(stats.iterations, stats.required_iterations);
+
+  // Refit and refine on the inliers of the best hypothesis.
+  std::vector<Point2f> in_model;
+  std::vector<Point2f> in_scene;
+  for (std::size_t i = 0; i < c.model.size(); ++i) {
+    if (reprojection(best, c.model[i], c.scene[i]) < est.threshold) {
+      in_model.push_back(c.model[i]);
+      in_scene.push_back(c.scene[i]);
+    }
+  }
+  const int n = static_cast<int>(in_model.size());
+  Homography h{};
+  ASSERT_TRUE(fit_homography(in_model.data(), in_scene.data(), n, h));
+  const double rms = refine_homography(in_model.data(), in_scene.data(), n, h);
+  EXPECT_LT(rms, 1.0);
+  EXPECT_TRUE(is_plausible_pose(h, kModelW, kModelH, RansacParams{}));
+  const Point2f corners[4] = {{0.f, 0.f}, {kModelW, 0.f}, {kModelW, kModelH}, {0.f, kModelH}};
+  for (const Point2f& q : corners) {
+    const Point2f got = kg::apply(h, q);
+    const Point2f want = kg::apply(kTruth, q);
+    EXPECT_LT(std::hypot(got.x - want.x, got.y - want.y), 2.0) << "corner " << q.x << "," << q.y;
+  }
+}
+
+TEST(Ransac, SameSeedGivesSameResult) {
+  const Correspondences c = make_correspondences(60, 240, 0.5, 22);
+  RansacOptions options;
+  options.max_iterations = 20000;
+  Homography first{};
+  Homography second{};
+  PointEstimator a;
+  a.model = &c.model;
+  a.scene = &c.scene;
+  PointEstimator b = a;
+  Rng r1(5);
+  Rng r2(5);
+  const RansacStats s1 = ransac(a, options, r1, first);
+  const RansacStats s2 = ransac(b, options, r2, second);
+  EXPECT_EQ(s1.iterations, s2.iterations);
+  EXPECT_EQ(s1.valid_hypotheses, s2.valid_hypotheses);
+  EXPECT_EQ(s1.best.point_inliers, s2.best.point_inliers);
+  EXPECT_EQ(s1.best.cost, s2.best.cost);
+  EXPECT_EQ(first, second);
+  // The random state advanced identically too.
+  EXPECT_EQ(r1.next(), r2.next());
+}
+
+// Reports the same score for every hypothesis: `sample_inliers` of
+// `samples` samples are inliers. Every `degenerate_every`-th hypothesis
+// (when > 0) is degenerate. Records each drawn sample.
+struct FixedFractionEstimator {
+  using Model = int;
+  int samples = 100;
+  int size = 3;
+  int sample_inliers = 40;
+  int degenerate_every = 0;
+  int calls = 0;
+  std::vector<std::vector<int>> drawn;
+
+  int sample_count() const { return samples; }
+  int sample_size() const { return size; }
+  bool hypothesis(const int* s, Model& out) {
+    drawn.emplace_back(s, s + size);
+    out = ++calls;
+    return degenerate_every <= 0 || calls % degenerate_every != 0;
+  }
+  RansacScore score(const Model&) const {
+    RansacScore r;
+    r.point_inliers = sample_inliers;
+    r.sample_inliers = sample_inliers;
+    return r;
+  }
+};
+
+TEST(Ransac, AdaptiveIterationCountMatchesFormula) {
+  FixedFractionEstimator est;  // p = 0.4, h = 3
+  RansacOptions options;
+  options.max_iterations = 1000;
+  Rng rng(1);
+  int best = 0;
+  const RansacStats stats = ransac(est, options, rng, best);
+  // ceil(log(0.01) / log(1 - 0.4^3)) = ceil(69.6) = 70.
+  const int expected = static_cast<int>(std::ceil(std::log(0.01) / std::log(1.0 - 0.064)));
+  ASSERT_EQ(expected, 70);
+  EXPECT_EQ(required_iterations(0.4, 3, 0.99, 1000), expected);
+  EXPECT_EQ(stats.required_iterations, expected);
+  EXPECT_EQ(stats.iterations, expected);
+  EXPECT_EQ(stats.valid_hypotheses, expected);
+  EXPECT_EQ(est.calls, expected);
+  // Equal scores never replace the first best.
+  EXPECT_EQ(best, 1);
+  EXPECT_EQ(stats.best.sample_inliers, 40);
+  // Every sample is `size` distinct indices in range.
+  for (const auto& s : est.drawn) {
+    ASSERT_EQ(s.size(), 3u);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_GE(s[i], 0);
+      EXPECT_LT(s[i], 100);
+      for (int j = 0; j < i; ++j) EXPECT_NE(s[i], s[j]);
+    }
+  }
+}
+
+TEST(Ransac, DegenerateHypothesesStillCountAsIterations) {
+  FixedFractionEstimator est;
+  est.sample_inliers = 80;  // p = 0.8: ceil(log(0.01) / log(1 - 0.512)) = 7
+  est.degenerate_every = 2;
+  RansacOptions options;
+  Rng rng(2);
+  int best = 0;
+  const RansacStats stats = ransac(est, options, rng, best);
+  EXPECT_EQ(required_iterations(0.8, 3, 0.99, options.max_iterations), 7);
+  EXPECT_EQ(stats.iterations, 7);
+  EXPECT_EQ(stats.valid_hypotheses, 4);  // calls 1, 3, 5, 7
+}
+
+TEST(Ransac, IterationCapAndMinimum) {
+  FixedFractionEstimator est;
+  est.sample_inliers = 1;  // p = 0.01: about 4.6 million iterations needed
+  RansacOptions options;
+  options.max_iterations = 500;
+  Rng rng(3);
+  int best = 0;
+  RansacStats stats = ransac(est, options, rng, best);
+  EXPECT_EQ(stats.required_iterations, 500);
+  EXPECT_EQ(stats.iterations, 500);
+
+  // min_iterations overrides an early adaptive stop, but not the cap.
+  FixedFractionEstimator easy;
+  easy.sample_inliers = 95;
+  options.min_iterations = 50;
+  stats = ransac(easy, options, rng, best);
+  EXPECT_LT(stats.required_iterations, 50);
+  EXPECT_EQ(stats.iterations, 50);
+  options.max_iterations = 20;
+  FixedFractionEstimator capped;
+  capped.sample_inliers = 95;
+  stats = ransac(capped, options, rng, best);
+  EXPECT_EQ(stats.iterations, 20);
+
+  // Too few samples for one minimal set: nothing is drawn.
+  FixedFractionEstimator tiny;
+  tiny.samples = 2;
+  stats = ransac(tiny, options, rng, best);
+  EXPECT_EQ(stats.iterations, 0);
+  EXPECT_EQ(tiny.calls, 0);
+}
+
+TEST(Ransac, RequiredIterationsEdgeCases) {
+  EXPECT_EQ(required_iterations(0.0, 4, 0.99, 2000), 2000);
+  EXPECT_EQ(required_iterations(1.0, 4, 0.99, 2000), 1);
+  EXPECT_EQ(required_iterations(1e-9, 4, 0.99, 2000), 2000);  // p^h underflows
+  EXPECT_EQ(required_iterations(0.5, 4, 0.99, 2000), 72);     // ceil(71.3)
+  EXPECT_EQ(required_iterations(0.5, 4, 0.99, 50), 50);
+  // Never above the cap, even when every sample is an inlier.
+  EXPECT_EQ(required_iterations(1.0, 4, 0.99, 0), 0);
+}
+
+}  // namespace
+}  // namespace kg
