@@ -43,6 +43,7 @@ struct Detection {
   // find a frame keypoint within the inlier threshold under the final pose
   // (chance level is the frame's keypoint density times the threshold disk).
   double score = 0.0;
+  double chance = 0.0;          // the same fraction for the pose shifted by 3 thresholds
   double rms_error = 0.0;       // refined reprojection error of the inliers, pixels
   int ransac_iterations = 0;
 };

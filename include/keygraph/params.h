@@ -79,7 +79,12 @@ struct RansacParams {
   int min_inlier_keygraphs = 3;    // keygraph correspondences fully inlier
   double max_scale_change = 8.0;   // model-to-scene area scale, either way
   double max_perspective = 0.005;  // |h31|,|h32| after normalising to model size
-  int max_instances = 4;           // instances of one model per frame
+  // Not in the paper: verification of a found pose. Under the final pose,
+  // the fraction of model keypoints that land within inlier_threshold of a
+  // frame keypoint must exceed the fraction for the pose shifted by three
+  // thresholds (chance) by this many binomial standard deviations.
+  double min_verification_z = 5.0;
+  int max_instances = 4;           // RANSAC attempts (so instances) per model and frame
   std::uint64_t seed = 0x6b657967;  // RANSAC random state, fixed for reproducibility
 };
 

@@ -40,6 +40,7 @@ void visit_params(P& p, F&& f) {
   f(p.ransac.max_scale_change);
   f(p.ransac.max_perspective);
   f(p.ransac.max_instances);
+  f(p.ransac.min_verification_z);
   f(p.ransac.seed);
 }
 
@@ -141,6 +142,8 @@ Status validate_params(const Params& p) {
   if (!(std::isfinite(p.ransac.max_scale_change) && p.ransac.max_scale_change >= 1.0))
     return bad("max_scale_change", "must be >= 1");
   if (!finite_positive(p.ransac.max_perspective)) return bad("max_perspective", "must be positive");
+  if (!(std::isfinite(p.ransac.min_verification_z) && p.ransac.min_verification_z >= 0.0))
+    return bad("min_verification_z", "must be >= 0");
   if (p.ransac.max_instances < 1 || p.ransac.max_instances > 64)
     return bad("max_instances", "must be in 1..64");
   return Status::ok();

@@ -97,12 +97,12 @@ struct KeygraphEstimator {
   }
 };
 
-double PoseEstimator::guided_refine(const ModelIndex& index, const ModelInfo& info,
-                                    const FrameKeypoints& frame, Homography& h) {
+PoseEstimator::Support PoseEstimator::guided_refine(const ModelIndex& index, const ModelInfo& info,
+                                                    const FrameKeypoints& frame, Homography& h) {
   const RansacParams& rp = index.params().ransac;
   const auto radius = static_cast<float>(rp.inlier_threshold);
   const Point2f* model_points = index.keypoints() + info.keypoint_begin;
-  double fraction = 0.0;
+  Support support;
   for (int round = 0; round < 2; ++round) {
     guided_model_.clear();
     guided_scene_.clear();
@@ -118,7 +118,8 @@ double PoseEstimator::guided_refine(const ModelIndex& index, const ModelInfo& in
       guided_model_.push_back(model_points[i]);
       guided_scene_.push_back({frame.keypoints[j].x, frame.keypoints[j].y});
     }
-    fraction = inside > 0 ? static_cast<double>(guided_model_.size()) / inside : 0.0;
+    support.inside = inside;
+    support.fraction = inside > 0 ? static_cast<double>(guided_model_.size()) / inside : 0.0;
     if (guided_model_.size() < 8) break;
     Homography candidate = h;
     refine_homography(guided_model_.data(), guided_scene_.data(),
@@ -126,7 +127,33 @@ double PoseEstimator::guided_refine(const ModelIndex& index, const ModelInfo& in
     if (!is_plausible_pose(candidate, info.width, info.height, rp)) break;
     h = candidate;
   }
-  return fraction;
+  return support;
+}
+
+double PoseEstimator::chance_fraction(const ModelIndex& index, const ModelInfo& info,
+                                      const FrameKeypoints& frame, const Homography& h) const {
+  // The same count under the pose shifted in the scene by a few inlier
+  // thresholds: how often model keypoints land on frame keypoints by chance
+  // in this part of the frame.
+  const RansacParams& rp = index.params().ransac;
+  const auto radius = static_cast<float>(rp.inlier_threshold);
+  const float shift = 3.f * radius;
+  const Point2f offsets[4] = {{shift, 0.f}, {-shift, 0.f}, {0.f, shift}, {0.f, -shift}};
+  const Point2f* model_points = index.keypoints() + info.keypoint_begin;
+  int inside = 0, hits = 0;
+  for (const Point2f& o : offsets) {
+    for (std::uint32_t i = 0; i < info.keypoint_count; ++i) {
+      Point2f p = kg::apply(h, model_points[i]);
+      p.x += o.x;
+      p.y += o.y;
+      if (!(p.x >= 0.f && p.y >= 0.f && p.x <= static_cast<float>(frame.width - 1) &&
+            p.y <= static_cast<float>(frame.height - 1)))
+        continue;
+      ++inside;
+      hits += frame.grid->nearest(p, radius) >= 0 ? 1 : 0;
+    }
+  }
+  return inside > 0 ? static_cast<double>(hits) / inside : 0.0;
 }
 
 int PoseEstimator::estimate(const ModelIndex& index, int model_id, const KeygraphMatch* matches,
@@ -189,7 +216,8 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
   options.confidence = rp.confidence;
   options.max_iterations = rp.max_iterations;
   int iterations = 0;
-  for (int instance = 0; instance < rp.max_instances; ++instance) {
+  // Each attempt finds one instance or rules out one false cluster.
+  for (int attempt = 0; attempt < rp.max_instances; ++attempt) {
     active_.clear();
     for (int i = 0; i < n; ++i) {
       active_pos_[i] = match_active_[i] ? static_cast<int>(active_.size()) : -1;
@@ -228,7 +256,11 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
 
     // Guided refinement over all model keypoints, then the support that
     // the descriptors gave is recounted under the final pose.
-    const double guided_fraction = guided_refine(index, info, frame, refined);
+    const Support support = guided_refine(index, info, frame, refined);
+    const double chance = chance_fraction(index, info, frame, refined);
+    // Binomial z-score of the re-found model keypoints against chance.
+    const double spread = std::sqrt(std::max(1e-9, support.inside * chance * (1.0 - chance)));
+    const double z = (support.fraction - chance) * support.inside / spread;
     final_score = estimator.score(refined);
 
     // Distinct scene keypoints among the inliers (a scene point explained
@@ -250,24 +282,28 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     }
     const bool accepted = distinct >= rp.min_inliers &&
                           final_score.sample_inliers >= rp.min_inlier_keygraphs &&
+                          z >= rp.min_verification_z &&
                           is_plausible_pose(refined, info.width, info.height, rp);
-    if (!accepted) break;
-    if (static_cast<int>(out.size()) >= max_out) {
+    if (accepted && static_cast<int>(out.size()) >= max_out) {
       truncated = true;
       break;
     }
-    Detection d;
-    d.model_id = model_id;
-    d.model_name = info.name;
-    d.homography = refined;
-    for (int c = 0; c < 4; ++c) d.corners[c] = kg::apply(refined, info.outline[c]);
-    d.inliers = distinct;
-    d.inlier_keygraphs = final_score.sample_inliers;
-    d.score = guided_fraction;
-    d.rms_error = rms;
-    d.ransac_iterations = stats.iterations;
-    out.push_back(d);
-
+    if (accepted) {
+      Detection d;
+      d.model_id = model_id;
+      d.model_name = info.name;
+      d.homography = refined;
+      for (int c = 0; c < 4; ++c) d.corners[c] = kg::apply(refined, info.outline[c]);
+      d.inliers = distinct;
+      d.inlier_keygraphs = final_score.sample_inliers;
+      d.score = support.fraction;
+      d.chance = chance;
+      d.rms_error = rms;
+      d.ransac_iterations = stats.iterations;
+      out.push_back(d);
+    }
+    // Accepted or not, this cluster of correspondences is explained (by an
+    // instance or as a false cluster); the next attempt looks elsewhere.
     // Remove every correspondence that touches this instance's inliers.
     for (int i : active_) {
       const std::uint32_t* ids = &match_pairs_[static_cast<std::size_t>(i) * k];

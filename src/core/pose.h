@@ -42,10 +42,15 @@ class PoseEstimator {
 
  private:
   friend struct KeygraphEstimator;
-  // Refines h on guided pairs; returns the fraction of model keypoints
-  // projecting inside the frame that found a frame keypoint.
-  double guided_refine(const ModelIndex& index, const ModelInfo& info, const FrameKeypoints& frame,
+  struct Support {
+    int inside = 0;         // model keypoints projecting inside the frame
+    double fraction = 0.0;  // of those, the fraction that found a frame keypoint
+  };
+  // Refines h on guided pairs and measures the support of the final pose.
+  Support guided_refine(const ModelIndex& index, const ModelInfo& info, const FrameKeypoints& frame,
                        Homography& h);
+  double chance_fraction(const ModelIndex& index, const ModelInfo& info, const FrameKeypoints& frame,
+                         const Homography& h) const;
   // Distinct keypoint correspondences and, per keygraph match, its k indices into them.
   std::vector<std::uint64_t> pairs_;
   std::vector<Point2f> pair_model_;
