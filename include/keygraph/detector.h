@@ -53,6 +53,7 @@ struct DetectStats {
   int sampled_keypoints = 0;    // after Chebyshev sampling
   int keygraphs = 0;            // scene keygraphs (Delaunay)
   int arcs_described = 0;       // scene arcs with a valid descriptor
+  long long arc_matches = 0;    // model arcs found similar to them, summed
   int correspondences = 0;      // keygraph correspondences selected
   int ransac_iterations = 0;    // summed over models and instances
   bool truncated_keypoints = false;

@@ -23,7 +23,7 @@ struct KdNode {
   std::uint32_t dim = 0;
 };
 
-inline constexpr int kLeafSize = 8;
+inline constexpr int kLeafSize = 32;
 inline constexpr int kMaxTreeDepth = 40;
 
 // Depth L of the tree for n points (0 when n <= kLeafSize).

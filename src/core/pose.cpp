@@ -18,33 +18,9 @@ struct KeygraphEstimator {
   float model_w, model_h;
   const RansacParams& params;
   double threshold2;
-  int draws = 0;
 
   int sample_count() const { return static_cast<int>(s.active_.size()); }
   int sample_size() const { return h; }
-
-  // Every other draw, the second keygraph correspondence is taken among
-  // those that share a keypoint correspondence with the first (adjacent
-  // scene keygraphs mapped consistently): when the first is right, such a
-  // neighbour is far more often right than a uniform pick. The other draws
-  // are uniform, as in the paper, so nothing is ever unreachable.
-  void draw(Rng& rng, int* sample) {
-    const int n = sample_count();
-    draw_distinct(rng, n, h, sample);
-    if (h != 2 || (++draws & 1) == 0) return;
-    const int first = s.active_[sample[0]];
-    for (int attempt = 0; attempt < 4; ++attempt) {
-      const std::uint32_t pair =
-          s.match_pairs_[static_cast<std::size_t>(first) * k + rng.uniform(static_cast<std::uint32_t>(k))];
-      const std::uint32_t begin = s.pair_match_offsets_[pair], end = s.pair_match_offsets_[pair + 1];
-      if (end - begin < 2) continue;
-      const int other = static_cast<int>(s.pair_matches_[begin + rng.uniform(end - begin)]);
-      const int pos = s.active_pos_[other];
-      if (other == first || pos < 0) continue;
-      sample[1] = pos;
-      return;
-    }
-  }
 
   bool hypothesis(const int* sample, Homography& out) {
     Point2f model[kMaxVertices * 4];
@@ -196,19 +172,6 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     }
   }
   match_active_.assign(static_cast<std::size_t>(n), 1);
-  // Matches containing each keypoint correspondence (CSR), for neighbour draws.
-  pair_match_offsets_.assign(pair_count + 1, 0);
-  for (std::uint32_t p : match_pairs_) ++pair_match_offsets_[p + 1];
-  for (std::size_t i = 0; i < pair_count; ++i) pair_match_offsets_[i + 1] += pair_match_offsets_[i];
-  pair_matches_.resize(match_pairs_.size());
-  pair_fill_.assign(pair_match_offsets_.begin(), pair_match_offsets_.end() - 1);
-  for (int i = 0; i < n; ++i) {
-    for (int j = 0; j < k; ++j) {
-      const std::uint32_t p = match_pairs_[static_cast<std::size_t>(i) * k + j];
-      pair_matches_[pair_fill_[p]++] = static_cast<std::uint32_t>(i);
-    }
-  }
-  active_pos_.resize(static_cast<std::size_t>(n));
 
   KeygraphEstimator estimator{*this, k, h, info.width, info.height, rp,
                               rp.inlier_threshold * rp.inlier_threshold};
@@ -220,7 +183,6 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
   for (int attempt = 0; attempt < rp.max_instances; ++attempt) {
     active_.clear();
     for (int i = 0; i < n; ++i) {
-      active_pos_[i] = match_active_[i] ? static_cast<int>(active_.size()) : -1;
       if (match_active_[i]) active_.push_back(i);
     }
     if (static_cast<int>(active_.size()) < std::max(h, rp.min_inlier_keygraphs)) break;

@@ -60,10 +60,7 @@ class PoseEstimator {
   std::vector<std::uint8_t> pair_dead_;  // explained by an instance already found
   std::vector<std::uint8_t> match_active_;
   std::vector<int> active_;      // indices of matches still in play
-  std::vector<int> active_pos_;  // match -> position in active_, or -1
-  std::vector<std::uint32_t> pair_match_offsets_;  // pair -> matches containing it (CSR)
-  std::vector<std::uint32_t> pair_matches_;
-  std::vector<std::uint32_t> pair_fill_;
+
   std::vector<Point2f> inlier_model_;
   std::vector<Point2f> inlier_scene_;
   std::vector<Point2f> guided_model_;

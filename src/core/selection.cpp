@@ -84,6 +84,7 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
   found_.resize(cap);
   const std::uint32_t total = in.tree.radius_search(d, r * r, found_.data(), cap);
   if (total > cap) stats.truncated_arc_matches = true;
+  stats.arc_matches += total;
   const std::uint32_t n = std::min(total, cap);
   const ModelArc* arcs = in.index->arcs();
   for (std::uint32_t i = 0; i < n; ++i) pool_.push_back(key(arcs[found_[i]].from, arcs[found_[i]].to));

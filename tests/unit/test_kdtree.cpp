@@ -102,7 +102,8 @@ TEST(KdTree, KnnEqualsBruteForce) {
   for (int q = 0; q < 200; ++q) {
     const ArcDescriptor query = random_descriptors(rng, 1)[0];
     std::vector<std::pair<float, std::uint32_t>> all;
-    for (std::uint32_t i = 0; i < data.size(); ++i) all.emplace_back(squared_distance(data[i], query), i);
+    for (std::uint32_t i = 0; i < data.size(); ++i)
+      all.emplace_back(squared_distance(data[i], query), i);
     std::sort(all.begin(), all.end());
     for (int k : {1, 5, 64}) {
       std::uint32_t ids[64];

@@ -141,21 +141,25 @@ TEST(Keytuple, PropositionHoldsForRandomDigraphs) {
     }
     Perm relabel(k);
     for (int i = 0; i < k; ++i) relabel[i] = i;
-    for (int i = k - 1; i > 0; --i) std::swap(relabel[i], relabel[rng.uniform(static_cast<std::uint32_t>(i + 1))]);
+    for (int i = k - 1; i > 0; --i)
+      std::swap(relabel[i], relabel[rng.uniform(static_cast<std::uint32_t>(i + 1))]);
     std::vector<std::pair<int, int>> gs;
     for (auto [a, b] : gm) gs.emplace_back(relabel[a], relabel[b]);
     // sigma from a random ordering of the scene graph.
     Perm order(k);
     for (int i = 0; i < k; ++i) order[i] = i;
-    for (int i = k - 1; i > 0; --i) std::swap(order[i], order[rng.uniform(static_cast<std::uint32_t>(i + 1))]);
+    for (int i = k - 1; i > 0; --i)
+      std::swap(order[i], order[rng.uniform(static_cast<std::uint32_t>(i + 1))]);
     std::vector<std::uint8_t> sigma(static_cast<std::size_t>(k * k), 0);
     for (int i = 0; i < k; ++i) {
       for (int j = 0; j < k; ++j) {
-        sigma[i * k + j] = std::find(gs.begin(), gs.end(), std::make_pair(order[i], order[j])) != gs.end();
+        sigma[i * k + j] =
+            std::find(gs.begin(), gs.end(), std::make_pair(order[i], order[j])) != gs.end();
       }
     }
     const std::set<Perm> brute = isomorphisms_brute_force(k, gm, gs);
-    EXPECT_EQ(isomorphisms_by_keytuples(k, gm, gs, sigma.data(), trial), brute) << "trial " << trial;
+    EXPECT_EQ(isomorphisms_by_keytuples(k, gm, gs, sigma.data(), trial), brute)
+        << "trial " << trial;
     // A non-isomorphic scene graph (one arc added or removed) has none.
     auto other = gs;
     if (!other.empty()) {
@@ -182,7 +186,8 @@ TEST(Geometry, ClockwiseOnScreen) {
 std::vector<Point2f> random_points(Rng& rng, int n, float size) {
   std::vector<Point2f> p;
   for (int i = 0; i < n; ++i)
-    p.push_back({static_cast<float>(rng.uniform01() * size), static_cast<float>(rng.uniform01() * size)});
+    p.push_back(
+        {static_cast<float>(rng.uniform01() * size), static_cast<float>(rng.uniform01() * size)});
   return p;
 }
 
@@ -197,7 +202,8 @@ TEST(SceneKeygraphs, FromDelaunayEdgesFacesAndInternalEdges) {
 
   scene_keygraphs(dt, pts.data(), Structure::kArc, g);
   int undirected = 0;
-  for (std::size_t e = 0; e < half.size(); ++e) undirected += (half[e] < 0 || static_cast<int>(e) < half[e]);
+  for (std::size_t e = 0; e < half.size(); ++e)
+    undirected += (half[e] < 0 || static_cast<int>(e) < half[e]);
   EXPECT_EQ(static_cast<int>(g.size()), undirected);
 
   scene_keygraphs(dt, pts.data(), Structure::kCircuit3, g);
@@ -206,12 +212,14 @@ TEST(SceneKeygraphs, FromDelaunayEdgesFacesAndInternalEdges) {
     const Point2f v[3] = {pts[tri[s.edges[0]]], pts[tri[s.edges[1]]], pts[tri[s.edges[2]]]};
     EXPECT_TRUE(is_clockwise_circuit(v, 3));
     // Each arc (v_i, v_i+1) is the half-edge named for it.
-    for (int i = 0; i < 3; ++i) EXPECT_EQ(tri[Delaunay::next(s.edges[i])], tri[s.edges[(i + 1) % 3]]);
+    for (int i = 0; i < 3; ++i)
+      EXPECT_EQ(tri[Delaunay::next(s.edges[i])], tri[s.edges[(i + 1) % 3]]);
   }
 
   scene_keygraphs(dt, pts.data(), Structure::kCircuit4, g);
   int internal = 0;
-  for (std::size_t e = 0; e < half.size(); ++e) internal += (half[e] >= 0 && static_cast<int>(e) < half[e]);
+  for (std::size_t e = 0; e < half.size(); ++e)
+    internal += (half[e] >= 0 && static_cast<int>(e) < half[e]);
   EXPECT_GT(static_cast<int>(g.size()), internal / 2);  // most quadrilaterals are convex
   EXPECT_LE(static_cast<int>(g.size()), internal);
   for (const SceneKeygraph& s : g) {

@@ -19,7 +19,8 @@ std::vector<Keypoint> random_keypoints(Rng& rng, int n, float w, float h) {
   return k;
 }
 
-void expect_separated_and_maximal(const std::vector<Keypoint>& k, const std::vector<int>& sel, float d) {
+void expect_separated_and_maximal(const std::vector<Keypoint>& k, const std::vector<int>& sel,
+                                  float d) {
   std::vector<bool> chosen(k.size(), false);
   for (int i : sel) chosen[i] = true;
   for (std::size_t a = 0; a < sel.size(); ++a) {
