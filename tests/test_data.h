@@ -19,7 +19,9 @@ inline std::string oxford(const std::string& subset, const std::string& name) {
 }
 
 // Loads an image as 8-bit gray; empty Mat when unreadable.
-inline cv::Mat load_gray(const std::string& path) { return cv::imread(path, cv::IMREAD_GRAYSCALE); }
+inline cv::Mat load_gray(const std::string& path) {
+  return cv::imread(path, cv::IMREAD_GRAYSCALE);
+}
 
 inline ImageView view(const cv::Mat& m) {
   return ImageView(m.data, m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step));

@@ -43,19 +43,19 @@ struct Detection {
   // find a frame keypoint within the inlier threshold under the final pose
   // (chance level is the frame's keypoint density times the threshold disk).
   double score = 0.0;
-  double chance = 0.0;          // the same fraction for the pose shifted by 3 thresholds
-  double rms_error = 0.0;       // refined reprojection error of the inliers, pixels
+  double chance = 0.0;     // the same fraction for the pose shifted by 3 thresholds
+  double rms_error = 0.0;  // refined reprojection error of the inliers, pixels
   int ransac_iterations = 0;
 };
 
 struct DetectStats {
-  int keypoints = 0;            // detected in the frame
-  int sampled_keypoints = 0;    // after Chebyshev sampling
-  int keygraphs = 0;            // scene keygraphs (Delaunay)
-  int arcs_described = 0;       // scene arcs with a valid descriptor
-  long long arc_matches = 0;    // model arcs found similar to them, summed
-  int correspondences = 0;      // keygraph correspondences selected
-  int ransac_iterations = 0;    // summed over models and instances
+  int keypoints = 0;          // detected in the frame
+  int sampled_keypoints = 0;  // after Chebyshev sampling
+  int keygraphs = 0;          // scene keygraphs (Delaunay)
+  int arcs_described = 0;     // scene arcs with a valid descriptor
+  long long arc_matches = 0;  // model arcs found similar to them, summed
+  int correspondences = 0;    // keygraph correspondences selected
+  int ransac_iterations = 0;  // summed over models and instances
   bool truncated_keypoints = false;
   bool truncated_arc_matches = false;
   bool truncated_correspondences = false;

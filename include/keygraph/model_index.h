@@ -24,12 +24,12 @@ struct KdNode;
 
 struct ModelInfo {
   std::string_view name;
-  float width = 0.f;   // model image size in pixels
+  float width = 0.f;  // model image size in pixels
   float height = 0.f;
-  Point2f outline[4];  // model outline (corners, clockwise on screen) in model pixels
+  Point2f outline[4];                // model outline (corners, clockwise on screen) in model pixels
   std::uint32_t keypoint_begin = 0;  // global keypoint ids [begin, begin + count)
   std::uint32_t keypoint_count = 0;
-  std::uint32_t arc_begin = 0;       // global arc ids [begin, begin + count)
+  std::uint32_t arc_begin = 0;  // global arc ids [begin, begin + count)
   std::uint32_t arc_count = 0;
   std::uint64_t keygraph_count = 0;  // model keygraphs (for reports)
 };

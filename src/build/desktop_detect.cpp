@@ -13,7 +13,8 @@ Status DesktopDetector::detect(const cv::Mat& gray, DetectionList& out) {
   if (params.keypoints.detector == KeypointDetector::kHessian)
     return detector_.detect(view_of(gray), out);
   extractor_.extract(gray, params.keypoints, limits_.max_keypoints, keypoints_);
-  return detector_.detect(view_of(gray), keypoints_.data(), static_cast<int>(keypoints_.size()), out);
+  return detector_.detect(view_of(gray), keypoints_.data(), static_cast<int>(keypoints_.size()),
+                          out);
 }
 
 cv::Mat draw_detections(const cv::Mat& gray, const DetectionList& detections) {

@@ -54,8 +54,8 @@ void model_keypoints(const cv::Mat& gray, const KeypointParams& params,
                    [](const Keypoint& a, const Keypoint& b) { return a.response > b.response; });
   std::vector<int> kept;
   SeparatedSampler sampler;
-  sampler.sample(all.data(), static_cast<int>(all.size()), std::max(params.model_merge_distance, 1e-3f),
-                 nullptr, kept);
+  sampler.sample(all.data(), static_cast<int>(all.size()),
+                 std::max(params.model_merge_distance, 1e-3f), nullptr, kept);
   std::sort(kept.begin(), kept.end());  // strongest first (all is sorted)
   if (static_cast<int>(kept.size()) > params.max_model_keypoints)
     kept.resize(static_cast<std::size_t>(params.max_model_keypoints));
@@ -110,8 +110,8 @@ Status build_model(const cv::Mat& gray, const std::string& name, const Params& p
   out.keygraphs = count_model_keygraphs(out.keypoints.data(), static_cast<int>(n), offsets.data(),
                                         to.data(), graph);
   if (out.arcs.empty())
-    return {StatusCode::kInvalidArgument,
-            name + ": no model arcs (" + std::to_string(n) + " keypoints); image too small or flat"};
+    return {StatusCode::kInvalidArgument, name + ": no model arcs (" + std::to_string(n) +
+                                              " keypoints); image too small or flat"};
   return Status::ok();
 }
 
@@ -169,7 +169,8 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
       {kSectionStrings, strings.data(), strings.size(), static_cast<std::uint32_t>(strings.size())},
       {kSectionKeypoints, keypoints.data(), keypoints.size() * sizeof(Point2f),
        static_cast<std::uint32_t>(keypoints.size())},
-      {kSectionArcs, arcs.data(), arcs.size() * sizeof(ModelArc), static_cast<std::uint32_t>(arcs.size())},
+      {kSectionArcs, arcs.data(), arcs.size() * sizeof(ModelArc),
+       static_cast<std::uint32_t>(arcs.size())},
       {kSectionDescriptors, tree_points.data(), tree_points.size() * sizeof(ArcDescriptor),
        static_cast<std::uint32_t>(tree_points.size())},
       {kSectionTreeIds, tree_ids.data(), tree_ids.size() * sizeof(std::uint32_t),

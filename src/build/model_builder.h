@@ -21,9 +21,9 @@ struct BuiltModel {
   std::string name;
   int width = 0;
   int height = 0;
-  std::vector<Point2f> keypoints;         // model pixels
-  std::vector<ModelArc> arcs;             // local keypoint ids, sorted by (from, to)
-  std::vector<ArcDescriptor> descriptors; // one per arc
+  std::vector<Point2f> keypoints;          // model pixels
+  std::vector<ModelArc> arcs;              // local keypoint ids, sorted by (from, to)
+  std::vector<ArcDescriptor> descriptors;  // one per arc
   std::uint64_t keygraphs = 0;
 };
 

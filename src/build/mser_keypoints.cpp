@@ -10,8 +10,8 @@ namespace kg {
 
 void mser_keypoints(const cv::Mat& gray, const KeypointParams& params, std::vector<Keypoint>& out) {
   out.clear();
-  cv::Ptr<cv::MSER> mser = cv::MSER::create(params.mser_delta, params.mser_min_area,
-                                            params.mser_max_area);
+  cv::Ptr<cv::MSER> mser =
+      cv::MSER::create(params.mser_delta, params.mser_min_area, params.mser_max_area);
   std::vector<std::vector<cv::Point>> regions;
   std::vector<cv::Rect> boxes;
   mser->detectRegions(gray, regions, boxes);
@@ -39,7 +39,8 @@ void KeypointExtractor::extract(const cv::Mat& gray, const KeypointParams& param
                                 int max_keypoints, std::vector<Keypoint>& out) {
   if (params.detector == KeypointDetector::kMser) {
     mser_keypoints(gray, params, out);
-    if (static_cast<int>(out.size()) > max_keypoints) out.resize(static_cast<std::size_t>(max_keypoints));
+    if (static_cast<int>(out.size()) > max_keypoints)
+      out.resize(static_cast<std::size_t>(max_keypoints));
     return;
   }
   hessian_.detect(view_of(gray), params, max_keypoints, out);

@@ -20,8 +20,8 @@ bool parse_roi(const std::string& text, cv::Rect& roi) {
   std::istringstream in(text);
   char c1 = 0, c2 = 0, c3 = 0;
   in >> roi.x >> c1 >> roi.y >> c2 >> roi.width >> c3 >> roi.height;
-  return in && in.peek() == EOF && c1 == ',' && c2 == ',' && c3 == ',' && roi.x >= 0 && roi.y >= 0 &&
-         roi.width > 0 && roi.height > 0;
+  return in && in.peek() == EOF && c1 == ',' && c2 == ',' && c3 == ',' && roi.x >= 0 &&
+         roi.y >= 0 && roi.width > 0 && roi.height > 0;
 }
 
 }  // namespace
@@ -80,21 +80,23 @@ int cmd_build(const Args& args) {
     if (name.empty()) return fail("build: empty model name for " + paths[i]);
     if (!seen.insert(name).second) return fail("build: duplicate model name '" + name + "'");
     cv::Mat gray;
-    Status s = load_gray(paths[i], gray);
+    Status s = load_image(paths[i], gray);
     if (!s) return fail(s.message());
     if (rois[i]) {
       const cv::Rect r = *rois[i];
       if (r.x + r.width > gray.cols || r.y + r.height > gray.rows)
         return fail("build: --roi " + std::to_string(r.x) + "," + std::to_string(r.y) + "," +
                     std::to_string(r.width) + "," + std::to_string(r.height) + " lies outside " +
-                    paths[i] + " (" + std::to_string(gray.cols) + "x" + std::to_string(gray.rows) + ")");
+                    paths[i] + " (" + std::to_string(gray.cols) + "x" + std::to_string(gray.rows) +
+                    ")");
       gray = gray(r).clone();
     }
     BuiltModel model;
     s = build_model(gray, name, params, model);
     if (!s) return fail(s.message());
-    std::printf("%s: %zu keypoints, %zu arcs, %llu keygraphs\n", name.c_str(), model.keypoints.size(),
-                model.arcs.size(), static_cast<unsigned long long>(model.keygraphs));
+    std::printf("%s: %zu keypoints, %zu arcs, %llu keygraphs\n", name.c_str(),
+                model.keypoints.size(), model.arcs.size(),
+                static_cast<unsigned long long>(model.keygraphs));
     models.push_back(std::move(model));
   }
   Status s = write_index(models, params, output);

@@ -29,9 +29,9 @@ int cmd_demo(const Args& args) {
   if (!std::filesystem::is_directory(out_dir, ec)) return fail("demo: no directory " + out_dir);
 
   cv::Mat model_image, scene;
-  Status s = load_gray(model_path, model_image);
+  Status s = load_image(model_path, model_image);
   if (!s) return fail(s.message() + " (install Debian's opencv-doc package)");
-  s = load_gray(scene_path, scene);
+  s = load_image(scene_path, scene);
   if (!s) return fail(s.message() + " (install Debian's opencv-doc package)");
 
   Params params;

@@ -16,8 +16,8 @@ namespace {
 std::string draw_path(const std::string& draw, const std::string& scene, bool several) {
   if (!several) return draw;
   const std::filesystem::path p(draw);
-  const std::string name =
-      p.stem().string() + "_" + std::filesystem::path(scene).stem().string() + p.extension().string();
+  const std::string name = p.stem().string() + "_" + std::filesystem::path(scene).stem().string() +
+                           p.extension().string();
   return (p.parent_path() / name).string();
 }
 
@@ -50,7 +50,7 @@ int cmd_detect(const Args& args) {
   DetectionList found;
   for (const std::string& scene : scenes) {
     cv::Mat gray;
-    s = load_gray(scene, gray);
+    s = load_image(scene, gray);
     if (!s) {
       exit_code = fail(s.message());
       continue;
@@ -69,8 +69,8 @@ int cmd_detect(const Args& args) {
     } else {
       std::printf("%s: %zu detection(s) in %.1f ms\n", scene.c_str(), found.size(), ms);
       for (const Detection& d : found) {
-        std::printf("  %.*s: inliers %d, score %.3f, corners", static_cast<int>(d.model_name.size()),
-                    d.model_name.data(), d.inliers, d.score);
+        std::printf("  %.*s: inliers %d, score %.3f, corners",
+                    static_cast<int>(d.model_name.size()), d.model_name.data(), d.inliers, d.score);
         for (const Point2f& c : d.corners) std::printf(" (%.1f, %.1f)", c.x, c.y);
         std::printf("\n");
       }

@@ -7,6 +7,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "keygraph/status.h"
+
 namespace kg::cli {
 
 using Args = std::vector<std::string>;
@@ -17,6 +19,9 @@ int cmd_demo(const Args& args);
 
 // "keygraph: <message>" on stderr; returns 1.
 int fail(const std::string& message);
+// load_gray() with image decoders' own stderr output held back when the
+// load fails, so the failure is reported as one line.
+Status load_image(const std::string& path, cv::Mat& gray);
 // Writes an image via a temporary file and a rename (no partial output).
 bool write_image_atomically(const std::string& path, const cv::Mat& image, std::string& error);
 

@@ -10,11 +10,21 @@ std::string json_string(std::string_view s) {
   for (const char ch : s) {
     const auto c = static_cast<unsigned char>(ch);
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\r': out += "\\r"; break;
-      case '\t': out += "\\t"; break;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\r':
+        out += "\\r";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
       default:
         if (c < 0x20) {
           char buf[8];
@@ -38,19 +48,22 @@ std::string json_number(double v) {
 std::string detection_json(const std::string& scene, int width, int height, double time_ms,
                            const DetectionList& detections, const DetectStats& stats) {
   std::string s = "{\"scene\": " + json_string(scene) + ", \"width\": " + std::to_string(width) +
-                  ", \"height\": " + std::to_string(height) + ", \"time_ms\": " +
-                  json_number(std::round(time_ms * 1000.0) / 1000.0) + ", \"detections\": [";
+                  ", \"height\": " + std::to_string(height) +
+                  ", \"time_ms\": " + json_number(std::round(time_ms * 1000.0) / 1000.0) +
+                  ", \"detections\": [";
   for (std::size_t i = 0; i < detections.size(); ++i) {
     const Detection& d = detections[i];
     if (i > 0) s += ", ";
-    s += "{\"model\": " + json_string(d.model_name) + ", \"model_id\": " + std::to_string(d.model_id) +
-         ", \"homography\": [";
+    s += "{\"model\": " + json_string(d.model_name) +
+         ", \"model_id\": " + std::to_string(d.model_id) + ", \"homography\": [";
     for (int j = 0; j < 9; ++j) s += (j ? ", " : "") + json_number(d.homography[j]);
     s += "], \"corners\": [";
     for (int c = 0; c < 4; ++c) {
-      s += (c ? ", [" : "[") + json_number(d.corners[c].x) + ", " + json_number(d.corners[c].y) + "]";
+      s += (c ? ", [" : "[") + json_number(d.corners[c].x) + ", " + json_number(d.corners[c].y) +
+           "]";
     }
-    s += "], \"inliers\": " + std::to_string(d.inliers) + ", \"score\": " + json_number(d.score) + "}";
+    s += "], \"inliers\": " + std::to_string(d.inliers) + ", \"score\": " + json_number(d.score) +
+         "}";
   }
   s += "], \"stats\": {\"keypoints\": " + std::to_string(stats.keypoints) +
        ", \"sampled_keypoints\": " + std::to_string(stats.sampled_keypoints) +

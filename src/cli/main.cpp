@@ -1,5 +1,6 @@
 // keygraph: build model indexes and detect models in images.
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <iostream>
 #include <string>
@@ -7,6 +8,11 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#if defined(__unix__) || defined(__APPLE__)
+#include <unistd.h>
+#endif
+
+#include "build/image_io.h"
 #include "cli/commands.h"
 
 namespace kg::cli {
@@ -14,6 +20,36 @@ namespace kg::cli {
 int fail(const std::string& message) {
   std::fprintf(stderr, "keygraph: %s\n", message.c_str());
   return 1;
+}
+
+Status load_image(const std::string& path, cv::Mat& gray) {
+#if defined(__unix__) || defined(__APPLE__)
+  // Decoders (libpng, libjpeg) print their own complaints on stderr. Hold
+  // them in a temporary file: on failure our one line replaces them, on
+  // success they are passed on (e.g. libpng's sRGB profile warnings).
+  std::FILE* held = std::tmpfile();
+  std::fflush(stderr);
+  const int saved = held != nullptr ? ::dup(2) : -1;
+  if (saved < 0 || ::dup2(::fileno(held), 2) < 0) {
+    if (saved >= 0) ::close(saved);
+    if (held != nullptr) std::fclose(held);
+    return load_gray(path, gray);
+  }
+  Status s = load_gray(path, gray);
+  std::fflush(stderr);
+  ::dup2(saved, 2);
+  ::close(saved);
+  if (s) {
+    std::rewind(held);
+    char buf[4096];
+    for (std::size_t n; (n = std::fread(buf, 1, sizeof(buf), held)) > 0;)
+      std::fwrite(buf, 1, n, stderr);
+  }
+  std::fclose(held);
+  return s;
+#else
+  return load_gray(path, gray);
+#endif
 }
 
 bool write_image_atomically(const std::string& path, const cv::Mat& image, std::string& error) {
@@ -64,9 +100,7 @@ void usage(std::FILE* out) {
                "  help                              this text\n");
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   if (argc < 2) {
     usage(stderr);
     return 2;
@@ -81,4 +115,16 @@ int main(int argc, char** argv) {
     return 0;
   }
   return kg::cli::fail("unknown command '" + command + "' (see keygraph help)");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Last resort (e.g. std::bad_alloc, cv::Exception): one line and a
+  // non-zero exit instead of std::terminate's multi-line abort.
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    return kg::cli::fail(std::string("internal error: ") + e.what());
+  }
 }

@@ -64,10 +64,18 @@ Detector::~Detector() = default;
 Detector::Detector(Detector&&) noexcept = default;
 Detector& Detector::operator=(Detector&&) noexcept = default;
 
-const DetectStats& Detector::stats() const { return impl_->stats; }
-const std::vector<KeygraphMatch>& Detector::last_matches() const { return impl_->matches; }
-const std::vector<Keypoint>& Detector::last_keypoints() const { return impl_->scene_keypoints; }
-const ModelIndex& Detector::index() const { return *impl_->index; }
+const DetectStats& Detector::stats() const {
+  return impl_->stats;
+}
+const std::vector<KeygraphMatch>& Detector::last_matches() const {
+  return impl_->matches;
+}
+const std::vector<Keypoint>& Detector::last_keypoints() const {
+  return impl_->scene_keypoints;
+}
+const ModelIndex& Detector::index() const {
+  return *impl_->index;
+}
 
 Status Detector::detect(ImageView frame, DetectionList& out) {
   out.clear();
@@ -76,8 +84,9 @@ Status Detector::detect(ImageView frame, DetectionList& out) {
     return {StatusCode::kInvalidArgument, "empty or malformed frame"};
   const Params& params = impl_->index->params();
   if (params.keypoints.detector != KeypointDetector::kHessian)
-    return {StatusCode::kInvalidArgument,
-            "index was built with a keypoint detector the core does not have (MSER): pass keypoints"};
+    return {
+        StatusCode::kInvalidArgument,
+        "index was built with a keypoint detector the core does not have (MSER): pass keypoints"};
   const auto start = Clock::now();
   impl_->hessian.detect(frame, params.keypoints, impl_->limits.max_keypoints, impl_->detected);
   impl_->stats.ms_keypoints = ms_since(start);
@@ -95,8 +104,8 @@ Status Detector::detect(ImageView frame, const Keypoint* keypoints, int count, D
   return impl_->run(frame, keypoints, count, out, Clock::now());
 }
 
-Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count, DetectionList& out,
-                           Clock::time_point start) {
+Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count,
+                           DetectionList& out, Clock::time_point start) {
   const Params& params = index->params();
   stats.keypoints = count;
   if (count > limits.max_keypoints) {
@@ -160,17 +169,19 @@ Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count
                std::max(4.f, static_cast<float>(params.ransac.inlier_threshold)));
   }
   frame_keypoints.grid = &grid;
-  std::stable_sort(matches.begin(), matches.end(),
-                   [](const KeygraphMatch& a, const KeygraphMatch& b) { return a.model_id < b.model_id; });
+  std::stable_sort(
+      matches.begin(), matches.end(),
+      [](const KeygraphMatch& a, const KeygraphMatch& b) { return a.model_id < b.model_id; });
   std::size_t begin = 0;
   while (begin < matches.size()) {
     std::size_t end = begin;
     while (end < matches.size() && matches[end].model_id == matches[begin].model_id) ++end;
-    Rng model_rng(params.ransac.seed ^ (0x9e3779b97f4a7c15ULL * static_cast<std::uint64_t>(matches[begin].model_id + 1)));
-    stats.ransac_iterations += pose.estimate(*index, matches[begin].model_id, matches.data() + begin,
-                                             static_cast<int>(end - begin), scene_points.data(),
-                                             frame_keypoints, model_rng, limits.max_detections, out,
-                                             stats.truncated_detections);
+    Rng model_rng(params.ransac.seed ^ (0x9e3779b97f4a7c15ULL *
+                                        static_cast<std::uint64_t>(matches[begin].model_id + 1)));
+    stats.ransac_iterations +=
+        pose.estimate(*index, matches[begin].model_id, matches.data() + begin,
+                      static_cast<int>(end - begin), scene_points.data(), frame_keypoints,
+                      model_rng, limits.max_detections, out, stats.truncated_detections);
     begin = end;
   }
   stats.ms_pose = ms_since(t);

@@ -53,7 +53,9 @@ constexpr std::size_t stored_size() {
   }
 }
 
-bool finite_positive(double v) { return std::isfinite(v) && v > 0.0; }
+bool finite_positive(double v) {
+  return std::isfinite(v) && v > 0.0;
+}
 
 Status bad(const std::string& field, const std::string& why) {
   return {StatusCode::kCorruptData, "parameter " + field + " " + why};
@@ -77,7 +79,8 @@ void serialize_params(const Params& params, std::uint8_t* out) {
 
 Status parse_params(const std::uint8_t* in, std::size_t size, Params& params) {
   std::size_t needed = 0;
-  visit_params(params, [&](auto& field) { needed += stored_size<std::decay_t<decltype(field)>>(); });
+  visit_params(params,
+               [&](auto& field) { needed += stored_size<std::decay_t<decltype(field)>>(); });
   if (size < needed) return {StatusCode::kCorruptData, "parameter block too small"};
   std::size_t at = 0;
   visit_params(params, [&](auto& field) {
@@ -116,7 +119,8 @@ Status validate_params(const Params& p) {
   if (!finite_positive(p.graph.min_distance) || !finite_positive(p.graph.max_distance) ||
       p.graph.max_distance < p.graph.min_distance)
     return bad("min/max_distance", "must be positive with min <= max");
-  if (!(std::isfinite(p.graph.max_anisotropy) && (p.graph.max_anisotropy == 0.f || p.graph.max_anisotropy >= 1.f)))
+  if (!(std::isfinite(p.graph.max_anisotropy) &&
+        (p.graph.max_anisotropy == 0.f || p.graph.max_anisotropy >= 1.f)))
     return bad("max_anisotropy", "must be 0 (off) or >= 1");
   if (!finite_positive(p.graph.scene_sample_distance))
     return bad("scene_sample_distance", "must be positive");
@@ -130,13 +134,15 @@ Status validate_params(const Params& p) {
     return bad("coefficients", "must be in 1.." + std::to_string(kMaxCoefficients));
   if (p.descriptor.parallel_offset < 0 || p.descriptor.parallel_offset > 8)
     return bad("parallel_offset", "must be in 0..8");
-  if (!finite_positive(p.descriptor.similarity_threshold) || p.descriptor.similarity_threshold > 2.f)
+  if (!finite_positive(p.descriptor.similarity_threshold) ||
+      p.descriptor.similarity_threshold > 2.f)
     return bad("similarity_threshold", "must be in (0, 2]");
   if (!(p.ransac.confidence > 0.0 && p.ransac.confidence < 1.0))
     return bad("confidence", "must be in (0, 1)");
   if (p.ransac.max_iterations < 1 || p.ransac.max_iterations > 10000000)
     return bad("max_iterations", "must be in 1..10^7");
-  if (!finite_positive(p.ransac.inlier_threshold)) return bad("inlier_threshold", "must be positive");
+  if (!finite_positive(p.ransac.inlier_threshold))
+    return bad("inlier_threshold", "must be positive");
   if (p.ransac.min_inliers < 4) return bad("min_inliers", "must be >= 4");
   if (p.ransac.min_inlier_keygraphs < 1) return bad("min_inlier_keygraphs", "must be >= 1");
   if (!(std::isfinite(p.ransac.max_scale_change) && p.ransac.max_scale_change >= 1.0))

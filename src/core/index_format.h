@@ -69,7 +69,9 @@ inline constexpr std::size_t kModArcCount = 28;
 inline constexpr std::size_t kModKeygraphCount = 32;
 inline constexpr std::size_t kModOutline = 40;  // 8 x float32
 
-inline std::size_t align_up(std::size_t v) { return (v + kAlignment - 1) & ~(kAlignment - 1); }
+inline std::size_t align_up(std::size_t v) {
+  return (v + kAlignment - 1) & ~(kAlignment - 1);
+}
 
 // Little-endian fixed-width access (the only byte order keygraph runs on,
 // checked at load time).

@@ -121,8 +121,8 @@ inline Frame root_frame(std::uint32_t n) {
 
 }  // namespace
 
-std::uint32_t KdTreeView::radius_search(const ArcDescriptor& q, float radius2,
-                                        std::uint32_t* out, std::uint32_t capacity) const {
+std::uint32_t KdTreeView::radius_search(const ArcDescriptor& q, float radius2, std::uint32_t* out,
+                                        std::uint32_t capacity) const {
   std::uint32_t found = 0;
   if (n_ == 0) return 0;
   Frame stack[kMaxTreeDepth + 2];

@@ -28,7 +28,8 @@ bool is_keytuple(const int* order, int k, const std::uint8_t* sigma, const int* 
     for (int j = 0; j < k; ++j) {
       if (i == j) continue;
       bool arc = false;
-      for (int a = 0; a < arc_count && !arc; ++a) arc = arc_from[a] == order[i] && arc_to[a] == order[j];
+      for (int a = 0; a < arc_count && !arc; ++a)
+        arc = arc_from[a] == order[i] && arc_to[a] == order[j];
       if (arc != (sigma[i * k + j] != 0)) return false;
     }
   }

@@ -23,11 +23,15 @@ inline float orient(Point2f a, Point2f b, Point2f c) {
   return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
 }
 
-inline int vertex_count(Structure s) { return static_cast<int>(s); }
+inline int vertex_count(Structure s) {
+  return static_cast<int>(s);
+}
 
 // Keygraph correspondences needed for one homography (4 point pairs): h in
 // the paper's log(1-P)/log(1-p^h).
-inline int sample_size(Structure s) { return (4 + vertex_count(s) - 1) / vertex_count(s); }
+inline int sample_size(Structure s) {
+  return (4 + vertex_count(s) - 1) / vertex_count(s);
+}
 
 // The paper's relative-positioning criterion: for circuits every turn is
 // clockwise (a convex clockwise polygon); arcs always pass.

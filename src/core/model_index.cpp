@@ -6,6 +6,8 @@
 #include <new>
 #include <string>
 
+#include <sys/stat.h>
+
 #include "core/crc32.h"
 #include "core/index_format.h"
 #include "core/kdtree.h"
@@ -16,7 +18,9 @@ using namespace format;
 
 namespace {
 
-Status corrupt(const std::string& what) { return {StatusCode::kCorruptData, what}; }
+Status corrupt(const std::string& what) {
+  return {StatusCode::kCorruptData, what};
+}
 
 struct Section {
   std::uint32_t encoding = 0;
@@ -29,14 +33,22 @@ struct Section {
 
 const char* section_name(std::uint32_t id) {
   switch (id) {
-    case kSectionModels: return "models";
-    case kSectionStrings: return "strings";
-    case kSectionKeypoints: return "keypoints";
-    case kSectionArcs: return "arcs";
-    case kSectionDescriptors: return "descriptors";
-    case kSectionTreeIds: return "tree ids";
-    case kSectionTreeNodes: return "tree nodes";
-    default: return "unknown";
+    case kSectionModels:
+      return "models";
+    case kSectionStrings:
+      return "strings";
+    case kSectionKeypoints:
+      return "keypoints";
+    case kSectionArcs:
+      return "arcs";
+    case kSectionDescriptors:
+      return "descriptors";
+    case kSectionTreeIds:
+      return "tree ids";
+    case kSectionTreeNodes:
+      return "tree nodes";
+    default:
+      return "unknown";
   }
 }
 
@@ -59,6 +71,9 @@ ModelIndex::ModelIndex(ModelIndex&&) noexcept = default;
 ModelIndex& ModelIndex::operator=(ModelIndex&&) noexcept = default;
 
 Status ModelIndex::open(const std::string& path, ModelIndex& out) {
+  struct stat info {};
+  if (::stat(path.c_str(), &info) != 0) return {StatusCode::kNotFound, "cannot open index " + path};
+  if (!S_ISREG(info.st_mode)) return {StatusCode::kInvalidArgument, path + ": not a regular file"};
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (f == nullptr) return {StatusCode::kNotFound, "cannot open index " + path};
   std::fseek(f, 0, SEEK_END);
@@ -74,8 +89,12 @@ Status ModelIndex::open(const std::string& path, ModelIndex& out) {
     return corrupt(path + ": file too small for a keygraph index (" + std::to_string(size) +
                    " bytes)");
   }
-  std::unique_ptr<std::uint8_t, AlignedFree> buffer(
-      static_cast<std::uint8_t*>(::operator new[](size, std::align_val_t(kAlignment))));
+  std::unique_ptr<std::uint8_t, AlignedFree> buffer(static_cast<std::uint8_t*>(
+      ::operator new[](size, std::align_val_t(kAlignment), std::nothrow)));
+  if (!buffer) {
+    std::fclose(f);
+    return {StatusCode::kResourceExhausted, path + ": not enough memory for the index"};
+  }
   const std::size_t got = std::fread(buffer.get(), 1, size, f);
   std::fclose(f);
   if (got != size) return {StatusCode::kIoError, "short read on index " + path};
@@ -114,10 +133,11 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
                 " is not supported (this reader reads " + std::to_string(kVersionMajor) + ".x)"};
   const auto header_size = load<std::uint32_t>(d + kOffHeaderSize);
   const auto file_size = load<std::uint64_t>(d + kOffFileSize);
-  if (header_size != kHeaderSize) return corrupt("header: size field is " + std::to_string(header_size));
+  if (header_size != kHeaderSize)
+    return corrupt("header: size field is " + std::to_string(header_size));
   if (file_size != size)
-    return corrupt("header: file size field says " + std::to_string(file_size) + " bytes, file has " +
-                   std::to_string(size) + " (truncated or padded)");
+    return corrupt("header: file size field says " + std::to_string(file_size) +
+                   " bytes, file has " + std::to_string(size) + " (truncated or padded)");
   const auto params_offset = load<std::uint32_t>(d + kOffParamsOffset);
   const auto params_size = load<std::uint32_t>(d + kOffParamsSize);
   const auto table_offset = load<std::uint32_t>(d + kOffTableOffset);
@@ -126,8 +146,8 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
       static_cast<std::uint64_t>(params_offset) + params_size > size)
     return corrupt("header: parameter block out of bounds");
   if (section_count == 0 || section_count > 64) return corrupt("header: bad section count");
-  const std::uint64_t table_end =
-      static_cast<std::uint64_t>(table_offset) + static_cast<std::uint64_t>(section_count) * kSectionEntrySize;
+  const std::uint64_t table_end = static_cast<std::uint64_t>(table_offset) +
+                                  static_cast<std::uint64_t>(section_count) * kSectionEntrySize;
   if (table_offset < static_cast<std::uint64_t>(params_offset) + params_size || table_end > size)
     return corrupt("header: section table out of bounds");
   // Header checksum covers header, parameters and table with its own field zeroed.
@@ -189,11 +209,13 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   if (strings.size != strings.count) return corrupt("strings section: size does not match count");
   if (models.count == 0) return corrupt("models section: no models");
   if (descriptors.count != arcs.count || ids.count != arcs.count)
-    return corrupt("tree sections: slot count differs from arc count " + std::to_string(arcs.count));
+    return corrupt("tree sections: slot count differs from arc count " +
+                   std::to_string(arcs.count));
   const int depth = kdtree_depth(arcs.count);
   if (nodes.count != (1ULL << depth) - 1)
     return corrupt("tree nodes section: " + std::to_string(nodes.count) + " nodes, expected " +
-                   std::to_string((1ULL << depth) - 1) + " for " + std::to_string(arcs.count) + " arcs");
+                   std::to_string((1ULL << depth) - 1) + " for " + std::to_string(arcs.count) +
+                   " arcs");
 
   // Model records: names, ranges, outlines.
   const std::uint8_t* rec = d + models.offset;
@@ -202,12 +224,14 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
     const std::string where = "model " + std::to_string(m) + ": ";
     const auto name_offset = load<std::uint32_t>(rec + kModNameOffset);
     const auto name_length = load<std::uint32_t>(rec + kModNameLength);
-    if (name_length == 0 || name_offset > strings.count || name_length > strings.count - name_offset)
+    if (name_length == 0 || name_offset > strings.count ||
+        name_length > strings.count - name_offset)
       return corrupt(where + "name out of bounds");
     const float w = load<float>(rec + kModWidth), h = load<float>(rec + kModHeight);
     if (!(w >= 1.f && h >= 1.f && w < 1e6f && h < 1e6f)) return corrupt(where + "bad image size");
     for (int c = 0; c < 8; ++c) {
-      if (!std::isfinite(load<float>(rec + kModOutline + 4 * c))) return corrupt(where + "bad outline");
+      if (!std::isfinite(load<float>(rec + kModOutline + 4 * c)))
+        return corrupt(where + "bad outline");
     }
     // Models own consecutive, non-overlapping keypoint and arc ranges.
     if (load<std::uint32_t>(rec + kModKeypointBegin) != next_keypoint ||
@@ -239,7 +263,8 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
     for (std::uint32_t a = ab; a < ae; ++a) {
       if (arc[a].from < kb || arc[a].from >= ke || arc[a].to < kb || arc[a].to >= ke ||
           arc[a].from == arc[a].to)
-        return corrupt("arc " + std::to_string(a) + ": keypoint ids outside model " + std::to_string(m));
+        return corrupt("arc " + std::to_string(a) + ": keypoint ids outside model " +
+                       std::to_string(m));
     }
   }
   const auto* desc = reinterpret_cast<const ArcDescriptor*>(d + descriptors.offset);
@@ -306,7 +331,8 @@ int ModelIndex::last_model_starting_at_or_before(std::size_t field, std::uint32_
   int lo = 0, hi = static_cast<int>(model_count_) - 1;
   while (lo < hi) {
     const int mid = (lo + hi + 1) / 2;
-    if (load<std::uint32_t>(models_ + static_cast<std::size_t>(mid) * kModelRecordSize + field) <= id) {
+    if (load<std::uint32_t>(models_ + static_cast<std::size_t>(mid) * kModelRecordSize + field) <=
+        id) {
       lo = mid;
     } else {
       hi = mid - 1;

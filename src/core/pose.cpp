@@ -28,7 +28,8 @@ struct KeygraphEstimator {
     std::uint32_t ids[kMaxVertices * 4];
     int n = 0;
     for (int i = 0; i < h; ++i) {
-      const std::uint32_t* pairs = &s.match_pairs_[static_cast<std::size_t>(s.active_[sample[i]]) * k];
+      const std::uint32_t* pairs =
+          &s.match_pairs_[static_cast<std::size_t>(s.active_[sample[i]]) * k];
       for (int j = 0; j < k; ++j) {
         const std::uint32_t p = pairs[j];
         bool seen = false;
@@ -38,7 +39,8 @@ struct KeygraphEstimator {
         const std::uint64_t key = s.pairs_[p];
         for (int q = 0; q < n; ++q) {
           const std::uint64_t other = s.pairs_[ids[q]];
-          if ((other >> 32) == (key >> 32) || (other & 0xFFFFFFFFu) == (key & 0xFFFFFFFFu)) return false;
+          if ((other >> 32) == (key >> 32) || (other & 0xFFFFFFFFu) == (key & 0xFFFFFFFFu))
+            return false;
         }
         ids[n] = p;
         model[n] = s.pair_model_[p];
@@ -173,8 +175,8 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
   }
   match_active_.assign(static_cast<std::size_t>(n), 1);
 
-  KeygraphEstimator estimator{*this, k, h, info.width, info.height, rp,
-                              rp.inlier_threshold * rp.inlier_threshold};
+  KeygraphEstimator estimator{
+      *this, k, h, info.width, info.height, rp, rp.inlier_threshold * rp.inlier_threshold};
   RansacOptions options;
   options.confidence = rp.confidence;
   options.max_iterations = rp.max_iterations;
@@ -233,19 +235,17 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
       for (std::size_t i = 0; i < pair_count; ++i) {
         if (pair_inlier_[i]) inlier_scene_.push_back(pair_scene_[i]);
       }
-      std::sort(inlier_scene_.begin(), inlier_scene_.end(), [](Point2f a, Point2f b) {
-        return a.x < b.x || (a.x == b.x && a.y < b.y);
-      });
+      std::sort(inlier_scene_.begin(), inlier_scene_.end(),
+                [](Point2f a, Point2f b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
       for (std::size_t i = 0; i < inlier_scene_.size(); ++i) {
         if (i == 0 || inlier_scene_[i].x != inlier_scene_[i - 1].x ||
             inlier_scene_[i].y != inlier_scene_[i - 1].y)
           ++distinct;
       }
     }
-    const bool accepted = distinct >= rp.min_inliers &&
-                          final_score.sample_inliers >= rp.min_inlier_keygraphs &&
-                          z >= rp.min_verification_z &&
-                          is_plausible_pose(refined, info.width, info.height, rp);
+    const bool accepted =
+        distinct >= rp.min_inliers && final_score.sample_inliers >= rp.min_inlier_keygraphs &&
+        z >= rp.min_verification_z && is_plausible_pose(refined, info.width, info.height, rp);
     if (accepted && static_cast<int>(out.size()) >= max_out) {
       truncated = true;
       break;

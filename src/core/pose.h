@@ -48,9 +48,9 @@ class PoseEstimator {
   };
   // Refines h on guided pairs and measures the support of the final pose.
   Support guided_refine(const ModelIndex& index, const ModelInfo& info, const FrameKeypoints& frame,
-                       Homography& h);
-  double chance_fraction(const ModelIndex& index, const ModelInfo& info, const FrameKeypoints& frame,
-                         const Homography& h) const;
+                        Homography& h);
+  double chance_fraction(const ModelIndex& index, const ModelInfo& info,
+                         const FrameKeypoints& frame, const Homography& h) const;
   // Distinct keypoint correspondences and, per keygraph match, its k indices into them.
   std::vector<std::uint64_t> pairs_;
   std::vector<Point2f> pair_model_;
@@ -59,7 +59,7 @@ class PoseEstimator {
   std::vector<std::uint8_t> pair_inlier_;
   std::vector<std::uint8_t> pair_dead_;  // explained by an instance already found
   std::vector<std::uint8_t> match_active_;
-  std::vector<int> active_;      // indices of matches still in play
+  std::vector<int> active_;  // indices of matches still in play
 
   std::vector<Point2f> inlier_model_;
   std::vector<Point2f> inlier_scene_;

@@ -41,9 +41,9 @@ struct RansacOptions {
 };
 
 struct RansacStats {
-  int iterations = 0;          // hypotheses drawn
-  int valid_hypotheses = 0;    // hypotheses that were not degenerate
-  int required_iterations = 0; // adaptive bound at the end
+  int iterations = 0;           // hypotheses drawn
+  int valid_hypotheses = 0;     // hypotheses that were not degenerate
+  int required_iterations = 0;  // adaptive bound at the end
   RansacScore best;
 };
 
@@ -83,8 +83,8 @@ inline void draw_distinct(Rng& rng, int n, int k, int* out) {
 template <class E, class = void>
 struct has_custom_draw : std::false_type {};
 template <class E>
-struct has_custom_draw<E, std::void_t<decltype(std::declval<E&>().draw(std::declval<Rng&>(),
-                                                                        std::declval<int*>()))>>
+struct has_custom_draw<
+    E, std::void_t<decltype(std::declval<E&>().draw(std::declval<Rng&>(), std::declval<int*>()))>>
     : std::true_type {};
 
 template <class Estimator>
@@ -98,9 +98,9 @@ RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
   int sample[8];
   typename Estimator::Model model;
   bool have_best = false;
-  while (stats.iterations < options.max_iterations &&
-         (stats.iterations < options.min_iterations ||
-          stats.iterations < stats.required_iterations)) {
+  while (
+      stats.iterations < options.max_iterations &&
+      (stats.iterations < options.min_iterations || stats.iterations < stats.required_iterations)) {
     ++stats.iterations;
     if constexpr (has_custom_draw<Estimator>::value) {
       estimator.draw(rng, sample);
@@ -116,8 +116,8 @@ RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
     have_best = true;
     stats.best = s;
     best_model = model;
-    stats.required_iterations = required_iterations(
-        static_cast<double>(s.sample_inliers) / n, h, options.confidence, options.max_iterations);
+    stats.required_iterations = required_iterations(static_cast<double>(s.sample_inliers) / n, h,
+                                                    options.confidence, options.max_iterations);
   }
   return stats;
 }

@@ -12,8 +12,12 @@ namespace {
 inline std::uint64_t key(std::uint32_t from, std::uint32_t to) {
   return (static_cast<std::uint64_t>(from) << 32) | to;
 }
-inline std::uint32_t from_of(std::uint64_t k) { return static_cast<std::uint32_t>(k >> 32); }
-inline std::uint32_t to_of(std::uint64_t k) { return static_cast<std::uint32_t>(k); }
+inline std::uint32_t from_of(std::uint64_t k) {
+  return static_cast<std::uint32_t>(k >> 32);
+}
+inline std::uint32_t to_of(std::uint64_t k) {
+  return static_cast<std::uint32_t>(k);
+}
 
 // Keys of `list` whose arc starts at `from`.
 inline std::pair<const std::uint64_t*, const std::uint64_t*> starting_at(const std::uint64_t* list,
@@ -43,8 +47,10 @@ bool plausible_local_map(const Point2f* m, const Point2f* s, int k, const Params
     return r2 * max_area >= 1.f && r2 <= max_area;
   }
   // A = S M^-1 with M, S the edge matrices of the two triangles.
-  const float m00 = m[1].x - m[0].x, m01 = m[2].x - m[0].x, m10 = m[1].y - m[0].y, m11 = m[2].y - m[0].y;
-  const float s00 = s[1].x - s[0].x, s01 = s[2].x - s[0].x, s10 = s[1].y - s[0].y, s11 = s[2].y - s[0].y;
+  const float m00 = m[1].x - m[0].x, m01 = m[2].x - m[0].x, m10 = m[1].y - m[0].y,
+              m11 = m[2].y - m[0].y;
+  const float s00 = s[1].x - s[0].x, s01 = s[2].x - s[0].x, s10 = s[1].y - s[0].y,
+              s11 = s[2].y - s[0].y;
   const float det_m = m00 * m11 - m01 * m10;
   if (det_m == 0.f) return false;
   const float inv = 1.f / det_m;
@@ -87,7 +93,8 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
   stats.arc_matches += total;
   const std::uint32_t n = std::min(total, cap);
   const ModelArc* arcs = in.index->arcs();
-  for (std::uint32_t i = 0; i < n; ++i) pool_.push_back(key(arcs[found_[i]].from, arcs[found_[i]].to));
+  for (std::uint32_t i = 0; i < n; ++i)
+    pool_.push_back(key(arcs[found_[i]].from, arcs[found_[i]].to));
   std::sort(pool_.begin() + begin_[e], pool_.end());
   count_[e] = n;
   count = n;

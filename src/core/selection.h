@@ -24,7 +24,7 @@ namespace kg {
 struct SelectionInput {
   const ModelIndex* index = nullptr;
   KdTreeView tree;
-  ImageView blurred;              // scene blurred for profiles
+  ImageView blurred;                      // scene blurred for profiles
   const Point2f* scene_points = nullptr;  // sampled scene keypoints
   const Delaunay* triangulation = nullptr;
   const std::vector<SceneKeygraph>* keygraphs = nullptr;

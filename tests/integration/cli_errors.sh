@@ -1,2 +1,216 @@
 #!/bin/sh
-exit 0
+# The keygraph CLI's contract on real files (DESIGN.md, "Quality bars"):
+# every failure prints exactly one line on stderr, exits non-zero and leaves
+# no output (not even a temporary file); the normal paths work and print
+# what the docs say.
+#
+# usage: cli_errors.sh PATH/TO/keygraph OPENCV_DATA_DIR
+set -u
+
+KG=${1:?usage: cli_errors.sh KEYGRAPH_BINARY OPENCV_DATA_DIR}
+DATA=${2:?usage: cli_errors.sh KEYGRAPH_BINARY OPENCV_DATA_DIR}
+
+die() {
+  echo "cli_errors: $*" >&2
+  exit 1
+}
+[ -x "$KG" ] || die "no keygraph binary at $KG"
+for f in box.png box_in_scene.png; do
+  [ -f "$DATA/$f" ] || die "missing $DATA/$f (install Debian's opencv-doc package)"
+done
+command -v python3 >/dev/null 2>&1 || die "python3 is needed to validate JSON output"
+# Absolute paths: failure cases run inside their own directories.
+KG=$(cd "$(dirname "$KG")" && pwd)/$(basename "$KG")
+DATA=$(cd "$DATA" && pwd)
+
+WORK=$(mktemp -d "${TMPDIR:-/tmp}/kg_cli.XXXXXX") || die "mktemp failed"
+trap 'rm -rf "$WORK"' EXIT
+trap 'exit 1' HUP INT TERM
+LOG=$WORK/log
+mkdir "$LOG"
+
+failures=0
+checks=0
+bad() {
+  echo "FAIL: $*" >&2
+  failures=$((failures + 1))
+}
+
+# Shared inputs.
+IN=$WORK/in
+mkdir "$IN"
+echo "this is a text file, not an image" >"$IN/text.png"
+: >"$IN/empty.png"
+head -c 2000 "$DATA/box.png" >"$IN/truncated.png"
+
+# expect_failure NAME CMD...: runs CMD inside a fresh directory $CASE (which
+# the command line may name) and checks one stderr line, non-zero exit, no
+# crash, and that nothing new appeared in $CASE.
+CASE=
+next_case() {
+  checks=$((checks + 1))
+  CASE=$WORK/case$checks
+  mkdir "$CASE"
+}
+expect_failure() {
+  name=$1
+  shift
+  before=$(ls -A "$CASE")
+  (cd "$CASE" && "$@") >"$LOG/stdout" 2>"$LOG/stderr"
+  rc=$?
+  # wc -l counts newline characters: a message without one counts as 0.
+  lines=$(wc -l <"$LOG/stderr" | tr -d ' ')
+  after=$(ls -A "$CASE")
+  if [ "$rc" -eq 0 ]; then
+    bad "$name: exit status 0, expected a failure"
+  elif [ "$rc" -ge 128 ]; then
+    bad "$name: killed by signal $((rc - 128)) (crash)"
+  fi
+  if [ "$lines" -ne 1 ] || [ "$(wc -c <"$LOG/stderr" | tr -d ' ')" -le 1 ]; then
+    bad "$name: expected one line on stderr, got $lines:"
+    sed 's/^/    /' "$LOG/stderr" >&2
+  elif ! grep -q '^keygraph: ' "$LOG/stderr"; then
+    bad "$name: stderr line does not start with 'keygraph: ': $(cat "$LOG/stderr")"
+  fi
+  if [ "$before" != "$after" ]; then
+    bad "$name: left files behind: $(echo "$after" | tr '\n' ' ')"
+  fi
+}
+
+# --- build failures ---------------------------------------------------------
+next_case
+expect_failure "build: missing model file" "$KG" build "$CASE/missing.png" -o "$CASE/out.kgi"
+next_case
+cp "$IN/text.png" "$CASE/"
+expect_failure "build: text file named .png" "$KG" build "$CASE/text.png" -o "$CASE/out.kgi"
+next_case
+cp "$IN/empty.png" "$CASE/"
+expect_failure "build: empty image file" "$KG" build "$CASE/empty.png" -o "$CASE/out.kgi"
+next_case
+cp "$IN/truncated.png" "$CASE/"
+expect_failure "build: truncated PNG" "$KG" build "$CASE/truncated.png" -o "$CASE/out.kgi"
+next_case
+expect_failure "build: no -o" "$KG" build "$DATA/box.png"
+next_case
+expect_failure "build: -o without a value" "$KG" build "$DATA/box.png" -o
+next_case
+expect_failure "build: no model images" "$KG" build -o "$CASE/out.kgi"
+next_case
+expect_failure "build: into a missing directory" \
+  "$KG" build "$DATA/box.png" -o "$CASE/no_such_dir/out.kgi"
+next_case
+expect_failure "build: bad --structure" "$KG" build --structure 5 "$DATA/box.png" -o "$CASE/o.kgi"
+next_case
+expect_failure "build: --roi outside the image" \
+  "$KG" build --roi 0,0,5000,10 "$DATA/box.png" -o "$CASE/out.kgi"
+next_case
+expect_failure "build: unknown option" "$KG" build --bogus "$DATA/box.png" -o "$CASE/out.kgi"
+
+# --- a real index (also the positive build check) -----------------------------
+INDEX=$WORK/box.kgi
+checks=$((checks + 1))
+if "$KG" build "$DATA/box.png" -o "$INDEX" >"$LOG/stdout" 2>"$LOG/stderr"; then
+  grep -Eq '^box: [0-9]+ keypoints, [0-9]+ arcs, [0-9]+ keygraphs$' "$LOG/stdout" ||
+    bad "build: no 'box: N keypoints, N arcs, N keygraphs' line in: $(cat "$LOG/stdout")"
+  [ -s "$LOG/stderr" ] && bad "build: succeeded but wrote to stderr: $(cat "$LOG/stderr")"
+  [ -s "$INDEX" ] || bad "build: $INDEX missing or empty"
+  [ -e "$INDEX.tmp" ] && bad "build: $INDEX.tmp left behind"
+else
+  bad "build box.png failed: $(cat "$LOG/stderr")"
+fi
+[ -s "$INDEX" ] || die "no index to continue with ($failures failure(s) so far)"
+
+# --- detect failures --------------------------------------------------------
+SCENE=$DATA/box_in_scene.png
+next_case
+expect_failure "detect: missing index" "$KG" detect --index "$CASE/missing.kgi" "$SCENE"
+next_case
+cp "$IN/text.png" "$CASE/index.kgi"
+expect_failure "detect: text file as index" "$KG" detect --index "$CASE/index.kgi" "$SCENE"
+next_case
+size=$(wc -c <"$INDEX" | tr -d ' ')
+head -c $((size / 2)) "$INDEX" >"$CASE/half.kgi"
+expect_failure "detect: truncated index (half)" "$KG" detect --index "$CASE/half.kgi" "$SCENE"
+next_case
+head -c $((size - 1)) "$INDEX" >"$CASE/short.kgi"
+expect_failure "detect: truncated index (last byte)" "$KG" detect --index "$CASE/short.kgi" "$SCENE"
+next_case
+head -c 40 "$INDEX" >"$CASE/header.kgi"
+expect_failure "detect: truncated index (inside header)" \
+  "$KG" detect --index "$CASE/header.kgi" "$SCENE"
+next_case
+mkdir "$CASE/dir.kgi"
+expect_failure "detect: directory as index" "$KG" detect --index "$CASE/dir.kgi" "$SCENE"
+next_case
+expect_failure "detect: missing scene" "$KG" detect --index "$INDEX" "$CASE/missing.png"
+next_case
+cp "$IN/truncated.png" "$CASE/"
+expect_failure "detect: truncated scene" "$KG" detect --index "$INDEX" "$CASE/truncated.png"
+next_case
+expect_failure "detect: --draw into a missing directory" \
+  "$KG" detect --index "$INDEX" --draw "$CASE/no_such_dir/out.png" "$SCENE"
+next_case
+expect_failure "detect: no --index" "$KG" detect "$SCENE"
+next_case
+expect_failure "detect: no scene" "$KG" detect --index "$INDEX"
+next_case
+expect_failure "detect: unknown option" "$KG" detect --index "$INDEX" --bogus "$SCENE"
+
+# --- other commands ---------------------------------------------------------
+next_case
+expect_failure "unknown command" "$KG" frobnicate
+next_case
+expect_failure "demo: unknown option" "$KG" demo --bogus
+next_case
+expect_failure "demo: missing output directory" "$KG" demo --out "$CASE/no_such_dir"
+
+# --- detect: JSON ------------------------------------------------------------
+checks=$((checks + 1))
+if "$KG" detect --index "$INDEX" --json "$SCENE" >"$LOG/json" 2>"$LOG/stderr"; then
+  lines=$(wc -l <"$LOG/json" | tr -d ' ')
+  [ "$lines" -eq 1 ] || bad "detect --json: $lines lines on stdout, expected 1"
+  [ -s "$LOG/stderr" ] && bad "detect --json: wrote to stderr: $(cat "$LOG/stderr")"
+  python3 -c 'import json,sys; json.loads(sys.stdin.read())' <"$LOG/json" ||
+    bad "detect --json: output is not valid JSON: $(head -c 300 "$LOG/json")"
+  python3 - "$LOG/json" <<'EOF' || bad "detect --json: unexpected content: $(head -c 600 "$LOG/json")"
+import json, numbers, sys
+doc = json.loads(open(sys.argv[1]).read())
+found = doc["detections"]
+assert len(found) == 1, "want one detection, got %d" % len(found)
+d = found[0]
+assert d["model"] == "box", d["model"]
+h = d["homography"]
+assert len(h) == 9 and all(isinstance(v, numbers.Real) and not isinstance(v, bool) for v in h), h
+EOF
+else
+  bad "detect --json failed (exit $?): $(cat "$LOG/stderr")"
+fi
+
+# --- detect: --draw ------------------------------------------------------------
+checks=$((checks + 1))
+DRAWN=$WORK/drawn.png
+if "$KG" detect --index "$INDEX" --draw "$DRAWN" "$SCENE" >"$LOG/stdout" 2>"$LOG/stderr"; then
+  [ "$(head -c 4 "$DRAWN" 2>/dev/null | tail -c 3)" = PNG ] || bad "detect --draw: $DRAWN is not a PNG"
+  for f in "$WORK"/.tmp-*; do
+    [ -e "$f" ] && bad "detect --draw: temporary image $f left behind"
+  done
+else
+  bad "detect --draw failed: $(cat "$LOG/stderr")"
+fi
+
+# --- demo ----------------------------------------------------------------------
+checks=$((checks + 1))
+DEMO=$WORK/demo
+mkdir "$DEMO"
+if "$KG" demo --out "$DEMO" --data "$DATA" >"$LOG/stdout" 2>"$LOG/stderr"; then
+  [ "$(head -c 4 "$DEMO/demo.png" 2>/dev/null | tail -c 3)" = PNG ] ||
+    bad "demo: $DEMO/demo.png missing or not a PNG"
+else
+  bad "demo --out failed: $(cat "$LOG/stderr")"
+fi
+
+if [ "$failures" -ne 0 ]; then
+  echo "cli_errors: $failures failure(s) in $checks checks" >&2
+  exit 1
+fi
+echo "cli_errors: all $checks checks passed"

@@ -1,0 +1,855 @@
+// The .kgi model index: writer/reader round trip on real models, byte-exact
+// determinism, atomic file writes, and the reader's validation: every kind of
+// damage is an error Status that names the problem, never a crash.
+#include "keygraph/model_index.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <memory>
+#include <new>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "build/model_builder.h"
+#include "core/crc32.h"
+#include "core/index_format.h"
+#include "core/kdtree.h"
+#include "test_data.h"
+
+namespace kg {
+namespace {
+
+using Bytes = std::vector<std::uint8_t>;
+using format::load;
+using format::store;
+
+// A copy of an index in a buffer of exactly its size (so ASan sees any
+// read past the end), 64-byte aligned plus `shift`.
+class AlignedBytes {
+ public:
+  explicit AlignedBytes(const Bytes& bytes, std::size_t shift = 0) : size_(bytes.size()) {
+    base_ = static_cast<std::uint8_t*>(
+        ::operator new[](size_ + shift + 1, std::align_val_t(format::kAlignment)));
+    data_ = base_ + shift;
+    if (size_ > 0) std::memcpy(data_, bytes.data(), size_);
+  }
+  ~AlignedBytes() { ::operator delete[](base_, std::align_val_t(format::kAlignment)); }
+  AlignedBytes(const AlignedBytes&) = delete;
+  AlignedBytes& operator=(const AlignedBytes&) = delete;
+  const std::uint8_t* data() const { return data_; }
+  std::size_t size() const { return size_; }
+
+ private:
+  std::uint8_t* base_ = nullptr;
+  std::uint8_t* data_ = nullptr;
+  std::size_t size_ = 0;
+};
+
+Status try_view(const Bytes& bytes) {
+  AlignedBytes buffer(bytes);
+  ModelIndex index;
+  return ModelIndex::view(buffer.data(), buffer.size(), index);
+}
+
+// Fails unless `bytes` is rejected with `code` and a message containing `needle`.
+::testing::AssertionResult rejected(const Bytes& bytes, std::string_view needle,
+                                    StatusCode code = StatusCode::kCorruptData) {
+  const Status s = try_view(bytes);
+  if (s.is_ok()) return ::testing::AssertionFailure() << "loaded; expected '" << needle << "'";
+  if (s.code() != code)
+    return ::testing::AssertionFailure()
+           << "code " << static_cast<int>(s.code()) << " (" << s.message() << ")";
+  if (s.message().find(needle) == std::string::npos)
+    return ::testing::AssertionFailure()
+           << "message '" << s.message() << "' lacks '" << needle << "'";
+  return ::testing::AssertionSuccess() << s.message();
+}
+
+// --- Section table access on a serialized index --------------------------
+
+std::size_t table_offset(const Bytes& b) {
+  return load<std::uint32_t>(b.data() + format::kOffTableOffset);
+}
+std::size_t section_count(const Bytes& b) {
+  return load<std::uint32_t>(b.data() + format::kOffSectionCount);
+}
+std::size_t table_end(const Bytes& b) {
+  return table_offset(b) + section_count(b) * format::kSectionEntrySize;
+}
+
+// Byte offset of the table entry for section `id`.
+std::size_t entry(const Bytes& b, std::uint32_t id) {
+  for (std::size_t i = 0; i < section_count(b); ++i) {
+    const std::size_t e = table_offset(b) + i * format::kSectionEntrySize;
+    if (load<std::uint32_t>(b.data() + e + format::kEntId) == id) return e;
+  }
+  ADD_FAILURE() << "section " << id << " not in the table";
+  return table_offset(b);
+}
+std::size_t section_offset(const Bytes& b, std::uint32_t id) {
+  return static_cast<std::size_t>(
+      load<std::uint64_t>(b.data() + entry(b, id) + format::kEntOffset));
+}
+std::size_t section_size(const Bytes& b, std::uint32_t id) {
+  return static_cast<std::size_t>(load<std::uint64_t>(b.data() + entry(b, id) + format::kEntSize));
+}
+
+// Recomputes the header CRC the way the format defines it: CRC-32 of
+// [0, table end) with the CRC field zeroed.
+void fix_header_crc(Bytes& b) {
+  store<std::uint32_t>(b.data() + format::kOffHeaderCrc, 0);
+  store<std::uint32_t>(b.data() + format::kOffHeaderCrc, crc32(b.data(), table_end(b)));
+}
+
+// Recomputes every section CRC, then the header CRC: after this only the
+// semantic checks can reject the file.
+void reseal(Bytes& b) {
+  for (std::uint32_t id = 1; id <= format::kSectionCount; ++id) {
+    const std::size_t e = entry(b, id);
+    store<std::uint32_t>(b.data() + e + format::kEntCrc,
+                         crc32(b.data() + section_offset(b, id), section_size(b, id)));
+  }
+  fix_header_crc(b);
+}
+
+// --- Real models, built once ----------------------------------------------
+
+struct Corpus {
+  std::string error;
+  Params params;
+  std::vector<BuiltModel> models;  // box.png, a 200x200 crop of graf1.png
+  Bytes bytes;                     // serialize_index(models, params)
+  Bytes small;                     // two small crops (box.png, graf1.png): for the bit-flip sweep
+};
+
+std::string build(const cv::Mat& gray, const std::string& name, BuiltModel& out) {
+  if (gray.empty()) return name + ": image missing (install opencv-doc)";
+  const Status s = build_model(gray, name, Params{}, out);
+  return s ? std::string() : s.message();
+}
+
+const Corpus& corpus() {
+  static const Corpus c = [] {
+    Corpus k;
+    k.models.resize(2);
+    const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+    const cv::Mat graf = test::load_gray(test::opencv_data("graf1.png"));
+    k.error = build(box, "box", k.models[0]);
+    if (k.error.empty() && !graf.empty())
+      k.error = build(graf(cv::Rect(300, 220, 200, 200)).clone(), "graf1_crop", k.models[1]);
+    if (k.error.empty() && graf.empty()) k.error = "graf1.png missing (install opencv-doc)";
+    if (k.error.empty()) {
+      const Status s = serialize_index(k.models, k.params, k.bytes);
+      if (!s) k.error = s.message();
+    }
+    // Small enough that thousands of full validations stay fast under ASan.
+    std::vector<BuiltModel> small(2);
+    if (k.error.empty())
+      k.error = build(box(cv::Rect(100, 50, 96, 96)).clone(), "box_crop", small[0]);
+    if (k.error.empty())
+      k.error = build(graf(cv::Rect(350, 250, 80, 80)).clone(), "graf1_small", small[1]);
+    if (k.error.empty()) {
+      const Status s = serialize_index(small, k.params, k.small);
+      if (!s) k.error = s.message();
+    }
+    return k;
+  }();
+  return c;
+}
+
+class ModelIndexTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(corpus().error.empty()) << corpus().error;
+    ASSERT_GT(corpus().models[0].arcs.size(), 0u);
+    ASSERT_GT(corpus().models[1].arcs.size(), 0u);
+  }
+  const std::vector<BuiltModel>& models() const { return corpus().models; }
+  const Bytes& bytes() const { return corpus().bytes; }
+};
+
+// Writes `p`'s parameter block over the index's (serialize_params does not
+// validate, so it can encode bad values) and fixes the header CRC.
+void put_params(Bytes& b, const Params& p) {
+  format::serialize_params(p, b.data() + load<std::uint32_t>(b.data() + format::kOffParamsOffset));
+  fix_header_crc(b);
+}
+
+void expect_same_params(const Params& got, const Params& want) {
+  std::uint8_t a[format::kParamsSize], b[format::kParamsSize];
+  format::serialize_params(got, a);
+  format::serialize_params(want, b);
+  EXPECT_EQ(0, std::memcmp(a, b, sizeof(a))) << "serialized parameter blocks differ";
+  EXPECT_EQ(got.keypoints.detector, want.keypoints.detector);
+  EXPECT_EQ(got.keypoints.hessian_threshold, want.keypoints.hessian_threshold);
+  EXPECT_EQ(got.keypoints.model_scales, want.keypoints.model_scales);
+  EXPECT_EQ(got.graph.structure, want.graph.structure);
+  EXPECT_EQ(got.graph.scene_sampling, want.graph.scene_sampling);
+  EXPECT_EQ(got.graph.min_distance, want.graph.min_distance);
+  EXPECT_EQ(got.graph.max_distance, want.graph.max_distance);
+  EXPECT_EQ(got.graph.max_anisotropy, want.graph.max_anisotropy);
+  EXPECT_EQ(got.descriptor.blur_sigma, want.descriptor.blur_sigma);
+  EXPECT_EQ(got.descriptor.profile_length, want.descriptor.profile_length);
+  EXPECT_EQ(got.descriptor.coefficients, want.descriptor.coefficients);
+  EXPECT_EQ(got.descriptor.similarity_threshold, want.descriptor.similarity_threshold);
+  EXPECT_EQ(got.ransac.confidence, want.ransac.confidence);
+  EXPECT_EQ(got.ransac.max_iterations, want.ransac.max_iterations);
+  EXPECT_EQ(got.ransac.inlier_threshold, want.ransac.inlier_threshold);
+  EXPECT_EQ(got.ransac.max_instances, want.ransac.max_instances);
+  EXPECT_EQ(got.ransac.seed, want.ransac.seed);
+}
+
+// Checks everything the reader exposes against the builder's data.
+void expect_matches(const ModelIndex& index, const std::vector<BuiltModel>& models) {
+  ASSERT_EQ(index.model_count(), static_cast<int>(models.size()));
+  EXPECT_FALSE(index.empty());
+  EXPECT_EQ(index.version_major(), format::kVersionMajor);
+  EXPECT_EQ(index.version_minor(), format::kVersionMinor);
+  std::uint32_t kp_begin = 0, arc_begin = 0;
+  std::vector<ArcDescriptor> descriptors;  // global arc id -> descriptor
+  for (int m = 0; m < index.model_count(); ++m) {
+    SCOPED_TRACE("model " + std::to_string(m));
+    const BuiltModel& bm = models[static_cast<std::size_t>(m)];
+    const ModelInfo info = index.model(m);
+    EXPECT_EQ(info.name, bm.name);
+    EXPECT_EQ(info.width, static_cast<float>(bm.width));
+    EXPECT_EQ(info.height, static_cast<float>(bm.height));
+    EXPECT_EQ(info.keypoint_begin, kp_begin);
+    EXPECT_EQ(info.keypoint_count, bm.keypoints.size());
+    EXPECT_EQ(info.arc_begin, arc_begin);
+    EXPECT_EQ(info.arc_count, bm.arcs.size());
+    EXPECT_EQ(info.keygraph_count, bm.keygraphs);
+    // Outline: the image rectangle through corner pixel centres, clockwise.
+    const float w = static_cast<float>(bm.width - 1), h = static_cast<float>(bm.height - 1);
+    const Point2f outline[4] = {{0.f, 0.f}, {w, 0.f}, {w, h}, {0.f, h}};
+    for (int c = 0; c < 4; ++c) {
+      EXPECT_EQ(info.outline[c].x, outline[c].x);
+      EXPECT_EQ(info.outline[c].y, outline[c].y);
+    }
+    for (std::size_t i = 0; i < bm.keypoints.size(); ++i) {
+      const Point2f& p = index.keypoints()[kp_begin + i];
+      ASSERT_TRUE(p.x == bm.keypoints[i].x && p.y == bm.keypoints[i].y) << "keypoint " << i;
+    }
+    for (std::size_t i = 0; i < bm.arcs.size(); ++i) {
+      const ModelArc& a = index.arcs()[arc_begin + i];
+      ASSERT_TRUE(a.from == bm.arcs[i].from + kp_begin && a.to == bm.arcs[i].to + kp_begin)
+          << "arc " << i;
+    }
+    descriptors.insert(descriptors.end(), bm.descriptors.begin(), bm.descriptors.end());
+    // Owner lookups at both ends of each range (and the middle).
+    if (info.keypoint_count > 0) {
+      EXPECT_EQ(index.model_of_keypoint(kp_begin), m);
+      EXPECT_EQ(index.model_of_keypoint(kp_begin + info.keypoint_count / 2), m);
+      EXPECT_EQ(index.model_of_keypoint(kp_begin + info.keypoint_count - 1), m);
+    }
+    if (info.arc_count > 0) {
+      EXPECT_EQ(index.model_of_arc(arc_begin), m);
+      EXPECT_EQ(index.model_of_arc(arc_begin + info.arc_count / 2), m);
+      EXPECT_EQ(index.model_of_arc(arc_begin + info.arc_count - 1), m);
+    }
+    kp_begin += info.keypoint_count;
+    arc_begin += info.arc_count;
+  }
+  EXPECT_EQ(index.keypoint_count(), kp_begin);
+  EXPECT_EQ(index.arc_count(), arc_begin);
+  EXPECT_EQ(index.model(-1).name, "");
+  EXPECT_EQ(index.model(index.model_count()).name, "");
+
+  // Tree: every slot holds the descriptor of the arc it names, and every
+  // arc appears exactly once.
+  EXPECT_EQ(index.tree_depth(), kdtree_depth(index.arc_count()));
+  std::vector<int> seen(index.arc_count(), 0);
+  for (std::uint32_t slot = 0; slot < index.arc_count(); ++slot) {
+    const std::uint32_t id = index.tree_ids()[slot];
+    ASSERT_LT(id, index.arc_count());
+    ++seen[id];
+    ASSERT_TRUE(index.tree_points()[slot] == descriptors[id]) << "slot " << slot;
+  }
+  for (std::uint32_t a = 0; a < index.arc_count(); ++a) ASSERT_EQ(seen[a], 1) << "arc " << a;
+  const std::uint32_t nodes = (1u << index.tree_depth()) - 1;
+  for (std::uint32_t n = 0; n < nodes; ++n)
+    ASSERT_LT(index.tree_nodes()[n].dim, static_cast<std::uint32_t>(kDescriptorSize));
+}
+
+TEST_F(ModelIndexTest, RoundTripThroughView) {
+  AlignedBytes buffer(bytes());
+  ModelIndex index;
+  const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_EQ(index.byte_size(), bytes().size());
+  EXPECT_EQ(bytes().size() % format::kAlignment, 0u);
+  expect_matches(index, models());
+  expect_same_params(index.params(), Params{});
+  // Zero copy: the accessors point into the caller's buffer.
+  EXPECT_GE(reinterpret_cast<const std::uint8_t*>(index.keypoints()), buffer.data());
+  EXPECT_LT(reinterpret_cast<const std::uint8_t*>(index.keypoints()),
+            buffer.data() + buffer.size());
+}
+
+TEST_F(ModelIndexTest, NonDefaultParamsRoundTrip) {
+  Params p;
+  p.keypoints.detector = KeypointDetector::kMser;
+  p.graph.structure = Structure::kCircuit4;
+  p.graph.scene_sampling = SceneSampling::kStrongest;
+  p.graph.min_distance = 12.5f;
+  p.graph.max_distance = 80.f;
+  p.descriptor.similarity_threshold = 0.25f;
+  p.descriptor.profile_length = 40;
+  p.ransac.confidence = 0.995;
+  p.ransac.max_iterations = 777;
+  p.ransac.inlier_threshold = 3.25;
+  p.ransac.max_instances = 7;
+  p.ransac.seed = 0x0123456789abcdefULL;
+  Bytes b;
+  ASSERT_TRUE(serialize_index(models(), p, b));
+  AlignedBytes buffer(b);
+  ModelIndex index;
+  const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
+  ASSERT_TRUE(s) << s.message();
+  expect_same_params(index.params(), p);
+}
+
+TEST_F(ModelIndexTest, OwnerLookupsOnManyModels) {
+  // Five models (some repeated) exercise the binary search beyond two ranges.
+  std::vector<BuiltModel> many = {models()[1], models()[0], models()[1], models()[1], models()[0]};
+  for (std::size_t i = 0; i < many.size(); ++i)
+    many[i].name = std::string("m").append(
+        std::to_string(i));  // not "m" + ...: GCC 12 -Wrestrict false positive
+  Bytes b;
+  ASSERT_TRUE(serialize_index(many, Params{}, b));
+  AlignedBytes buffer(b);
+  ModelIndex index;
+  ASSERT_TRUE(ModelIndex::view(buffer.data(), buffer.size(), index));
+  expect_matches(index, many);
+  for (std::uint32_t a = 0; a < index.arc_count(); a += 97) {
+    const ModelInfo info = index.model(index.model_of_arc(a));
+    ASSERT_TRUE(a >= info.arc_begin && a < info.arc_begin + info.arc_count) << a;
+  }
+  for (std::uint32_t k = 0; k < index.keypoint_count(); ++k) {
+    const ModelInfo info = index.model(index.model_of_keypoint(k));
+    ASSERT_TRUE(k >= info.keypoint_begin && k < info.keypoint_begin + info.keypoint_count) << k;
+  }
+}
+
+TEST_F(ModelIndexTest, SerializationIsDeterministic) {
+  Bytes again;
+  ASSERT_TRUE(serialize_index(models(), Params{}, again));
+  EXPECT_TRUE(again == bytes()) << "two serializations of the same models differ";
+
+  // Building the same image again gives the same model and the same bytes.
+  BuiltModel box;
+  const cv::Mat image = test::load_gray(test::opencv_data("box.png"));
+  ASSERT_FALSE(image.empty());
+  ASSERT_TRUE(build_model(image, "box", Params{}, box));
+  const BuiltModel& first = models()[0];
+  EXPECT_EQ(box.keygraphs, first.keygraphs);
+  ASSERT_EQ(box.keypoints.size(), first.keypoints.size());
+  ASSERT_EQ(box.arcs.size(), first.arcs.size());
+  std::vector<BuiltModel> rebuilt = {box, models()[1]};
+  Bytes rebuilt_bytes;
+  ASSERT_TRUE(serialize_index(rebuilt, Params{}, rebuilt_bytes));
+  EXPECT_TRUE(rebuilt_bytes == bytes()) << "rebuilding box.png changed the index bytes";
+}
+
+TEST_F(ModelIndexTest, SerializeRejectsBadInput) {
+  Bytes b;
+  EXPECT_FALSE(serialize_index({}, Params{}, b));
+  std::vector<BuiltModel> unnamed = {models()[0]};
+  unnamed[0].name.clear();
+  EXPECT_FALSE(serialize_index(unnamed, Params{}, b));
+  Params bad;
+  bad.graph.structure = static_cast<Structure>(7);
+  EXPECT_FALSE(serialize_index(models(), bad, b));
+}
+
+// --- Files --------------------------------------------------------------
+
+class TempDir {
+ public:
+  TempDir() {
+    std::string tmpl = (std::filesystem::temp_directory_path() / "kg_index_XXXXXX").string();
+    if (::mkdtemp(tmpl.data()) != nullptr) path_ = tmpl;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    if (!path_.empty()) std::filesystem::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::vector<std::string> entries() const {
+    std::vector<std::string> names;
+    for (const auto& e : std::filesystem::directory_iterator(path_))
+      names.push_back(e.path().filename().string());
+    return names;
+  }
+
+ private:
+  std::filesystem::path path_;
+};
+
+Bytes read_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+void write_file(const std::filesystem::path& path, const Bytes& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
+}
+
+TEST_F(ModelIndexTest, WriteAndOpenFile) {
+  TempDir dir;
+  ASSERT_FALSE(dir.path().empty());
+  const std::string path = (dir.path() / "models.kgi").string();
+  Status s = write_index(models(), Params{}, path);
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_TRUE(read_file(path) == bytes()) << "file differs from serialize_index";
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"models.kgi"}) << "temporary file left";
+
+  ModelIndex index;
+  s = ModelIndex::open(path, index);
+  ASSERT_TRUE(s) << s.message();
+  expect_matches(index, models());
+  expect_same_params(index.params(), Params{});
+
+  // Overwriting an existing index replaces it whole.
+  std::vector<BuiltModel> one = {models()[1]};
+  ASSERT_TRUE(write_index(one, Params{}, path));
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"models.kgi"});
+  ModelIndex replaced;
+  ASSERT_TRUE(ModelIndex::open(path, replaced));
+  EXPECT_EQ(replaced.model_count(), 1);
+  EXPECT_EQ(replaced.model(0).name, "graf1_crop");
+  // The earlier index owns its own buffer and is unaffected.
+  EXPECT_EQ(index.model_count(), 2);
+  EXPECT_EQ(index.model(1).name, "graf1_crop");
+}
+
+TEST_F(ModelIndexTest, WriteIntoMissingDirectoryFails) {
+  TempDir dir;
+  ASSERT_FALSE(dir.path().empty());
+  const std::filesystem::path missing = dir.path() / "no_such_dir";
+  const std::string path = (missing / "models.kgi").string();
+  const Status s = write_index(models(), Params{}, path);
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.message().find(path), std::string::npos) << s.message();
+  EXPECT_FALSE(std::filesystem::exists(missing));
+  EXPECT_TRUE(dir.entries().empty()) << "something was left behind";
+}
+
+TEST_F(ModelIndexTest, OpenRejectsBadFiles) {
+  TempDir dir;
+  ASSERT_FALSE(dir.path().empty());
+  ModelIndex index;
+  Status s = ModelIndex::open((dir.path() / "absent.kgi").string(), index);
+  EXPECT_EQ(s.code(), StatusCode::kNotFound) << s.message();
+  EXPECT_NE(s.message().find("absent.kgi"), std::string::npos) << s.message();
+
+  const auto empty = dir.path() / "empty.kgi";
+  write_file(empty, {});
+  s = ModelIndex::open(empty.string(), index);
+  EXPECT_FALSE(s);
+  EXPECT_NE(s.message().find("too small"), std::string::npos) << s.message();
+
+  const auto text = dir.path() / "text.kgi";
+  const std::string words = "this is a text file, not an index, but long enough for a header....\n";
+  write_file(text, Bytes(words.begin(), words.end()));
+  s = ModelIndex::open(text.string(), index);
+  EXPECT_FALSE(s);
+  EXPECT_NE(s.message().find("magic"), std::string::npos) << s.message();
+
+  const auto truncated = dir.path() / "truncated.kgi";
+  write_file(truncated, Bytes(bytes().begin(), bytes().begin() + bytes().size() / 2));
+  s = ModelIndex::open(truncated.string(), index);
+  EXPECT_FALSE(s);
+  EXPECT_NE(s.message().find("truncated"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("truncated.kgi"), std::string::npos) << "message names the file";
+}
+
+TEST_F(ModelIndexTest, OpenRejectsDirectory) {
+  // fopen() succeeds on a directory on Linux and ftell() then reports a
+  // huge size: open() must say so, not throw or abort on the allocation.
+  TempDir dir;
+  ASSERT_FALSE(dir.path().empty());
+  ModelIndex index;
+  const Status s = ModelIndex::open(dir.path().string(), index);
+  EXPECT_FALSE(s);
+  EXPECT_FALSE(s.message().empty());
+  EXPECT_TRUE(index.empty()) << "failed opens leave the output untouched";
+}
+
+// --- Corruption -------------------------------------------------------------
+
+TEST_F(ModelIndexTest, RejectsBadMagic) {
+  Bytes b = bytes();
+  b[0] = 'X';
+  EXPECT_TRUE(rejected(b, "bad magic"));
+  b = bytes();
+  std::memcpy(b.data() + 1, "PNG", 3);
+  EXPECT_TRUE(rejected(b, "not a keygraph index"));
+  b = bytes();
+  b[7] = 0;  // the trailing LF of the magic
+  EXPECT_TRUE(rejected(b, "bad magic"));
+}
+
+TEST_F(ModelIndexTest, RejectsTextModeDamage) {
+  // CR LF -> LF over the whole file, as a text-mode transfer would do.
+  Bytes lf;
+  for (std::size_t i = 0; i < bytes().size(); ++i) {
+    if (bytes()[i] == '\r' && i + 1 < bytes().size() && bytes()[i + 1] == '\n') continue;
+    lf.push_back(bytes()[i]);
+  }
+  ASSERT_LT(lf.size(), bytes().size());
+  EXPECT_TRUE(rejected(lf, "text-mode"));
+
+  // LF -> CR LF, the other direction.
+  Bytes crlf;
+  for (std::uint8_t c : bytes()) {
+    if (c == '\n') crlf.push_back('\r');
+    crlf.push_back(c);
+  }
+  EXPECT_TRUE(rejected(crlf, "text-mode"));
+}
+
+TEST_F(ModelIndexTest, RejectsTruncation) {
+  const std::size_t n = bytes().size();
+  std::vector<std::size_t> lengths = {0,
+                                      1,
+                                      8,
+                                      12,
+                                      40,
+                                      format::kHeaderSize - 1,
+                                      format::kHeaderSize,
+                                      table_end(bytes()) - 1,
+                                      table_end(bytes())};
+  for (std::size_t k = 1; k < 50; ++k) lengths.push_back(n * k / 50);
+  for (std::size_t k = 1; k <= 8; ++k) lengths.push_back(n - k);
+  for (std::size_t len : lengths) {
+    SCOPED_TRACE("length " + std::to_string(len) + " of " + std::to_string(n));
+    const Bytes cut(bytes().begin(), bytes().begin() + static_cast<std::ptrdiff_t>(len));
+    const Status s = try_view(cut);
+    ASSERT_FALSE(s);
+    EXPECT_TRUE(s.message().find("truncated") != std::string::npos ||
+                s.message().find("too small") != std::string::npos)
+        << s.message();
+  }
+  // Trailing bytes are damage too.
+  Bytes padded = bytes();
+  padded.resize(n + 64, 0);
+  EXPECT_TRUE(rejected(padded, "padded"));
+}
+
+TEST_F(ModelIndexTest, RejectsOtherMajorVersion) {
+  for (std::uint16_t major : {std::uint16_t{0}, std::uint16_t{2}, std::uint16_t{0xFFFF}}) {
+    Bytes b = bytes();
+    store<std::uint16_t>(b.data() + format::kOffMajor, major);
+    fix_header_crc(b);
+    EXPECT_TRUE(
+        rejected(b, "version " + std::to_string(major) + ".", StatusCode::kUnsupportedVersion));
+  }
+  // A newer minor version of the same major is readable (new sections and
+  // parameters are additive).
+  Bytes b = bytes();
+  store<std::uint16_t>(b.data() + format::kOffMinor, 9);
+  fix_header_crc(b);
+  AlignedBytes buffer(b);
+  ModelIndex index;
+  const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_EQ(index.version_minor(), 9);
+}
+
+TEST_F(ModelIndexTest, RejectsHeaderDamage) {
+  // Without a fixed CRC, any header, parameter or table byte is caught.
+  for (std::size_t at : {std::size_t{format::kOffFileSize + 7}, std::size_t{format::kOffHeaderCrc},
+                         std::size_t{format::kHeaderSize + 3}, table_end(bytes()) - 1}) {
+    Bytes b = bytes();
+    b[at] ^= 0x10;
+    EXPECT_TRUE(rejected(b, "header")) << "byte " << at;
+  }
+  Bytes b = bytes();
+  store<std::uint32_t>(b.data() + format::kOffHeaderCrc,
+                       load<std::uint32_t>(b.data() + format::kOffHeaderCrc) ^ 1u);
+  EXPECT_TRUE(rejected(b, "header: checksum mismatch"));
+
+  // With the CRC fixed, the structural checks must fire on their own.
+  b = bytes();
+  store<std::uint32_t>(b.data() + format::kOffHeaderSize, 128);
+  fix_header_crc(b);
+  EXPECT_TRUE(rejected(b, "header: size field"));
+  b = bytes();
+  store<std::uint32_t>(b.data() + format::kOffParamsOffset, 0xFFFFFF00u);
+  fix_header_crc(b);
+  EXPECT_TRUE(rejected(b, "parameter block out of bounds"));
+  b = bytes();
+  store<std::uint32_t>(b.data() + format::kOffSectionCount, 0);
+  fix_header_crc(b);
+  EXPECT_TRUE(rejected(b, "section count"));
+  b = bytes();
+  store<std::uint32_t>(b.data() + format::kOffTableOffset, 0xFFFFFFC0u);
+  store<std::uint32_t>(b.data() + format::kOffHeaderCrc, 0);  // CRC is checked after bounds
+  EXPECT_TRUE(rejected(b, "section table out of bounds"));
+}
+
+TEST_F(ModelIndexTest, RejectsFlippedByteInEachSection) {
+  const char* names[] = {"",     "models",      "strings",  "keypoints",
+                         "arcs", "descriptors", "tree ids", "tree nodes"};
+  for (std::uint32_t id = 1; id <= format::kSectionCount; ++id) {
+    ASSERT_GT(section_size(bytes(), id), 0u) << names[id];
+    for (std::size_t where :
+         {std::size_t{0}, section_size(bytes(), id) / 2, section_size(bytes(), id) - 1}) {
+      Bytes b = bytes();
+      b[section_offset(b, id) + where] ^= 0x01;
+      EXPECT_TRUE(rejected(b, std::string(names[id]) + " section: checksum mismatch"))
+          << names[id] << " byte " << where;
+    }
+  }
+}
+
+TEST_F(ModelIndexTest, RejectsBadSectionTable) {
+  const std::size_t e = entry(bytes(), format::kSectionArcs);
+  Bytes b = bytes();
+  store<std::uint64_t>(b.data() + e + format::kEntOffset, b.size() + 64);
+  fix_header_crc(b);
+  EXPECT_TRUE(rejected(b, "arcs section: offset"));
+  b = bytes();
+  store<std::uint64_t>(b.data() + e + format::kEntSize, ~std::uint64_t{0} - 8);
+  fix_header_crc(b);
+  EXPECT_TRUE(rejected(b, "out of bounds"));
+  b = bytes();
+  store<std::uint64_t>(b.data() + e + format::kEntOffset,
+                       load<std::uint64_t>(b.data() + e + format::kEntOffset) + 4);
+  fix_header_crc(b);
+  EXPECT_TRUE(rejected(b, "not 64-byte aligned"));
+  // Section overlapping the header/table.
+  b = bytes();
+  store<std::uint64_t>(b.data() + e + format::kEntOffset, 0);
+  fix_header_crc(b);
+  EXPECT_TRUE(rejected(b, "out of bounds"));
+  // Count disagreeing with size (CRC still right: the data did not change).
+  b = bytes();
+  store<std::uint32_t>(b.data() + e + format::kEntCount,
+                       load<std::uint32_t>(b.data() + e + format::kEntCount) + 1);
+  fix_header_crc(b);
+  EXPECT_TRUE(rejected(b, "does not match count"));
+  // Two arcs sections; the tree-nodes section then missing.
+  b = bytes();
+  store<std::uint32_t>(b.data() + entry(b, format::kSectionTreeNodes) + format::kEntId,
+                       format::kSectionArcs);
+  fix_header_crc(b);
+  EXPECT_TRUE(rejected(b, "duplicate arcs section"));
+  b = bytes();
+  store<std::uint32_t>(b.data() + entry(b, format::kSectionTreeNodes) + format::kEntId, 99);
+  fix_header_crc(b);
+  EXPECT_TRUE(rejected(b, "tree nodes section missing"));
+  b = bytes();
+  store<std::uint32_t>(b.data() + entry(b, format::kSectionDescriptors) + format::kEntEncoding, 3);
+  fix_header_crc(b);
+  EXPECT_TRUE(rejected(b, "unknown encoding"));
+}
+
+TEST_F(ModelIndexTest, RejectsOutOfRangeArcKeypoint) {
+  const std::size_t arcs = section_offset(bytes(), format::kSectionArcs);
+  const auto total =
+      static_cast<std::uint32_t>(models()[0].keypoints.size() + models()[1].keypoints.size());
+  // Past every keypoint.
+  Bytes b = bytes();
+  store<std::uint32_t>(b.data() + arcs + 4, total);
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "arc 0: keypoint ids outside model 0"));
+  b = bytes();
+  store<std::uint32_t>(b.data() + arcs, 0xFFFFFFFFu);
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "arc 0: keypoint ids outside model 0"));
+  // A valid keypoint, but of another model.
+  const auto first_of_1 = static_cast<std::uint32_t>(models()[0].arcs.size());
+  b = bytes();
+  store<std::uint32_t>(b.data() + arcs + 8 * first_of_1, 0);
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "arc " + std::to_string(first_of_1) + ": keypoint ids outside model 1"));
+  // A loop.
+  b = bytes();
+  store<std::uint32_t>(b.data() + arcs + 4, load<std::uint32_t>(b.data() + arcs));
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "arc 0:"));
+}
+
+TEST_F(ModelIndexTest, RejectsOutOfRangeTreeId) {
+  const std::size_t ids = section_offset(bytes(), format::kSectionTreeIds);
+  const auto arcs = static_cast<std::uint32_t>(models()[0].arcs.size() + models()[1].arcs.size());
+  for (std::uint32_t bad : {arcs, arcs + 1, 0xFFFFFFFFu}) {
+    Bytes b = bytes();
+    store<std::uint32_t>(b.data() + ids + 4 * 5, bad);
+    reseal(b);
+    EXPECT_TRUE(rejected(b, "tree ids: slot 5 names arc " + std::to_string(bad)));
+  }
+  const std::size_t nodes = section_offset(bytes(), format::kSectionTreeNodes);
+  Bytes b = bytes();
+  store<std::uint32_t>(b.data() + nodes + 4, static_cast<std::uint32_t>(kDescriptorSize));
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "tree nodes: node 0 has a bad split"));
+}
+
+TEST_F(ModelIndexTest, RejectsBadModelRecords) {
+  const std::size_t rec1 =
+      section_offset(bytes(), format::kSectionModels) + format::kModelRecordSize;
+  Bytes b = bytes();
+  store<std::uint32_t>(b.data() + rec1 + format::kModKeypointBegin,
+                       load<std::uint32_t>(b.data() + rec1 + format::kModKeypointBegin) + 1);
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "model 1: keypoint or arc range not contiguous"));
+  b = bytes();
+  store<std::uint32_t>(b.data() + rec1 + format::kModArcCount, 0x7FFFFFFFu);
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "model 1: keypoint or arc range out of bounds"));
+  b = bytes();
+  store<std::uint32_t>(b.data() + rec1 + format::kModArcCount,
+                       load<std::uint32_t>(b.data() + rec1 + format::kModArcCount) - 1);
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "ranges do not cover"));
+  b = bytes();
+  store<std::uint32_t>(b.data() + rec1 + format::kModNameLength, 1000);
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "model 1: name out of bounds"));
+  b = bytes();
+  store<float>(b.data() + rec1 + format::kModWidth, 0.f);
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "model 1: bad image size"));
+  b = bytes();
+  store<float>(b.data() + rec1 + format::kModOutline + 12, std::nanf(""));
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "model 1: bad outline"));
+  b = bytes();
+  store<float>(b.data() + section_offset(b, format::kSectionKeypoints) + 8 * 3 + 4,
+               std::numeric_limits<float>::infinity());
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "keypoint 3: not finite"));
+  b = bytes();
+  store<float>(b.data() + section_offset(b, format::kSectionDescriptors) + 4, std::nanf(""));
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "descriptor 0: not finite"));
+}
+
+TEST_F(ModelIndexTest, RejectsBadParameterValues) {
+  Params p;
+  p.graph.structure = static_cast<Structure>(7);
+  Bytes b = bytes();
+  put_params(b, p);
+  EXPECT_TRUE(rejected(b, "parameter structure"));
+
+  p = Params{};
+  p.keypoints.detector = static_cast<KeypointDetector>(9);
+  b = bytes();
+  put_params(b, p);
+  EXPECT_TRUE(rejected(b, "parameter detector"));
+
+  p = Params{};
+  p.descriptor.similarity_threshold = std::nanf("");
+  b = bytes();
+  put_params(b, p);
+  EXPECT_TRUE(rejected(b, "parameter similarity_threshold"));
+
+  p = Params{};
+  p.graph.min_distance = 200.f;  // above max_distance
+  b = bytes();
+  put_params(b, p);
+  EXPECT_TRUE(rejected(b, "parameter min/max_distance"));
+
+  p = Params{};
+  p.ransac.max_instances = 0;
+  b = bytes();
+  put_params(b, p);
+  EXPECT_TRUE(rejected(b, "parameter max_instances"));
+
+  b = bytes();
+  store<std::uint32_t>(b.data() + format::kOffParamsSize, 16);
+  fix_header_crc(b);
+  EXPECT_TRUE(rejected(b, "parameter block"));
+}
+
+TEST_F(ModelIndexTest, RejectsUnalignedOrNullBuffer) {
+  for (std::size_t shift : {1u, 4u, 8u, 32u}) {
+    AlignedBytes buffer(bytes(), shift);
+    ModelIndex index;
+    const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << shift;
+    EXPECT_NE(s.message().find("aligned"), std::string::npos) << s.message();
+    EXPECT_TRUE(index.empty());
+  }
+  ModelIndex index;
+  EXPECT_FALSE(ModelIndex::view(nullptr, bytes().size(), index));
+}
+
+// One bit flipped at thousands of places: every flip inside a checksummed
+// range (header..table, section payloads) must be rejected; a flip in
+// alignment padding (checked by nothing) must load. Nothing may crash or read out of bounds
+// (CI runs this under ASan).
+TEST_F(ModelIndexTest, BitFlipSweep) {
+  const Bytes& good = corpus().small;
+  const std::size_t n = good.size();
+  std::vector<bool> covered(n, false);
+  for (std::size_t i = 0; i < table_end(good); ++i) covered[i] = true;
+  for (std::uint32_t id = 1; id <= format::kSectionCount; ++id) {
+    const std::size_t off = section_offset(good, id), size = section_size(good, id);
+    for (std::size_t i = off; i < off + size; ++i) covered[i] = true;
+  }
+  std::vector<std::size_t> positions;
+  // Every byte of header, parameters and table (rejected early, so cheap)...
+  for (std::size_t i = 0; i < table_end(good); ++i) positions.push_back(i);
+  // ...and 2000 spread over the whole file, offset so they hit varied bytes.
+  constexpr std::size_t kSpread = 2000;
+  for (std::size_t k = 0; k < kSpread; ++k) positions.push_back((k * n) / kSpread + (k * 7) % 61);
+  // Every padding byte range gets a flip at its start and end.
+  for (std::size_t i = 1; i < n; ++i) {
+    if (covered[i] != covered[i - 1]) {
+      positions.push_back(i - 1);
+      positions.push_back(i);
+    }
+  }
+  positions.push_back(n - 1);
+
+  AlignedBytes scratch(good);  // reused: copying 1 MB per flip would dominate
+  auto* data = const_cast<std::uint8_t*>(scratch.data());
+  int rejected_count = 0, loaded = 0;
+  for (std::size_t k = 0; k < positions.size(); ++k) {
+    const std::size_t at = positions[k] < n ? positions[k] : n - 1;
+    const auto mask = static_cast<std::uint8_t>(1u << (k % 8));
+    data[at] ^= mask;
+    ModelIndex index;
+    const Status s = ModelIndex::view(data, n, index);
+    data[at] ^= mask;
+    if (s) {
+      ++loaded;
+      ASSERT_FALSE(covered[at]) << "flip of bit " << k % 8 << " at checksummed byte " << at
+                                << " was not detected";
+      ASSERT_EQ(index.model_count(), 2);
+    } else {
+      ++rejected_count;
+      ASSERT_FALSE(s.message().empty()) << "byte " << at;
+      ASSERT_TRUE(covered[at]) << "flip at padding byte " << at << " rejected: " << s.message();
+    }
+  }
+  EXPECT_GT(rejected_count, 2000);
+  std::printf("bit-flip sweep: %zu-byte index, %d flips rejected, %d in padding loaded\n", n,
+              rejected_count, loaded);
+  EXPECT_GT(loaded, 0) << "no flip landed in padding; the sweep misses the padding case";
+  // The scratch buffer is back to the original.
+  EXPECT_EQ(0, std::memcmp(data, good.data(), n));
+}
+
+}  // namespace
+}  // namespace kg
