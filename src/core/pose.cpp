@@ -191,7 +191,10 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     Homography best{};
     const RansacStats stats = ransac(estimator, options, rng, best);
     iterations += stats.iterations;
-    if (stats.best.point_inliers < 4) break;
+    // The best cluster left cannot make an instance: neither can weaker ones.
+    if (stats.best.point_inliers < rp.min_inliers ||
+        stats.best.sample_inliers < rp.min_inlier_keygraphs)
+      break;
 
     // Refine on the inliers, re-selecting them with the refined pose.
     Homography refined = best;
