@@ -87,17 +87,21 @@ bool write_image_atomically(const std::string& path, const cv::Mat& image, std::
 namespace {
 
 void usage(std::FILE* out) {
-  std::fprintf(out,
-               "usage: keygraph <command> [options]\n"
-               "\n"
-               "commands:\n"
-               "  build [--name NAME]... [--detector hessian|mser] [--structure 2|3|4]\n"
-               "        MODEL.png... -o OUT.kgi     compile model images into one index\n"
-               "  detect --index I.kgi [--json] [--draw OUT.png] SCENE...\n"
-               "                                    find the index's models in scene images\n"
-               "  demo [--out DIR]                  build box.png from opencv-doc and find it\n"
-               "                                    in box_in_scene.png\n"
-               "  help                              this text\n");
+  std::fprintf(
+      out,
+      "usage: keygraph <command> [options]\n"
+      "\n"
+      "commands:\n"
+      "  build [--name NAME]... [--detector hessian|mser] [--structure 2|3|4]\n"
+      "        MODEL.png... -o OUT.kgi     compile model images into one index\n"
+      "  detect --index I.kgi [--json] [--draw OUT.png] SCENE...\n"
+      "                                    find the index's models in scene images\n"
+      "  demo [--out DIR]                  build box.png from opencv-doc and find it\n"
+      "                                    in box_in_scene.png\n"
+      "  eval --dataset DIR [--subsets a,b] [--crops N] [--size S] [--centre]\n"
+      "       [--seed N] [--set NAME=VALUE]... [--csv FILE]\n"
+      "                                    crops of img1 found in img2..6 (Oxford layout)\n"
+      "  help                              this text\n");
 }
 
 int run(int argc, char** argv) {
@@ -110,6 +114,7 @@ int run(int argc, char** argv) {
   if (command == "build") return kg::cli::cmd_build(args);
   if (command == "detect") return kg::cli::cmd_detect(args);
   if (command == "demo") return kg::cli::cmd_demo(args);
+  if (command == "eval") return kg::cli::cmd_eval(args);
   if (command == "help" || command == "--help" || command == "-h") {
     usage(stdout);
     return 0;

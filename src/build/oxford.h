@@ -1,0 +1,48 @@
+// The Oxford affine-region benchmark in the layout of the keygraph paper's
+// experiments (<subset>/img1..6.png, H1to2p..H1to6p) and the evaluation of
+// detection on it: models are crops of img1, scenes are img2..img6, the
+// ground-truth pose is H1toN * T(crop offset).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "keygraph/params.h"
+#include "keygraph/status.h"
+#include "keygraph/types.h"
+
+namespace kg {
+
+// Reads a homography stored as 9 whitespace-separated numbers, row-major.
+Status read_homography(const std::string& path, Homography& h);
+
+struct OxfordEvalOptions {
+  std::string dataset;               // directory holding the subsets
+  std::vector<std::string> subsets;  // empty: every subdirectory with img1.png
+  int crops_per_subset = 10;
+  int crop_size = 300;
+  bool centre_crop = false;  // one crop, centred, instead of random ones
+  std::uint64_t seed = 1;
+  Params params;
+};
+
+struct OxfordCase {
+  std::string subset;
+  int crop = 0;
+  int crop_x = 0, crop_y = 0;
+  int degree = 0;  // scene imgN, N in 2..6
+  bool detected = false;
+  double corner_error = -1;  // max over the 4 corners, pixels (first detection)
+  int inliers = 0;
+  int ransac_iterations = 0;
+  int correspondences = 0;
+  double time_ms = 0;
+};
+
+// Runs the evaluation; cases in subset, crop, degree order. `progress`
+// (may be null) is called after each case.
+Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>& cases,
+                       void (*progress)(const OxfordCase&) = nullptr);
+
+}  // namespace kg

@@ -1,0 +1,20 @@
+// Setting pipeline parameters by name ("graph.max_anisotropy=2.5"), for the
+// command line's --set option and evaluation sweeps.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "keygraph/params.h"
+#include "keygraph/status.h"
+
+namespace kg {
+
+// Applies "name=value"; the result is validated as a whole by the caller
+// (format::validate_params). Unknown names and unparsable values are errors.
+Status apply_param_override(const std::string& assignment, Params& params);
+
+// Names accepted by apply_param_override, for help texts.
+std::vector<std::string> param_names();
+
+}  // namespace kg
