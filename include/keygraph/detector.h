@@ -55,6 +55,9 @@ struct DetectStats {
   int arcs_described = 0;     // scene arcs with a valid descriptor
   long long arc_matches = 0;  // model arcs found similar to them, summed
   int correspondences = 0;    // keygraph correspondences selected
+  // Keygraph correspondences whose arcs all matched but a vertex pair did
+  // not (vertex descriptors only).
+  long long vertex_rejections = 0;
   int ransac_iterations = 0;  // summed over models and instances
   bool truncated_keypoints = false;
   bool truncated_arc_matches = false;
@@ -82,11 +85,20 @@ class Detector {
   Detector& operator=(Detector&&) noexcept;
 
   // Detects with the built-in keypoint detector (the index's detector must
-  // be kHessian). Clears and fills `out`.
+  // be kHessian, and the index must have no vertex descriptors). Clears and
+  // fills `out`.
   Status detect(ImageView frame, DetectionList& out);
   // Detects with keypoints computed by the caller (e.g. MSER on a desktop):
-  // the same pipeline from the sampling step on.
+  // the same pipeline from the sampling step on. The index must have no
+  // vertex descriptors.
   Status detect(ImageView frame, const Keypoint* keypoints, int count, DetectionList& out);
+  // The same with the keypoints' vertex descriptors (the core cannot compute
+  // SIFT): kVertexDescriptorSize bytes per keypoint, row i describing
+  // keypoints[i], computed as the index's were (DesktopDetector does).
+  // Required when the index has vertex descriptors (params().descriptor.
+  // vertex_descriptor != kNone), ignored otherwise; nullptr means none.
+  Status detect(ImageView frame, const Keypoint* keypoints, int count,
+                const std::uint8_t* vertex_descriptors, DetectionList& out);
 
   const DetectStats& stats() const;
   // Keygraph correspondences selected in the last frame (evaluation, tests).

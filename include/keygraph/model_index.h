@@ -1,6 +1,6 @@
 // The model index (.kgi): every model's keypoints, arcs, arc descriptors and
-// the search tree over them, plus the pipeline parameters they were built
-// with. Layout: docs/FORMAT.md.
+// the search tree over them, optionally vertex (SIFT) descriptors, plus the
+// pipeline parameters they were built with. Layout: docs/FORMAT.md.
 //
 // Loading is validation, not construction: open() reads the file into one
 // aligned buffer and view() checks every count, offset, size, checksum and
@@ -73,6 +73,11 @@ class ModelIndex {
   std::uint32_t arc_count() const { return arc_count_; }
   const ModelArc* arcs() const { return arcs_; }
 
+  // Vertex descriptors (Params::descriptor.vertex_descriptor), one per
+  // keypoint, kVertexDescriptorSize bytes each in keypoint order; nullptr
+  // when the index has none (vertex_descriptor == kNone).
+  const std::uint8_t* vertex_descriptors() const { return vertex_descriptors_; }
+
   // Search tree over arc descriptors (see core/kdtree.h for the layout).
   const ArcDescriptor* tree_points() const { return tree_points_; }
   const std::uint32_t* tree_ids() const { return tree_ids_; }
@@ -106,6 +111,7 @@ class ModelIndex {
   const std::uint32_t* tree_ids_ = nullptr;
   const KdNode* tree_nodes_ = nullptr;
   int tree_depth_ = 0;
+  const std::uint8_t* vertex_descriptors_ = nullptr;
 };
 
 }  // namespace kg

@@ -10,6 +10,17 @@ namespace kg {
 
 Status DesktopDetector::detect(const cv::Mat& gray, DetectionList& out) {
   const Params& params = detector_.index().params();
+  if (params.descriptor.vertex_descriptor == VertexDescriptor::kSift) {
+    if (gray.empty() || gray.type() != CV_8UC1)
+      return {StatusCode::kInvalidArgument, "empty or malformed frame (8-bit gray expected)"};
+    // The keypoints the core's detect(frame) would find (for Hessian), found
+    // here so that they can be described.
+    extractor_.extract(gray, params.keypoints, limits_.max_keypoints, keypoints_);
+    const int count = static_cast<int>(keypoints_.size());
+    sift_.describe(gray, keypoints_.data(), count, vertex_descriptors_);
+    return detector_.detect(view_of(gray), keypoints_.data(), count, vertex_descriptors_.data(),
+                            out);
+  }
   if (params.keypoints.detector == KeypointDetector::kHessian)
     return detector_.detect(view_of(gray), out);
   extractor_.extract(gray, params.keypoints, limits_.max_keypoints, keypoints_);

@@ -1,5 +1,6 @@
 // Detection on a desktop image: the core detector, with OpenCV computing
-// the keypoints when the index was built with a detector the core lacks.
+// the keypoints when the index was built with a detector the core lacks,
+// and the keypoints' SIFT descriptors when the index has vertex descriptors.
 #pragma once
 
 #include <vector>
@@ -7,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "build/keypoints.h"
+#include "build/sift_descriptors.h"
 #include "keygraph/detector.h"
 
 namespace kg {
@@ -24,6 +26,8 @@ class DesktopDetector {
   Limits limits_;
   KeypointExtractor extractor_;
   std::vector<Keypoint> keypoints_;
+  SiftDescriber sift_;
+  std::vector<std::uint8_t> vertex_descriptors_;
 };
 
 // Draws each detection's outline and name onto a BGR copy of `gray`.

@@ -10,6 +10,7 @@
 
 #include "build/image_io.h"
 #include "build/keypoints.h"
+#include "build/sift_descriptors.h"
 #include "core/arc_descriptor.h"
 #include "core/blur.h"
 #include "core/crc32.h"
@@ -82,7 +83,15 @@ Status build_model(const cv::Mat& gray, const std::string& name, const Params& p
   std::sort(keypoints.begin(), keypoints.end(), [](const Keypoint& a, const Keypoint& b) {
     return a.y < b.y || (a.y == b.y && a.x < b.x);
   });
-  for (const Keypoint& k : keypoints) out.keypoints.push_back({k.x, k.y});
+  for (const Keypoint& k : keypoints) {
+    out.keypoints.push_back({k.x, k.y});
+    out.keypoint_scales.push_back(k.scale);
+  }
+  if (params.descriptor.vertex_descriptor == VertexDescriptor::kSift) {
+    SiftDescriber sift;
+    sift.describe(gray, keypoints.data(), static_cast<int>(keypoints.size()),
+                  out.vertex_descriptors);
+  }
 
   Plane<std::uint8_t> blurred;
   Plane<float> scratch;
@@ -128,9 +137,17 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
   std::vector<Point2f> keypoints;
   std::vector<ModelArc> arcs;
   std::vector<ArcDescriptor> descriptors;
+  std::vector<std::uint8_t> vertex_descriptors;
+  const bool with_vertex = params.descriptor.vertex_descriptor != VertexDescriptor::kNone;
   for (std::size_t m = 0; m < models.size(); ++m) {
     const BuiltModel& model = models[m];
     if (model.name.empty()) return {StatusCode::kInvalidArgument, "model with an empty name"};
+    if (with_vertex && model.vertex_descriptors.size() !=
+                           model.keypoints.size() * static_cast<std::size_t>(kVertexDescriptorSize))
+      return {StatusCode::kInvalidArgument,
+              model.name +
+                  ": no vertex descriptors for every keypoint (build the model with "
+                  "the parameters of the index)"};
     std::uint8_t* r = records.data() + m * kModelRecordSize;
     const auto kp_begin = static_cast<std::uint32_t>(keypoints.size());
     store<std::uint32_t>(r + kModNameOffset, static_cast<std::uint32_t>(strings.size()));
@@ -151,6 +168,9 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
     keypoints.insert(keypoints.end(), model.keypoints.begin(), model.keypoints.end());
     for (const ModelArc& a : model.arcs) arcs.push_back({a.from + kp_begin, a.to + kp_begin});
     descriptors.insert(descriptors.end(), model.descriptors.begin(), model.descriptors.end());
+    if (with_vertex)
+      vertex_descriptors.insert(vertex_descriptors.end(), model.vertex_descriptors.begin(),
+                                model.vertex_descriptors.end());
   }
   std::vector<ArcDescriptor> tree_points;
   std::vector<std::uint32_t> tree_ids;
@@ -164,7 +184,7 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
     std::size_t size;
     std::uint32_t count;
   };
-  const Payload payloads[kSectionCount] = {
+  const Payload payloads[kLastSectionId] = {
       {kSectionModels, records.data(), records.size(), static_cast<std::uint32_t>(models.size())},
       {kSectionStrings, strings.data(), strings.size(), static_cast<std::uint32_t>(strings.size())},
       {kSectionKeypoints, keypoints.data(), keypoints.size() * sizeof(Point2f),
@@ -177,13 +197,15 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
        static_cast<std::uint32_t>(tree_ids.size())},
       {kSectionTreeNodes, tree_nodes.data(), tree_nodes.size() * sizeof(KdNode),
        static_cast<std::uint32_t>(tree_nodes.size())},
+      {kSectionVertexDescriptors, vertex_descriptors.data(), vertex_descriptors.size(),
+       static_cast<std::uint32_t>(vertex_descriptors.size() / kVertexDescriptorSize)},
   };
   const std::size_t params_offset = kHeaderSize;
   const std::size_t table_offset = params_offset + kParamsSize;
-  const std::size_t table_end = table_offset + kSectionCount * kSectionEntrySize;
+  const std::size_t table_end = table_offset + kLastSectionId * kSectionEntrySize;
   std::size_t offset = align_up(table_end);
-  std::size_t offsets[kSectionCount];
-  for (std::uint32_t i = 0; i < kSectionCount; ++i) {
+  std::size_t offsets[kLastSectionId];
+  for (std::uint32_t i = 0; i < kLastSectionId; ++i) {
     offsets[i] = offset;
     offset = align_up(offset + payloads[i].size);
   }
@@ -197,9 +219,9 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
   store<std::uint32_t>(d + kOffParamsOffset, static_cast<std::uint32_t>(params_offset));
   store<std::uint32_t>(d + kOffParamsSize, static_cast<std::uint32_t>(kParamsSize));
   store<std::uint32_t>(d + kOffTableOffset, static_cast<std::uint32_t>(table_offset));
-  store<std::uint32_t>(d + kOffSectionCount, kSectionCount);
+  store<std::uint32_t>(d + kOffSectionCount, kLastSectionId);
   serialize_params(params, d + params_offset);
-  for (std::uint32_t i = 0; i < kSectionCount; ++i) {
+  for (std::uint32_t i = 0; i < kLastSectionId; ++i) {
     const Payload& p = payloads[i];
     if (p.size > 0) std::memcpy(d + offsets[i], p.data, p.size);
     std::uint8_t* e = d + table_offset + i * kSectionEntrySize;

@@ -1,7 +1,8 @@
 // Desktop side of the pipeline (paper sections 5-6, model half): keypoints
 // of a model image over several scales, every model arc (Chebyshev distance
-// within [min, max]) with its descriptor, and the keygraph count; then one
-// .kgi index for a set of models.
+// within [min, max]) with its descriptor, optionally the keypoints' SIFT
+// descriptors, and the keygraph count; then one .kgi index for a set of
+// models.
 #pragma once
 
 #include <cstdint>
@@ -21,7 +22,11 @@ struct BuiltModel {
   std::string name;
   int width = 0;
   int height = 0;
-  std::vector<Point2f> keypoints;          // model pixels
+  std::vector<Point2f> keypoints;      // model pixels
+  std::vector<float> keypoint_scales;  // detector sigma per keypoint (0: unknown)
+  // Params::descriptor.vertex_descriptor kSift: kVertexDescriptorSize bytes
+  // per keypoint, in keypoint order; empty for kNone.
+  std::vector<std::uint8_t> vertex_descriptors;
   std::vector<ModelArc> arcs;              // local keypoint ids, sorted by (from, to)
   std::vector<ArcDescriptor> descriptors;  // one per arc
   std::uint64_t keygraphs = 0;

@@ -72,6 +72,18 @@ const std::map<std::string, Setter>& setters() {
        field(&Params::descriptor, &DescriptorParams::parallel_offset)},
       {"descriptor.similarity_threshold",
        field(&Params::descriptor, &DescriptorParams::similarity_threshold)},
+      {"descriptor.vertex_descriptor",
+       [](Params& p, const std::string& v) {
+         if (v == "none")
+           p.descriptor.vertex_descriptor = VertexDescriptor::kNone;
+         else if (v == "sift")
+           p.descriptor.vertex_descriptor = VertexDescriptor::kSift;
+         else
+           return false;
+         return true;
+       }},
+      {"descriptor.vertex_threshold",
+       field(&Params::descriptor, &DescriptorParams::vertex_threshold)},
       {"ransac.confidence", field(&Params::ransac, &RansacParams::confidence)},
       {"ransac.max_iterations", field(&Params::ransac, &RansacParams::max_iterations)},
       {"ransac.inlier_threshold", field(&Params::ransac, &RansacParams::inlier_threshold)},

@@ -1,5 +1,5 @@
 // keygraph build [--name NAME]... [--detector hessian|mser] [--structure 2|3|4]
-//                [--roi X,Y,W,H] MODEL... -o OUT.kgi
+//                [--vertex-descriptor none|sift] [--roi X,Y,W,H] MODEL... -o OUT.kgi
 // --roi applies to the model image that follows it: the model is that
 // rectangle of the image (model pixel (0,0) is image pixel (X,Y)).
 #include <cstdio>
@@ -36,7 +36,7 @@ int cmd_build(const Args& args) {
     const std::string& a = args[i];
     const bool has_value = i + 1 < args.size();
     if (a == "--name" || a == "-o" || a == "--output" || a == "--detector" || a == "--structure" ||
-        a == "--roi") {
+        a == "--vertex-descriptor" || a == "--roi") {
       if (!has_value) return fail("build: " + a + " needs a value");
       const std::string& v = args[++i];
       if (a == "--name") {
@@ -52,6 +52,14 @@ int cmd_build(const Args& args) {
           params.keypoints.detector = KeypointDetector::kMser;
         } else {
           return fail("build: unknown detector '" + v + "' (hessian or mser)");
+        }
+      } else if (a == "--vertex-descriptor") {
+        if (v == "sift") {
+          params.descriptor.vertex_descriptor = VertexDescriptor::kSift;
+        } else if (v == "none") {
+          params.descriptor.vertex_descriptor = VertexDescriptor::kNone;
+        } else {
+          return fail("build: unknown vertex descriptor '" + v + "' (none or sift)");
         }
       } else if (a == "--structure") {
         if (v != "2" && v != "3" && v != "4") return fail("build: --structure takes 2, 3 or 4");

@@ -13,6 +13,7 @@
 #include "core/rng.h"
 #include "core/sampling.h"
 #include "core/selection.h"
+#include "core/vertex_descriptor.h"
 
 namespace kg {
 
@@ -21,6 +22,18 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
+
+constexpr auto kRow = static_cast<std::size_t>(kVertexDescriptorSize);
+
+bool wants_vertex_descriptors(const ModelIndex& index) {
+  return index.params().descriptor.vertex_descriptor != VertexDescriptor::kNone;
+}
+
+Status missing_vertex_descriptors() {
+  return {StatusCode::kInvalidArgument,
+          "index was built with SIFT vertex descriptors, which the core cannot compute: pass "
+          "keypoints with their descriptors (DesktopDetector does)"};
 }
 
 }  // namespace
@@ -33,6 +46,14 @@ struct Detector::Impl {
 
   HessianDetector hessian;
   std::vector<Keypoint> detected;
+  // Vertex descriptors: of the model keypoints' inverse norms (once), of the
+  // strongest keypoints when the input is cut to max_keypoints, and of the
+  // sampled keypoints.
+  std::vector<float> model_inverse_norms;
+  std::vector<int> order;
+  std::vector<std::uint8_t> detected_descriptors;
+  std::vector<std::uint8_t> scene_descriptors;
+  std::vector<float> scene_inverse_norms;
   Plane<std::uint8_t> blurred;
   Plane<float> blur_scratch;
   SeparatedSampler sampler;
@@ -47,8 +68,8 @@ struct Detector::Impl {
   PoseEstimator pose;
   PointGrid grid;
 
-  Status run(ImageView frame, const Keypoint* keypoints, int count, DetectionList& out,
-             Clock::time_point start);
+  Status run(ImageView frame, const Keypoint* keypoints, int count, const std::uint8_t* descriptors,
+             DetectionList& out, Clock::time_point start);
 };
 
 Detector::Detector(const ModelIndex& index, const Limits& limits) : impl_(new Impl) {
@@ -58,6 +79,18 @@ Detector::Detector(const ModelIndex& index, const Limits& limits) : impl_(new Im
                            index.tree_nodes(), index.tree_depth());
   impl_->detected.reserve(static_cast<std::size_t>(std::max(0, limits.max_keypoints)));
   impl_->matches.reserve(static_cast<std::size_t>(std::max(0, limits.max_correspondences)));
+  if (const std::uint8_t* v = index.vertex_descriptors()) {
+    impl_->model_inverse_norms.resize(index.keypoint_count());
+    for (std::uint32_t i = 0; i < index.keypoint_count(); ++i)
+      impl_->model_inverse_norms[i] = vertex_inverse_norm(v + i * kRow);
+    const auto frame_keypoints = static_cast<std::size_t>(std::max(0, limits.max_keypoints));
+    impl_->order.reserve(frame_keypoints);
+    impl_->detected_descriptors.reserve(frame_keypoints * kRow);
+    impl_->scene_descriptors.reserve(
+        static_cast<std::size_t>(std::max(0, limits.max_scene_keypoints)) * kRow);
+    impl_->scene_inverse_norms.reserve(
+        static_cast<std::size_t>(std::max(0, limits.max_scene_keypoints)));
+  }
 }
 
 Detector::~Detector() = default;
@@ -83,6 +116,7 @@ Status Detector::detect(ImageView frame, DetectionList& out) {
   if (frame.empty() || frame.stride < frame.width)
     return {StatusCode::kInvalidArgument, "empty or malformed frame"};
   const Params& params = impl_->index->params();
+  if (wants_vertex_descriptors(*impl_->index)) return missing_vertex_descriptors();
   if (params.keypoints.detector != KeypointDetector::kHessian)
     return {
         StatusCode::kInvalidArgument,
@@ -90,25 +124,57 @@ Status Detector::detect(ImageView frame, DetectionList& out) {
   const auto start = Clock::now();
   impl_->hessian.detect(frame, params.keypoints, impl_->limits.max_keypoints, impl_->detected);
   impl_->stats.ms_keypoints = ms_since(start);
-  return impl_->run(frame, impl_->detected.data(), static_cast<int>(impl_->detected.size()), out,
-                    Clock::now());
+  return impl_->run(frame, impl_->detected.data(), static_cast<int>(impl_->detected.size()),
+                    nullptr, out, Clock::now());
 }
 
 Status Detector::detect(ImageView frame, const Keypoint* keypoints, int count, DetectionList& out) {
+  return detect(frame, keypoints, count, nullptr, out);
+}
+
+Status Detector::detect(ImageView frame, const Keypoint* keypoints, int count,
+                        const std::uint8_t* vertex_descriptors, DetectionList& out) {
   out.clear();
   impl_->stats = DetectStats{};
   if (frame.empty() || frame.stride < frame.width)
     return {StatusCode::kInvalidArgument, "empty or malformed frame"};
   if (count < 0 || (count > 0 && keypoints == nullptr))
     return {StatusCode::kInvalidArgument, "bad keypoint array"};
-  return impl_->run(frame, keypoints, count, out, Clock::now());
+  if (!wants_vertex_descriptors(*impl_->index)) {
+    vertex_descriptors = nullptr;
+  } else if (vertex_descriptors == nullptr && count > 0) {
+    return missing_vertex_descriptors();
+  }
+  return impl_->run(frame, keypoints, count, vertex_descriptors, out, Clock::now());
 }
 
 Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count,
-                           DetectionList& out, Clock::time_point start) {
+                           const std::uint8_t* descriptors, DetectionList& out,
+                           Clock::time_point start) {
   const Params& params = index->params();
   stats.keypoints = count;
-  if (count > limits.max_keypoints) {
+  if (count > limits.max_keypoints && descriptors != nullptr) {
+    // As below, carrying each keypoint's descriptor along (ties by input order).
+    stats.truncated_keypoints = true;
+    order.resize(static_cast<std::size_t>(count));
+    for (int i = 0; i < count; ++i) order[static_cast<std::size_t>(i)] = i;
+    std::partial_sort(order.begin(), order.begin() + limits.max_keypoints, order.end(),
+                      [keypoints](int a, int b) {
+                        return keypoints[a].response > keypoints[b].response ||
+                               (keypoints[a].response == keypoints[b].response && a < b);
+                      });
+    order.resize(static_cast<std::size_t>(limits.max_keypoints));
+    detected.clear();
+    detected_descriptors.resize(order.size() * kRow);
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      detected.push_back(keypoints[order[i]]);
+      std::copy_n(descriptors + static_cast<std::size_t>(order[i]) * kRow, kRow,
+                  detected_descriptors.data() + i * kRow);
+    }
+    keypoints = detected.data();
+    descriptors = detected_descriptors.data();
+    count = limits.max_keypoints;
+  } else if (count > limits.max_keypoints) {
     // Keep the strongest: callers pass keypoints in any order.
     stats.truncated_keypoints = true;
     detected.assign(keypoints, keypoints + count);
@@ -134,6 +200,15 @@ Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count
     scene_points.push_back({keypoints[i].x, keypoints[i].y});
   }
   stats.sampled_keypoints = static_cast<int>(scene_points.size());
+  if (descriptors != nullptr) {
+    scene_descriptors.resize(selected.size() * kRow);
+    scene_inverse_norms.resize(selected.size());
+    for (std::size_t i = 0; i < selected.size(); ++i) {
+      std::uint8_t* row = scene_descriptors.data() + i * kRow;
+      std::copy_n(descriptors + static_cast<std::size_t>(selected[i]) * kRow, kRow, row);
+      scene_inverse_norms[i] = vertex_inverse_norm(row);
+    }
+  }
 
   // Scene keygraphs from the Delaunay triangulation.
   triangulation.triangulate(scene_points.data(), static_cast<int>(scene_points.size()));
@@ -154,6 +229,12 @@ Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count
   in.scene_points = scene_points.data();
   in.triangulation = &triangulation;
   in.keygraphs = &keygraphs;
+  if (descriptors != nullptr) {
+    in.model_descriptors = index->vertex_descriptors();
+    in.model_inverse_norms = model_inverse_norms.data();
+    in.scene_descriptors = scene_descriptors.data();
+    in.scene_inverse_norms = scene_inverse_norms.data();
+  }
   selector.select(in, limits, matches, stats);
   stats.ms_select = ms_since(t);
 

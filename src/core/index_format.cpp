@@ -42,6 +42,9 @@ void visit_params(P& p, F&& f) {
   f(p.ransac.max_instances);
   f(p.ransac.min_verification_z);
   f(p.ransac.seed);
+  // Format 1.1 (zero in 1.0 files: no vertex descriptors).
+  f(p.descriptor.vertex_descriptor);
+  f(p.descriptor.vertex_threshold);
 }
 
 template <class T>
@@ -137,6 +140,16 @@ Status validate_params(const Params& p) {
   if (!finite_positive(p.descriptor.similarity_threshold) ||
       p.descriptor.similarity_threshold > 2.f)
     return bad("similarity_threshold", "must be in (0, 2]");
+  if (static_cast<unsigned>(p.descriptor.vertex_descriptor) > 1)
+    return bad("vertex_descriptor",
+               "is unknown (" +
+                   std::to_string(static_cast<unsigned>(p.descriptor.vertex_descriptor)) + ")");
+  // 0 is allowed without vertex descriptors: format 1.0 files store no value.
+  if (!(std::isfinite(p.descriptor.vertex_threshold) && p.descriptor.vertex_threshold >= 0.f &&
+        p.descriptor.vertex_threshold <= 2.f) ||
+      (p.descriptor.vertex_descriptor != VertexDescriptor::kNone &&
+       p.descriptor.vertex_threshold == 0.f))
+    return bad("vertex_threshold", "must be in (0, 2]");
   if (!(p.ransac.confidence > 0.0 && p.ransac.confidence < 1.0))
     return bad("confidence", "must be in (0, 1)");
   if (p.ransac.max_iterations < 1 || p.ransac.max_iterations > 10000000)

@@ -17,7 +17,7 @@ namespace kg::format {
 // SUB/LF tail catch text-mode conversions and `type` on DOS.
 inline constexpr std::uint8_t kMagic[8] = {0x89, 'K', 'G', 'I', '\r', '\n', 0x1A, '\n'};
 inline constexpr std::uint16_t kVersionMajor = 1;
-inline constexpr std::uint16_t kVersionMinor = 0;
+inline constexpr std::uint16_t kVersionMinor = 1;  // 1.1: vertex descriptors
 inline constexpr std::size_t kAlignment = 64;
 
 inline constexpr std::size_t kHeaderSize = 64;
@@ -51,8 +51,14 @@ enum SectionId : std::uint32_t {
   kSectionDescriptors = 5,  // per tree slot: kDescriptorSize components
   kSectionTreeIds = 6,      // uint32 arc id per tree slot
   kSectionTreeNodes = 7,    // float32 split, uint32 dimension per internal node
+  // Format 1.1: kVertexDescriptorSize bytes (SIFT) per keypoint, or empty.
+  kSectionVertexDescriptors = 8,
 };
+// Sections 1..kSectionCount are in every index (format 1.0) and required.
+// The writer writes every section up to kLastSectionId, empty or not; the
+// reader takes a later section that is absent as empty, so 1.0 files load.
 inline constexpr std::uint32_t kSectionCount = 7;
+inline constexpr std::uint32_t kLastSectionId = 8;
 
 enum DescriptorEncoding : std::uint32_t { kFloat32 = 0 };
 

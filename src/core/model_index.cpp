@@ -47,6 +47,8 @@ const char* section_name(std::uint32_t id) {
       return "tree ids";
     case kSectionTreeNodes:
       return "tree nodes";
+    case kSectionVertexDescriptors:
+      return "vertex descriptors";
     default:
       return "unknown";
   }
@@ -160,11 +162,11 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   Status s = parse_params(d + params_offset, params_size, params_);
   if (!s) return s;
 
-  Section sections[kSectionCount + 1];
+  Section sections[kLastSectionId + 1];
   for (std::uint32_t i = 0; i < section_count; ++i) {
     const std::uint8_t* e = d + table_offset + static_cast<std::size_t>(i) * kSectionEntrySize;
     const auto id = load<std::uint32_t>(e + kEntId);
-    if (id == 0 || id > kSectionCount) continue;  // unknown sections: newer minor versions
+    if (id == 0 || id > kLastSectionId) continue;  // unknown sections: newer minor versions
     Section& sec = sections[id];
     const std::string name = section_name(id);
     if (sec.present) return corrupt("section table: duplicate " + name + " section");
@@ -198,6 +200,7 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   const Section& descriptors = sections[kSectionDescriptors];
   const Section& ids = sections[kSectionTreeIds];
   const Section& nodes = sections[kSectionTreeNodes];
+  const Section& vertex = sections[kSectionVertexDescriptors];  // absent (1.0): empty
   if (!(s = expect_size(kSectionModels, kModelRecordSize))) return s;
   if (!(s = expect_size(kSectionKeypoints, sizeof(Point2f)))) return s;
   if (!(s = expect_size(kSectionArcs, sizeof(ModelArc)))) return s;
@@ -206,8 +209,16 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   if (!(s = expect_size(kSectionDescriptors, sizeof(ArcDescriptor)))) return s;
   if (!(s = expect_size(kSectionTreeIds, sizeof(std::uint32_t)))) return s;
   if (!(s = expect_size(kSectionTreeNodes, sizeof(KdNode)))) return s;
+  if (!(s = expect_size(kSectionVertexDescriptors, kVertexDescriptorSize))) return s;
   if (strings.size != strings.count) return corrupt("strings section: size does not match count");
   if (models.count == 0) return corrupt("models section: no models");
+  // One vertex descriptor per keypoint exactly when the parameters ask for them.
+  const bool want_vertex = params_.descriptor.vertex_descriptor != VertexDescriptor::kNone;
+  if (vertex.count != (want_vertex ? keypoints.count : 0U))
+    return corrupt("vertex descriptors section: count " + std::to_string(vertex.count) +
+                   ", expected " + std::to_string(want_vertex ? keypoints.count : 0U) +
+                   (want_vertex ? " (one per keypoint: parameter vertex_descriptor is sift)"
+                                : " (parameter vertex_descriptor is none)"));
   if (descriptors.count != arcs.count || ids.count != arcs.count)
     return corrupt("tree sections: slot count differs from arc count " +
                    std::to_string(arcs.count));
@@ -302,6 +313,7 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   tree_ids_ = slot_ids;
   tree_nodes_ = tree_nodes;
   tree_depth_ = depth;
+  vertex_descriptors_ = vertex.count > 0 ? d + vertex.offset : nullptr;
   return Status::ok();
 }
 

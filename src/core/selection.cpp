@@ -5,6 +5,7 @@
 
 #include "core/arc_descriptor.h"
 #include "core/sampling.h"
+#include "core/vertex_descriptor.h"
 
 namespace kg {
 namespace {
@@ -115,6 +116,19 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   const auto cap = static_cast<std::size_t>(limits.max_correspondences);
 
   const Params& params = in.index->params();
+  const bool check_vertices = in.model_descriptors != nullptr && in.scene_descriptors != nullptr;
+  const float vertex_max2 = params.descriptor.vertex_threshold * params.descriptor.vertex_threshold;
+  constexpr auto kRow = static_cast<std::size_t>(kVertexDescriptorSize);
+  auto similar_vertices = [&](const std::uint32_t* model, const SceneKeygraph& g) {
+    for (int i = 0; i < k; ++i) {
+      const auto s = static_cast<std::size_t>(tri[g.edges[i]]);
+      if (vertex_distance2(in.model_descriptors + model[i] * kRow, in.model_inverse_norms[model[i]],
+                           in.scene_descriptors + s * kRow,
+                           in.scene_inverse_norms[s]) > vertex_max2)
+        return false;
+    }
+    return true;
+  };
   auto emit = [&](const std::uint32_t* model, const SceneKeygraph& g) {
     Point2f mp[kMaxVertices], sp[kMaxVertices];
     for (int i = 0; i < k; ++i) {
@@ -122,6 +136,10 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
       sp[i] = in.scene_points[tri[g.edges[i]]];
     }
     if (!plausible_local_map(mp, sp, k, params)) return true;
+    if (check_vertices && !similar_vertices(model, g)) {
+      ++stats.vertex_rejections;
+      return true;
+    }
     if (matches.size() >= cap) {
       stats.truncated_correspondences = true;
       return false;

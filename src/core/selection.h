@@ -7,6 +7,8 @@
 // Scene arcs are Delaunay half-edges; each is described and looked up in
 // the model search tree at most once per frame, on first use. Each lookup's
 // model arcs are kept sorted by (from, to) so the joins are binary searches.
+// With vertex descriptors, each vertex pair of a joined correspondence must
+// be similar too.
 #pragma once
 
 #include <cstdint>
@@ -28,6 +30,15 @@ struct SelectionInput {
   const Point2f* scene_points = nullptr;  // sampled scene keypoints
   const Delaunay* triangulation = nullptr;
   const std::vector<SceneKeygraph>* keygraphs = nullptr;
+  // Vertex descriptors (kVertexDescriptorSize bytes) and their inverse
+  // norms, of the model keypoints (global ids) and of the sampled scene
+  // keypoints. When set, a correspondence is also rejected when any vertex
+  // pair is farther apart than params.descriptor.vertex_threshold (paper
+  // section 7).
+  const std::uint8_t* model_descriptors = nullptr;
+  const float* model_inverse_norms = nullptr;
+  const std::uint8_t* scene_descriptors = nullptr;
+  const float* scene_inverse_norms = nullptr;
 };
 
 class Selector {

@@ -165,6 +165,88 @@ TEST_F(Detection2Models, NothingInUnrelatedPhotos) {
   EXPECT_GE(scenes, 10);
 }
 
+// The paper's vertex descriptors (section 6: SIFT), off by default: an index
+// built with them still finds both models and nothing in unrelated photos.
+class DetectionSiftVertices : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    box_ = new cv::Mat(test::load_gray(test::opencv_data("box.png")));
+    ASSERT_FALSE(box_->empty());
+    index_ = new AlignedIndex;
+    Params params;
+    params.descriptor.vertex_descriptor = VertexDescriptor::kSift;
+    build_index({{"graf-crop", graf_crop()}, {"box", *box_}}, params, *index_);
+  }
+  static void TearDownTestSuite() {
+    delete index_;
+    delete box_;
+  }
+  static AlignedIndex* index_;
+  static cv::Mat* box_;
+};
+AlignedIndex* DetectionSiftVertices::index_ = nullptr;
+cv::Mat* DetectionSiftVertices::box_ = nullptr;
+
+TEST_F(DetectionSiftVertices, IndexHasVertexDescriptors) {
+  EXPECT_EQ(index_->index.params().descriptor.vertex_descriptor, VertexDescriptor::kSift);
+  EXPECT_NE(index_->index.vertex_descriptors(), nullptr);
+  // The core alone cannot describe frames for it.
+  Detector core(index_->index);
+  DetectionList found;
+  const cv::Mat scene = test::load_gray(test::opencv_data("graf3.png"));
+  ASSERT_FALSE(scene.empty());
+  EXPECT_EQ(core.detect(test::view(scene), found).code(), StatusCode::kInvalidArgument);
+}
+
+TEST_F(DetectionSiftVertices, GrafCropFoundInGraf3WithinFivePixels) {
+  const cv::Mat scene = test::load_gray(test::opencv_data("graf3.png"));
+  ASSERT_FALSE(scene.empty());
+  DesktopDetector detector(index_->index);
+  DetectionList found;
+  ASSERT_TRUE(detector.detect(scene, found).is_ok());
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].model_name, "graf-crop");
+  const double err = max_corner_error(found[0], graf_truth(), index_->index.model(0));
+  EXPECT_LT(err, 5.0);
+  EXPECT_GE(found[0].inliers, 12);
+  EXPECT_GT(detector.stats().vertex_rejections, 0);
+  std::printf(
+      "SIFT vertices, graf crop -> graf3: max corner error %.2f px, %d inliers, "
+      "%d correspondences (%lld rejected by a vertex)\n",
+      err, found[0].inliers, detector.stats().correspondences, detector.stats().vertex_rejections);
+}
+
+TEST_F(DetectionSiftVertices, BoxFoundInBoxInScene) {
+  const cv::Mat scene = test::load_gray(test::opencv_data("box_in_scene.png"));
+  ASSERT_FALSE(scene.empty());
+  DesktopDetector detector(index_->index);
+  DetectionList found;
+  ASSERT_TRUE(detector.detect(scene, found).is_ok());
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].model_name, "box");
+  const Homography reference = sift_reference(*box_, scene);
+  const double err = max_corner_error(found[0], reference, index_->index.model(1));
+  EXPECT_LT(err, 8.0) << "against SIFT + RANSAC";
+  std::printf(
+      "SIFT vertices, box -> box_in_scene: max corner distance to SIFT reference "
+      "%.2f px, %d inliers, %d correspondences (%lld rejected by a vertex)\n",
+      err, found[0].inliers, detector.stats().correspondences, detector.stats().vertex_rejections);
+}
+
+TEST_F(DetectionSiftVertices, NothingInUnrelatedPhotos) {
+  const char* negatives[] = {"aero1.jpg", "building.jpg", "messi5.jpg", "starry_night.jpg",
+                             "butterfly.jpg"};
+  DesktopDetector detector(index_->index);
+  for (const char* name : negatives) {
+    const cv::Mat scene = test::load_gray(test::opencv_data(name));
+    ASSERT_FALSE(scene.empty()) << name;
+    DetectionList found;
+    ASSERT_TRUE(detector.detect(scene, found).is_ok());
+    EXPECT_TRUE(found.empty()) << name << ": found " << found.size() << " (first: "
+                               << (found.empty() ? "" : std::string(found[0].model_name)) << ")";
+  }
+}
+
 TEST(Detection, TwoInstancesOfOneModel) {
   // Two copies of box.png in one synthetic scene: one as is, one rotated by
   // 20 degrees and scaled by 0.8, on a noisy background.

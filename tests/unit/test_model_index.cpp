@@ -374,6 +374,199 @@ TEST_F(ModelIndexTest, SerializeRejectsBadInput) {
   EXPECT_FALSE(serialize_index(models(), bad, b));
 }
 
+// --- Vertex descriptors (format 1.1) ----------------------------------------
+
+Params sift_params() {
+  Params p;
+  p.descriptor.vertex_descriptor = VertexDescriptor::kSift;
+  return p;
+}
+
+// The corpus' two images built with SIFT vertex descriptors.
+struct SiftCorpus {
+  std::string error;
+  std::vector<BuiltModel> models;
+  Bytes bytes;
+};
+
+const SiftCorpus& sift_corpus() {
+  static const SiftCorpus c = [] {
+    SiftCorpus k;
+    const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+    const cv::Mat graf = test::load_gray(test::opencv_data("graf1.png"));
+    if (box.empty() || graf.empty()) {
+      k.error = "box.png or graf1.png missing (install opencv-doc)";
+      return k;
+    }
+    k.models.resize(2);
+    Status s = build_model(box, "box", sift_params(), k.models[0]);
+    if (s)
+      s = build_model(graf(cv::Rect(300, 220, 200, 200)).clone(), "graf1_crop", sift_params(),
+                      k.models[1]);
+    if (s) s = serialize_index(k.models, sift_params(), k.bytes);
+    if (!s) k.error = s.message();
+    return k;
+  }();
+  return c;
+}
+
+std::uint32_t section_count_field(const Bytes& b, std::uint32_t id) {
+  return load<std::uint32_t>(b.data() + entry(b, id) + format::kEntCount);
+}
+
+// Recomputes the CRC of section `id` and the header CRC.
+void reseal_section(Bytes& b, std::uint32_t id) {
+  store<std::uint32_t>(b.data() + entry(b, id) + format::kEntCrc,
+                       crc32(b.data() + section_offset(b, id), section_size(b, id)));
+  fix_header_crc(b);
+}
+
+TEST_F(ModelIndexTest, DefaultIndexHasEmptyVertexDescriptorSection) {
+  EXPECT_EQ(section_count(bytes()), format::kLastSectionId);
+  EXPECT_EQ(section_count_field(bytes(), format::kSectionVertexDescriptors), 0u);
+  EXPECT_EQ(section_size(bytes(), format::kSectionVertexDescriptors), 0u);
+  AlignedBytes buffer(bytes());
+  ModelIndex index;
+  ASSERT_TRUE(ModelIndex::view(buffer.data(), buffer.size(), index));
+  EXPECT_EQ(index.vertex_descriptors(), nullptr);
+  EXPECT_EQ(index.params().descriptor.vertex_descriptor, VertexDescriptor::kNone);
+  for (const BuiltModel& m : models()) EXPECT_TRUE(m.vertex_descriptors.empty());
+}
+
+TEST_F(ModelIndexTest, SiftVertexDescriptorsRoundTrip) {
+  const SiftCorpus& sc = sift_corpus();
+  ASSERT_TRUE(sc.error.empty()) << sc.error;
+  Bytes all;
+  std::size_t keypoints = 0;
+  for (const BuiltModel& m : sc.models) {
+    ASSERT_EQ(m.vertex_descriptors.size(), m.keypoints.size() * kVertexDescriptorSize) << m.name;
+    ASSERT_EQ(m.keypoint_scales.size(), m.keypoints.size()) << m.name;
+    all.insert(all.end(), m.vertex_descriptors.begin(), m.vertex_descriptors.end());
+    keypoints += m.keypoints.size();
+  }
+  // Same keypoints and arcs as without vertex descriptors.
+  EXPECT_EQ(sc.models[0].keypoints.size(), models()[0].keypoints.size());
+  EXPECT_EQ(sc.models[0].arcs.size(), models()[0].arcs.size());
+  const Bytes& b = sc.bytes;
+  EXPECT_EQ(section_count_field(b, format::kSectionVertexDescriptors), keypoints);
+  EXPECT_EQ(section_size(b, format::kSectionVertexDescriptors), keypoints * kVertexDescriptorSize);
+  EXPECT_EQ(section_offset(b, format::kSectionVertexDescriptors) % format::kAlignment, 0u);
+
+  AlignedBytes buffer(b);
+  ModelIndex index;
+  const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
+  ASSERT_TRUE(s) << s.message();
+  expect_matches(index, sc.models);
+  expect_same_params(index.params(), sift_params());
+  EXPECT_EQ(index.params().descriptor.vertex_descriptor, VertexDescriptor::kSift);
+  EXPECT_EQ(index.params().descriptor.vertex_threshold, sift_params().descriptor.vertex_threshold);
+  ASSERT_NE(index.vertex_descriptors(), nullptr);
+  EXPECT_EQ(0, std::memcmp(index.vertex_descriptors(), all.data(), all.size()));
+  // Zero copy, like every section.
+  EXPECT_EQ(index.vertex_descriptors(),
+            buffer.data() + section_offset(b, format::kSectionVertexDescriptors));
+  // Not all zero: SIFT of textured images.
+  std::size_t nonzero = 0;
+  for (std::uint8_t v : all) nonzero += v != 0;
+  EXPECT_GT(nonzero, all.size() / 4);
+
+  // Deterministic, and written to a file the same way.
+  Bytes again;
+  ASSERT_TRUE(serialize_index(sc.models, sift_params(), again));
+  EXPECT_TRUE(again == b);
+}
+
+TEST_F(ModelIndexTest, RejectsVertexDescriptorCountMismatch) {
+  const SiftCorpus& sc = sift_corpus();
+  ASSERT_TRUE(sc.error.empty()) << sc.error;
+  const std::uint32_t id = format::kSectionVertexDescriptors;
+  const std::uint32_t n = section_count_field(sc.bytes, id);
+  ASSERT_GT(n, 1u);
+
+  // One descriptor short (size and count agree, CRCs right).
+  Bytes b = sc.bytes;
+  store<std::uint32_t>(b.data() + entry(b, id) + format::kEntCount, n - 1);
+  store<std::uint64_t>(b.data() + entry(b, id) + format::kEntSize,
+                       std::uint64_t{n - 1} * kVertexDescriptorSize);
+  reseal_section(b, id);
+  EXPECT_TRUE(rejected(b, "vertex descriptors section: count " + std::to_string(n - 1) +
+                              ", expected " + std::to_string(n)));
+
+  // Count disagreeing with the size.
+  b = sc.bytes;
+  store<std::uint32_t>(b.data() + entry(b, id) + format::kEntCount, n + 1);
+  fix_header_crc(b);
+  EXPECT_TRUE(rejected(b, "vertex descriptors section: size"));
+
+  // Parameters asking for SIFT on an index without descriptors...
+  b = bytes();
+  put_params(b, sift_params());
+  EXPECT_TRUE(rejected(b, "vertex descriptors section: count 0, expected"));
+  // ...and descriptors the parameters do not ask for.
+  b = sc.bytes;
+  put_params(b, Params{});
+  EXPECT_TRUE(
+      rejected(b, "vertex descriptors section: count " + std::to_string(n) + ", expected 0"));
+
+  // A section this reader does not know is skipped: as a 1.0 file, which
+  // has no vertex descriptor section, a default index still loads...
+  b = bytes();
+  store<std::uint32_t>(b.data() + entry(b, id) + format::kEntId, 99);
+  fix_header_crc(b);
+  {
+    AlignedBytes buffer(b);
+    ModelIndex index;
+    const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
+    ASSERT_TRUE(s) << s.message();
+    EXPECT_EQ(index.vertex_descriptors(), nullptr);
+  }
+  // ...but one whose parameters ask for SIFT does not.
+  b = sc.bytes;
+  store<std::uint32_t>(b.data() + entry(b, id) + format::kEntId, 99);
+  fix_header_crc(b);
+  EXPECT_TRUE(rejected(b, "vertex descriptors section: count 0"));
+
+  // The payload is checksummed like every section.
+  b = sc.bytes;
+  b[section_offset(b, id) + 17] ^= 0x01;
+  EXPECT_TRUE(rejected(b, "vertex descriptors section: checksum mismatch"));
+}
+
+TEST_F(ModelIndexTest, RejectsBadVertexDescriptorParameters) {
+  Params p;
+  p.descriptor.vertex_descriptor = static_cast<VertexDescriptor>(2);
+  Bytes b = bytes();
+  put_params(b, p);
+  EXPECT_TRUE(rejected(b, "parameter vertex_descriptor"));
+  for (float bad : {0.f, -0.5f, 2.5f, std::nanf("")}) {
+    p = sift_params();
+    p.descriptor.vertex_threshold = bad;
+    b = sift_corpus().bytes;
+    put_params(b, p);
+    EXPECT_TRUE(rejected(b, "parameter vertex_threshold")) << bad;
+  }
+  // Without vertex descriptors a 0 threshold is what a 1.0 file holds.
+  p = Params{};
+  p.descriptor.vertex_threshold = 0.f;
+  b = bytes();
+  put_params(b, p);
+  EXPECT_TRUE(try_view(b));
+}
+
+TEST_F(ModelIndexTest, SerializeRejectsMissingVertexDescriptors) {
+  Bytes b;
+  // Models built without SIFT cannot go into an index that asks for it.
+  const Status s = serialize_index(models(), sift_params(), b);
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("box"), std::string::npos) << s.message();
+  // The other way round, descriptors are left out.
+  const SiftCorpus& sc = sift_corpus();
+  ASSERT_TRUE(sc.error.empty()) << sc.error;
+  ASSERT_TRUE(serialize_index(sc.models, Params{}, b));
+  EXPECT_TRUE(b == bytes()) << "models built with SIFT, written without, differ";
+}
+
 // --- Files --------------------------------------------------------------
 
 class TempDir {
