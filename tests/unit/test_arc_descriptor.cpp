@@ -593,7 +593,7 @@ TEST(ArcDescriptor, ArbitraryRotationKeepsArcsSimilar) {
         name, same.count, same.mean(), same.max, 100.0 * similar / same.count, unrelated.mean());
     EXPECT_GT(same.count, 1900);
     // Measured: 0.093 (box), 0.064 (graf1) against 1.36 for unrelated arcs.
-    EXPECT_LT(same.mean(), 0.3 * params.similarity_threshold);
+    EXPECT_LT(same.mean(), 0.5 * params.similarity_threshold);
     EXPECT_LT(same.mean(), 0.1 * unrelated.mean());
   }
 }
