@@ -24,5 +24,21 @@ write_basic_package_version_file(${PROJECT_BINARY_DIR}/keygraphConfigVersion.cma
 install(FILES ${PROJECT_BINARY_DIR}/keygraphConfig.cmake ${PROJECT_BINARY_DIR}/keygraphConfigVersion.cmake
   DESTINATION ${_kg_cmake_dir})
 
+# The .pc file locates the prefix from its own directory (${pcfiledir}), so
+# `cmake --install --prefix DIR` and a copied install tree both work.
+set(_kg_pc_dir ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
+if(IS_ABSOLUTE "${CMAKE_INSTALL_LIBDIR}" OR IS_ABSOLUTE "${CMAKE_INSTALL_INCLUDEDIR}")
+  set(KG_PC_PREFIX "${CMAKE_INSTALL_PREFIX}")
+else()
+  file(RELATIVE_PATH _kg_pc_up "/kg-prefix/${_kg_pc_dir}" "/kg-prefix")
+  set(KG_PC_PREFIX "\${pcfiledir}/${_kg_pc_up}")
+endif()
+set(KG_PC_LIBDIR "${CMAKE_INSTALL_LIBDIR}")
+set(KG_PC_INCLUDEDIR "${CMAKE_INSTALL_INCLUDEDIR}")
+foreach(_kg_dir IN ITEMS LIBDIR INCLUDEDIR)
+  if(NOT IS_ABSOLUTE "${KG_PC_${_kg_dir}}")
+    set(KG_PC_${_kg_dir} "\${prefix}/${KG_PC_${_kg_dir}}")
+  endif()
+endforeach()
 configure_file(${PROJECT_SOURCE_DIR}/cmake/keygraph.pc.in ${PROJECT_BINARY_DIR}/keygraph.pc @ONLY)
-install(FILES ${PROJECT_BINARY_DIR}/keygraph.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
+install(FILES ${PROJECT_BINARY_DIR}/keygraph.pc DESTINATION ${_kg_pc_dir})
