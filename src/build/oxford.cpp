@@ -8,6 +8,7 @@
 #include <fstream>
 #include <memory>
 
+#include "build/baselines.h"
 #include "build/desktop_detect.h"
 #include "build/image_io.h"
 #include "build/model_builder.h"
@@ -71,23 +72,46 @@ Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>
     std::sort(subsets.begin(), subsets.end());
   }
   if (subsets.empty()) return {StatusCode::kNotFound, options.dataset + ": no <subset>/img1.png"};
-  Rng rng(options.seed);
-  for (const std::string& subset : subsets) {
-    const std::string dir = options.dataset + "/" + subset;
+  cv::setNumThreads(1);  // every method on one thread
+  std::vector<BaselineDetector> baselines;
+  std::vector<std::string> baseline_methods;
+  bool run_keygraph = false;
+  for (const std::string& m : options.methods) {
+    BaselineOptions b;
+    if (m == "keygraph") {
+      run_keygraph = true;
+    } else if (parse_baseline(m, b)) {
+      baselines.emplace_back(b);
+      baseline_methods.push_back(m);
+    } else {
+      return {StatusCode::kInvalidArgument, "unknown method '" + m + "'"};
+    }
+  }
+  // Scenes and ground truth of every subset (negatives use the next one's).
+  struct Subset {
     cv::Mat img1;
-    Status s = load_gray(dir + "/img1.png", img1);
+    std::vector<cv::Mat> scenes = std::vector<cv::Mat>(7);
+    std::vector<Homography> truths = std::vector<Homography>(7);
+  };
+  std::vector<Subset> data(subsets.size());
+  for (std::size_t i = 0; i < subsets.size(); ++i) {
+    const std::string dir = options.dataset + "/" + subsets[i];
+    Status s = load_gray(dir + "/img1.png", data[i].img1);
     if (!s) return s;
-    const int size = options.crop_size;
-    if (img1.cols < size || img1.rows < size)
-      return {StatusCode::kInvalidArgument, dir + "/img1.png smaller than the crop size"};
-    std::vector<cv::Mat> scenes(7);
-    std::vector<Homography> truths(7);
     for (int n = 2; n <= 6; ++n) {
-      s = load_gray(dir + "/img" + std::to_string(n) + ".png", scenes[n]);
+      s = load_gray(dir + "/img" + std::to_string(n) + ".png", data[i].scenes[n]);
       if (!s) return s;
-      s = read_homography(dir + "/H1to" + std::to_string(n) + "p", truths[n]);
+      s = read_homography(dir + "/H1to" + std::to_string(n) + "p", data[i].truths[n]);
       if (!s) return s;
     }
+    if (data[i].img1.cols < options.crop_size || data[i].img1.rows < options.crop_size)
+      return {StatusCode::kInvalidArgument, dir + "/img1.png smaller than the crop size"};
+  }
+  using Clock = std::chrono::steady_clock;
+  Rng rng(options.seed);
+  for (std::size_t si = 0; si < subsets.size(); ++si) {
+    const cv::Mat& img1 = data[si].img1;
+    const int size = options.crop_size;
     const int crops = options.centre_crop ? 1 : options.crops_per_subset;
     for (int c = 0; c < crops; ++c) {
       int x = (img1.cols - size) / 2, y = (img1.rows - size) / 2;
@@ -95,41 +119,67 @@ Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>
         x = static_cast<int>(rng.uniform(static_cast<std::uint32_t>(img1.cols - size + 1)));
         y = static_cast<int>(rng.uniform(static_cast<std::uint32_t>(img1.rows - size + 1)));
       }
+      const cv::Mat crop = img1(cv::Rect(x, y, size, size)).clone();
       OwnedIndex owned;
-      s = owned.build(img1(cv::Rect(x, y, size, size)).clone(), options.params);
-      if (!s) return {s.code(), subset + " crop " + std::to_string(c) + ": " + s.message()};
-      DesktopDetector detector(owned.index);
-      const ModelInfo model = owned.index.model(0);
-      for (int n = 2; n <= 6; ++n) {
-        OxfordCase r;
-        r.subset = subset;
-        r.crop = c;
-        r.crop_x = x;
-        r.crop_y = y;
-        r.degree = n;
-        DetectionList found;
-        const auto start = std::chrono::steady_clock::now();
-        s = detector.detect(scenes[n], found);
-        r.time_ms =
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                .count();
-        if (!s) return s;
-        r.ransac_iterations = detector.stats().ransac_iterations;
-        r.correspondences = detector.stats().correspondences;
-        if (!found.empty()) {
-          const Homography truth = compose_with_offset(truths[n], x, y);
-          r.detected = true;
-          r.inliers = found[0].inliers;
-          r.corner_error = 0;
-          for (const Point2f& corner : model.outline) {
-            const Point2f g = kg::apply(truth, corner);
-            const Point2f d = kg::apply(found[0].homography, corner);
-            r.corner_error =
-                std::max(r.corner_error, std::hypot(double{g.x} - d.x, double{g.y} - d.y));
+      std::unique_ptr<DesktopDetector> detector;
+      if (run_keygraph) {
+        Status s = owned.build(crop, options.params);
+        if (!s) return {s.code(), subsets[si] + " crop " + std::to_string(c) + ": " + s.message()};
+        detector = std::make_unique<DesktopDetector>(owned.index);
+      }
+      for (BaselineDetector& b : baselines) b.set_model(crop);
+      const Point2f outline[4] = {{0.f, 0.f},
+                                  {static_cast<float>(size - 1), 0.f},
+                                  {static_cast<float>(size - 1), static_cast<float>(size - 1)},
+                                  {0.f, static_cast<float>(size - 1)}};
+      const int scene_sets = options.negatives && subsets.size() > 1 ? 2 : 1;
+      for (int set = 0; set < scene_sets; ++set) {
+        const std::size_t ti = set == 0 ? si : (si + 1) % subsets.size();
+        for (int n = 2; n <= 6; ++n) {
+          const cv::Mat& scene = data[ti].scenes[n];
+          const Homography truth = compose_with_offset(data[ti].truths[n], x, y);
+          for (std::size_t m = 0; m < baselines.size() + (run_keygraph ? 1 : 0); ++m) {
+            OxfordCase r;
+            r.subset = subsets[si];
+            r.scene_subset = subsets[ti];
+            r.negative = set == 1;
+            r.crop = c;
+            r.crop_x = x;
+            r.crop_y = y;
+            r.degree = n;
+            Homography found_h{};
+            const auto start = Clock::now();
+            if (run_keygraph && m == baselines.size()) {
+              r.method = "keygraph";
+              DetectionList found;
+              Status s = detector->detect(scene, found);
+              r.time_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+              if (!s) return s;
+              r.ransac_iterations = detector->stats().ransac_iterations;
+              r.correspondences = detector->stats().correspondences;
+              r.detected = !found.empty();
+              if (r.detected) {
+                r.inliers = found[0].inliers;
+                found_h = found[0].homography;
+              }
+            } else {
+              r.method = baseline_methods[m];
+              baselines[m].detect(scene, r.detected, found_h, r.inliers);
+              r.time_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+            }
+            if (r.detected) {
+              r.corner_error = 0;
+              for (const Point2f& corner : outline) {
+                const Point2f g = kg::apply(truth, corner);
+                const Point2f d = kg::apply(found_h, corner);
+                r.corner_error =
+                    std::max(r.corner_error, std::hypot(double{g.x} - d.x, double{g.y} - d.y));
+              }
+            }
+            cases.push_back(r);
+            if (progress != nullptr) progress(r);
           }
         }
-        cases.push_back(r);
-        if (progress != nullptr) progress(r);
       }
     }
   }

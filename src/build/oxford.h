@@ -25,13 +25,21 @@ struct OxfordEvalOptions {
   bool centre_crop = false;  // one crop, centred, instead of random ones
   std::uint64_t seed = 1;
   Params params;
+  // "keygraph" and/or baseline names (build/baselines.h: "sift-ransac", ...).
+  std::vector<std::string> methods = {"keygraph"};
+  // Also run each crop against the scenes of the next subset (no instance
+  // there): every detection on those is a false detection.
+  bool negatives = false;
 };
 
 struct OxfordCase {
+  std::string method;
   std::string subset;
+  bool negative = false;  // scene from another subset: any detection is false
   int crop = 0;
   int crop_x = 0, crop_y = 0;
-  int degree = 0;  // scene imgN, N in 2..6
+  int degree = 0;            // scene imgN, N in 2..6
+  std::string scene_subset;  // subset of the scene (differs for negatives)
   bool detected = false;
   double corner_error = -1;  // max over the 4 corners, pixels (first detection)
   int inliers = 0;
