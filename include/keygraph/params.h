@@ -80,6 +80,17 @@ struct GraphParams {
   float max_anisotropy = 2.5f;
 };
 
+// How arc descriptors are stored in the model index and compared at search
+// time. The integer encodings store round(component * 32767) or
+// round(component * 127) and compare integer squared distances against the
+// similarity threshold scaled the same way; the scene descriptor is
+// quantised identically before each query. float32 is the reference.
+enum class DescriptorEncoding : std::uint8_t {
+  kFloat32 = 0,  // 24 bytes per arc descriptor
+  kInt16 = 1,    // 12 bytes
+  kInt8 = 2,     // 6 bytes
+};
+
 struct DescriptorParams {
   float blur_sigma = 1.0f;  // Gaussian blur before profiles
   int profile_length = 30;  // l: mean profile resampled to this length

@@ -36,5 +36,9 @@ inline Point2f apply(const Homography& h, Point2f p) {
 inline constexpr int kMaxCoefficients = 3;
 inline constexpr int kDescriptorSize = 2 * kMaxCoefficients;
 using ArcDescriptor = std::array<float, kDescriptorSize>;
+// The same descriptor quantised for storage and search
+// (DescriptorParams::encoding): each component times 32767 or 127, rounded.
+using ArcDescriptorI16 = std::array<std::int16_t, kDescriptorSize>;
+using ArcDescriptorI8 = std::array<std::int8_t, kDescriptorSize>;
 
 }  // namespace kg

@@ -1,16 +1,24 @@
 // Flat kd-tree over arc descriptors, laid out so it can live in a file and
 // be used in place (zero copy):
-// - points: N descriptors of kDescriptorSize floats, in tree order;
-// - ids: for each tree slot, the original index (model arc id);
+// - points: N descriptors of kDescriptorSize components of type T (float,
+//   int16_t or int8_t: DescriptorParams::encoding), in tree order;
+// - ids (optional): for each tree slot, the original index of its point.
+//   The model index stores its arcs in tree order instead, so it has none
+//   and a query returns tree slots;
 // - nodes: the 2^L - 1 internal nodes of a complete binary tree in
 //   breadth-first order (children of node i are 2i+1 and 2i+2), each a split
-//   dimension and value. Node ranges are implicit: the root covers [0, N) and
-//   a node covering [b, e) gives [b, m) to its left and [m, e) to its right
-//   child with m = b + (e - b) / 2. L is the smallest depth whose leaves hold
-//   at most kLeafSize points. Left points have value <= split <= right points.
-// Queries use a fixed-size stack and allocate nothing.
+//   dimension and value in the points' domain. Node ranges are implicit: the
+//   root covers [0, N) and a node covering [b, e) gives [b, m) to its left
+//   and [m, e) to its right child with m = b + (e - b) / 2. L is the smallest
+//   depth whose leaves hold at most kLeafSize points. Left points have
+//   value <= split <= right points.
+// Distances are squared Euclidean in the points' domain: float for float
+// points, int32 for int8 (at most 6 * 254^2), int64 for int16 (6 * 65534^2
+// does not fit in 32 bits). Queries use a fixed-size stack and allocate
+// nothing.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -18,10 +26,51 @@
 
 namespace kg {
 
+// Internal node of a float32 tree (8 bytes in the file).
 struct KdNode {
   float split = 0.f;
   std::uint32_t dim = 0;
 };
+
+// Internal node of an int16 or int8 tree (4 bytes in the file).
+struct KdNodeInt {
+  std::int16_t split = 0;
+  std::uint16_t dim = 0;
+};
+
+template <class T>
+struct KdTraits;
+template <>
+struct KdTraits<float> {
+  using Node = KdNode;
+  using Dist = float;
+};
+template <>
+struct KdTraits<std::int16_t> {
+  using Node = KdNodeInt;
+  using Dist = std::int64_t;
+};
+template <>
+struct KdTraits<std::int8_t> {
+  using Node = KdNodeInt;
+  using Dist = std::int32_t;
+};
+
+template <class T>
+using KdPoint = std::array<T, kDescriptorSize>;
+
+// Squared Euclidean distance in the points' domain (for float, the same
+// arithmetic as squared_distance() in core/arc_descriptor.h).
+template <class T>
+inline typename KdTraits<T>::Dist kd_distance2(const KdPoint<T>& p, const KdPoint<T>& q) {
+  using Dist = typename KdTraits<T>::Dist;
+  Dist s = 0;
+  for (int i = 0; i < kDescriptorSize; ++i) {
+    const Dist d = static_cast<Dist>(p[i]) - static_cast<Dist>(q[i]);
+    s += d * d;
+  }
+  return s;
+}
 
 inline constexpr int kLeafSize = 32;
 inline constexpr int kMaxTreeDepth = 40;
@@ -29,17 +78,24 @@ inline constexpr int kMaxTreeDepth = 40;
 // Depth L of the tree for n points (0 when n <= kLeafSize).
 int kdtree_depth(std::uint32_t n);
 
-// Builds a tree over descriptors[0..n): fills points (tree order), ids and
-// nodes (resized). Deterministic.
-void build_kdtree(const ArcDescriptor* descriptors, std::uint32_t n,
-                  std::vector<ArcDescriptor>& points, std::vector<std::uint32_t>& ids,
-                  std::vector<KdNode>& nodes);
+// Builds a tree over points[0..n): fills `points` (tree order), `ids` (the
+// source index of each tree slot) and `nodes` (resized). Deterministic: ties
+// are broken by source index.
+template <class T>
+void build_kdtree(const KdPoint<T>* source, std::uint32_t n, std::vector<KdPoint<T>>& points,
+                  std::vector<std::uint32_t>& ids, std::vector<typename KdTraits<T>::Node>& nodes);
 
-class KdTreeView {
+template <class T>
+class BasicKdTreeView {
  public:
-  KdTreeView() = default;
-  KdTreeView(const ArcDescriptor* points, const std::uint32_t* ids, std::uint32_t n,
-             const KdNode* nodes, int depth)
+  using Point = KdPoint<T>;
+  using Node = typename KdTraits<T>::Node;
+  using Dist = typename KdTraits<T>::Dist;
+
+  BasicKdTreeView() = default;
+  // `ids` may be null: queries then report tree slots.
+  BasicKdTreeView(const Point* points, const std::uint32_t* ids, std::uint32_t n, const Node* nodes,
+                  int depth)
       : points_(points), ids_(ids), n_(n), nodes_(nodes), depth_(depth) {}
 
   std::uint32_t size() const { return n_; }
@@ -47,19 +103,29 @@ class KdTreeView {
   // Ids of all points with squared distance < radius2 from q. Writes at most
   // `capacity` ids to `out` and returns how many points matched in total
   // (a return value > capacity means the output was truncated).
-  std::uint32_t radius_search(const ArcDescriptor& q, float radius2, std::uint32_t* out,
+  std::uint32_t radius_search(const Point& q, Dist radius2, std::uint32_t* out,
                               std::uint32_t capacity) const;
 
-  // The k (<= 64) nearest points, closest first: ids and squared distances.
-  // Returns the number written (min(k, size())).
-  int knn_search(const ArcDescriptor& q, int k, std::uint32_t* ids, float* dist2) const;
+  // The k (<= 64) nearest points, closest first (ties: smaller id first):
+  // ids and squared distances. Returns the number written (min(k, size())).
+  int knn_search(const Point& q, int k, std::uint32_t* ids, Dist* dist2) const;
 
  private:
-  const ArcDescriptor* points_ = nullptr;
+  std::uint32_t id(std::uint32_t slot) const { return ids_ != nullptr ? ids_[slot] : slot; }
+
+  const Point* points_ = nullptr;
   const std::uint32_t* ids_ = nullptr;
   std::uint32_t n_ = 0;
-  const KdNode* nodes_ = nullptr;
+  const Node* nodes_ = nullptr;
   int depth_ = 0;
 };
+
+using KdTreeView = BasicKdTreeView<float>;
+using KdTreeView16 = BasicKdTreeView<std::int16_t>;
+using KdTreeView8 = BasicKdTreeView<std::int8_t>;
+
+extern template class BasicKdTreeView<float>;
+extern template class BasicKdTreeView<std::int16_t>;
+extern template class BasicKdTreeView<std::int8_t>;
 
 }  // namespace kg

@@ -1,11 +1,22 @@
-// Flat kd-tree over arc descriptors: exact radius and k-nearest search.
+// Flat kd-tree over arc descriptors in each encoding (float32, int16, int8):
+// exact radius and k-nearest search against brute force in the same domain,
+// quantisation and the scaled radius, and queries that allocate nothing.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <iterator>
+#include <limits>
+#include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
+#include "alloc_counter.h"
 #include "core/arc_descriptor.h"
+#include "core/descriptor_encoding.h"
 #include "core/kdtree.h"
 #include "core/rng.h"
 
@@ -31,26 +42,84 @@ std::vector<ArcDescriptor> random_descriptors(Rng& rng, std::uint32_t n) {
   return out;
 }
 
+// Descriptors in the domain of T: as computed for float, quantised otherwise.
+template <class T>
+KdPoint<T> encode(const ArcDescriptor& d) {
+  if constexpr (std::is_same_v<T, float>) {
+    return d;
+  } else {
+    return quantise<T>(d);
+  }
+}
+
+template <class T>
+std::vector<KdPoint<T>> encode_all(const std::vector<ArcDescriptor>& data) {
+  std::vector<KdPoint<T>> out;
+  for (const ArcDescriptor& d : data) out.push_back(encode<T>(d));
+  return out;
+}
+
+template <class T>
+constexpr DescriptorEncoding encoding_of() {
+  if constexpr (std::is_same_v<T, std::int16_t>) {
+    return DescriptorEncoding::kInt16;
+  } else if constexpr (std::is_same_v<T, std::int8_t>) {
+    return DescriptorEncoding::kInt8;
+  } else {
+    return DescriptorEncoding::kFloat32;
+  }
+}
+
+// The squared radius in T's domain, as ArcSearch computes it.
+template <class T>
+typename KdTraits<T>::Dist radius2_of(float r) {
+  using Dist = typename KdTraits<T>::Dist;
+  if constexpr (std::is_same_v<T, float>) {
+    return r * r;
+  } else {
+    std::int64_t scaled = 0;
+    EXPECT_TRUE(scaled_radius2(r, encoding_of<T>(), std::numeric_limits<Dist>::max(), scaled));
+    return static_cast<Dist>(scaled);
+  }
+}
+
+template <class T>
 struct Tree {
-  std::vector<ArcDescriptor> points;
+  std::vector<KdPoint<T>> points;
   std::vector<std::uint32_t> ids;
-  std::vector<KdNode> nodes;
-  KdTreeView view;
+  std::vector<typename KdTraits<T>::Node> nodes;
+  BasicKdTreeView<T> view;        // reports source ids
+  BasicKdTreeView<T> slots_view;  // no ids: reports tree slots (the model index's way)
 };
 
-Tree make_tree(const std::vector<ArcDescriptor>& data) {
-  Tree t;
+template <class T>
+Tree<T> make_tree(const std::vector<KdPoint<T>>& data) {
+  Tree<T> t;
   const auto n = static_cast<std::uint32_t>(data.size());
-  build_kdtree(data.data(), n, t.points, t.ids, t.nodes);
-  t.view = KdTreeView(t.points.data(), t.ids.data(), n, t.nodes.data(), kdtree_depth(n));
+  build_kdtree<T>(data.data(), n, t.points, t.ids, t.nodes);
+  t.view = BasicKdTreeView<T>(t.points.data(), t.ids.data(), n, t.nodes.data(), kdtree_depth(n));
+  t.slots_view = BasicKdTreeView<T>(t.points.data(), nullptr, n, t.nodes.data(), kdtree_depth(n));
   return t;
 }
 
-TEST(KdTree, LayoutIsCompleteAndAPermutation) {
+template <class T>
+class KdTreeTyped : public ::testing::Test {};
+using Encodings = ::testing::Types<float, std::int16_t, std::int8_t>;
+class EncodingName {
+ public:
+  template <class T>
+  static std::string GetName(int) {
+    return encoding_name(encoding_of<T>());
+  }
+};
+TYPED_TEST_SUITE(KdTreeTyped, Encodings, EncodingName);
+
+TYPED_TEST(KdTreeTyped, LayoutIsCompleteAndAPermutation) {
+  using T = TypeParam;
   Rng rng(1);
   for (std::uint32_t n : {0u, 1u, 7u, 8u, 9u, 100u, 1000u, 4097u}) {
-    const auto data = random_descriptors(rng, n);
-    const Tree t = make_tree(data);
+    const auto data = encode_all<T>(random_descriptors(rng, n));
+    const Tree<T> t = make_tree<T>(data);
     EXPECT_EQ(t.nodes.size(), (std::size_t{1} << kdtree_depth(n)) - 1);
     std::vector<std::uint32_t> sorted = t.ids;
     std::sort(sorted.begin(), sorted.end());
@@ -58,75 +127,272 @@ TEST(KdTree, LayoutIsCompleteAndAPermutation) {
       ASSERT_EQ(sorted[i], i);
       EXPECT_EQ(t.points[i], data[t.ids[i]]);
     }
+    // Every node separates its range: left <= split <= right on its dimension.
+    const int depth = kdtree_depth(n);
+    for (std::uint32_t node = 0; node < t.nodes.size(); ++node) {
+      std::uint32_t b = 0, e = n, level = 0;
+      for (std::uint32_t x = node + 1; x > 1; x /= 2) ++level;
+      // Walk down from the root to find the node's range.
+      std::uint32_t path = node + 1, at = 0;
+      for (std::uint32_t l = level; l-- > 0;) {
+        const std::uint32_t m = b + (e - b) / 2;
+        if ((path >> l) & 1U) {
+          b = m;
+          at = 2 * at + 2;
+        } else {
+          e = m;
+          at = 2 * at + 1;
+        }
+      }
+      ASSERT_EQ(at, node);
+      ASSERT_LT(static_cast<int>(level), depth);
+      const auto dim = t.nodes[node].dim;
+      ASSERT_LT(dim, static_cast<decltype(dim)>(kDescriptorSize));
+      const std::uint32_t m = b + (e - b) / 2;
+      for (std::uint32_t i = b; i < m; ++i) ASSERT_LE(t.points[i][dim], t.nodes[node].split);
+      for (std::uint32_t i = m; i < e; ++i) ASSERT_GE(t.points[i][dim], t.nodes[node].split);
+    }
   }
 }
 
-TEST(KdTree, RadiusSearchEqualsBruteForce) {
+TYPED_TEST(KdTreeTyped, RadiusSearchEqualsBruteForce) {
+  using T = TypeParam;
   Rng rng(2);
   for (std::uint32_t n : {1u, 50u, 3000u, 20000u}) {
-    const auto data = random_descriptors(rng, n);
-    const Tree t = make_tree(data);
+    const auto data = encode_all<T>(random_descriptors(rng, n));
+    const Tree<T> t = make_tree<T>(data);
     std::vector<std::uint32_t> out(n + 1);
     for (int q = 0; q < 100; ++q) {
-      const ArcDescriptor query = random_descriptors(rng, 1)[0];
+      const KdPoint<T> query = encode<T>(random_descriptors(rng, 1)[0]);
       for (float r : {0.1f, 0.3f, 0.5f}) {
-        std::vector<std::uint32_t> expected;
+        const auto r2 = radius2_of<T>(r);
+        std::vector<std::uint32_t> expected, expected_slots;
         for (std::uint32_t i = 0; i < n; ++i) {
-          if (squared_distance(data[i], query) < r * r) expected.push_back(i);
+          if (kd_distance2<T>(data[i], query) < r2) expected.push_back(i);
+          if (kd_distance2<T>(t.points[i], query) < r2) expected_slots.push_back(i);
         }
-        const std::uint32_t found =
-            t.view.radius_search(query, r * r, out.data(), static_cast<std::uint32_t>(out.size()));
+        const auto cap = static_cast<std::uint32_t>(out.size());
+        std::uint32_t found = t.view.radius_search(query, r2, out.data(), cap);
         std::vector<std::uint32_t> got(out.begin(), out.begin() + found);
         std::sort(got.begin(), got.end());
         EXPECT_EQ(got, expected) << "n " << n << " r " << r;
+        found = t.slots_view.radius_search(query, r2, out.data(), cap);
+        got.assign(out.begin(), out.begin() + found);
+        std::sort(got.begin(), got.end());
+        EXPECT_EQ(got, expected_slots) << "slots, n " << n << " r " << r;
       }
     }
   }
 }
 
-TEST(KdTree, RadiusSearchReportsTruncation) {
+TYPED_TEST(KdTreeTyped, KnnEqualsBruteForce) {
+  using T = TypeParam;
+  using Dist = typename KdTraits<T>::Dist;
+  Rng rng(4);
+  const auto data = encode_all<T>(random_descriptors(rng, 5000));
+  const Tree<T> t = make_tree<T>(data);
+  for (int q = 0; q < 200; ++q) {
+    const KdPoint<T> query = encode<T>(random_descriptors(rng, 1)[0]);
+    // Closest first, ties by id: integer distances tie often.
+    std::vector<std::pair<Dist, std::uint32_t>> all;
+    for (std::uint32_t i = 0; i < data.size(); ++i)
+      all.emplace_back(kd_distance2<T>(data[i], query), i);
+    std::sort(all.begin(), all.end());
+    for (int k : {1, 5, 64}) {
+      std::uint32_t ids[64];
+      Dist d2[64];
+      ASSERT_EQ(t.view.knn_search(query, k, ids, d2), k);
+      for (int i = 0; i < k; ++i) {
+        EXPECT_EQ(d2[i], all[static_cast<std::size_t>(i)].first) << "k " << k << " rank " << i;
+        EXPECT_EQ(ids[i], all[static_cast<std::size_t>(i)].second) << "k " << k << " rank " << i;
+      }
+    }
+  }
+  // Fewer points than k.
+  const auto few = encode_all<T>(random_descriptors(rng, 3));
+  const Tree<T> small = make_tree<T>(few);
+  std::uint32_t ids[64];
+  Dist d2[64];
+  EXPECT_EQ(small.view.knn_search(few[0], 10, ids, d2), 3);
+  EXPECT_EQ(d2[0], Dist{0});
+}
+
+TYPED_TEST(KdTreeTyped, RadiusSearchReportsTruncation) {
+  using T = TypeParam;
   Rng rng(3);
-  const auto data = random_descriptors(rng, 2000);
-  const Tree t = make_tree(data);
+  const auto data = encode_all<T>(random_descriptors(rng, 2000));
+  const Tree<T> t = make_tree<T>(data);
   std::uint32_t out[5] = {0, 0, 0, 0, 0};
-  const std::uint32_t found = t.view.radius_search(data[0], 4.f, out, 3);  // everything matches
+  // Radius 2 covers every unit vector.
+  const std::uint32_t found = t.view.radius_search(data[0], radius2_of<T>(2.f), out, 3);
   EXPECT_EQ(found, 2000u);
   EXPECT_EQ(out[3], 0u);  // nothing written past the capacity
   EXPECT_EQ(out[4], 0u);
 }
 
-TEST(KdTree, KnnEqualsBruteForce) {
-  Rng rng(4);
-  const auto data = random_descriptors(rng, 5000);
-  const Tree t = make_tree(data);
-  for (int q = 0; q < 200; ++q) {
-    const ArcDescriptor query = random_descriptors(rng, 1)[0];
-    std::vector<std::pair<float, std::uint32_t>> all;
-    for (std::uint32_t i = 0; i < data.size(); ++i)
-      all.emplace_back(squared_distance(data[i], query), i);
-    std::sort(all.begin(), all.end());
-    for (int k : {1, 5, 64}) {
-      std::uint32_t ids[64];
-      float d2[64];
-      ASSERT_EQ(t.view.knn_search(query, k, ids, d2), k);
-      for (int i = 0; i < k; ++i) {
-        EXPECT_FLOAT_EQ(d2[i], all[i].first);
-        EXPECT_EQ(ids[i], all[i].second);
-      }
-    }
-  }
-}
-
-TEST(KdTree, DeterministicBuild) {
+TYPED_TEST(KdTreeTyped, DeterministicBuild) {
+  using T = TypeParam;
   Rng a(9), b(9);
-  const auto data = random_descriptors(a, 3000);
-  const Tree t1 = make_tree(data), t2 = make_tree(random_descriptors(b, 3000));
+  const Tree<T> t1 = make_tree<T>(encode_all<T>(random_descriptors(a, 3000)));
+  const Tree<T> t2 = make_tree<T>(encode_all<T>(random_descriptors(b, 3000)));
   EXPECT_EQ(t1.ids, t2.ids);
   ASSERT_EQ(t1.nodes.size(), t2.nodes.size());
   for (std::size_t i = 0; i < t1.nodes.size(); ++i) {
     EXPECT_EQ(t1.nodes[i].dim, t2.nodes[i].dim);
     EXPECT_EQ(t1.nodes[i].split, t2.nodes[i].split);
   }
+}
+
+TYPED_TEST(KdTreeTyped, QueriesAllocateNothing) {
+  using T = TypeParam;
+  using Dist = typename KdTraits<T>::Dist;
+  Rng rng(5);
+  const auto data = encode_all<T>(random_descriptors(rng, 20000));
+  const Tree<T> t = make_tree<T>(data);
+  const auto queries = encode_all<T>(random_descriptors(rng, 50));
+  std::vector<std::uint32_t> out(1000);
+  std::uint32_t ids[64];
+  Dist d2[64];
+  const auto r2 = radius2_of<T>(0.3f);
+  std::uint64_t found = 0;
+  test::AllocationCounter allocations;
+  for (const KdPoint<T>& q : queries) {
+    found += t.view.radius_search(q, r2, out.data(), static_cast<std::uint32_t>(out.size()));
+    found += static_cast<std::uint64_t>(t.view.knn_search(q, 64, ids, d2));
+  }
+  EXPECT_EQ(allocations.count(), 0);
+  EXPECT_GT(found, 0u);
+}
+
+// Opposite extreme points: the largest squared distances the domain holds,
+// computed without overflow.
+TYPED_TEST(KdTreeTyped, ExtremeDistancesDoNotOverflow) {
+  using T = TypeParam;
+  using Dist = typename KdTraits<T>::Dist;
+  if constexpr (!std::is_same_v<T, float>) {
+    constexpr T hi = std::numeric_limits<T>::max();
+    std::vector<KdPoint<T>> data(100);
+    for (std::size_t i = 0; i < data.size(); ++i)
+      data[i].fill(static_cast<T>(i % 2 == 0 ? hi : -hi));
+    const Tree<T> t = make_tree<T>(data);
+    KdPoint<T> q;
+    q.fill(hi);
+    std::uint32_t ids[64];
+    Dist d2[64];
+    ASSERT_EQ(t.view.knn_search(q, 64, ids, d2), 64);
+    const Dist far = static_cast<Dist>(kDescriptorSize) * (2 * static_cast<Dist>(hi)) *
+                     (2 * static_cast<Dist>(hi));
+    EXPECT_EQ(d2[0], 0);
+    EXPECT_EQ(d2[63], far);
+    std::vector<std::uint32_t> out(100);
+    EXPECT_EQ(t.view.radius_search(q, std::numeric_limits<Dist>::max(), out.data(), 100), 100u);
+    EXPECT_EQ(t.view.radius_search(q, far, out.data(), 100), 50u);
+  }
+}
+
+TEST(DescriptorEncoding, QuantiseRoundsAndSaturates) {
+  EXPECT_EQ(quantise_component<std::int8_t>(1.f), 127);
+  EXPECT_EQ(quantise_component<std::int8_t>(-1.f), -127);
+  EXPECT_EQ(quantise_component<std::int8_t>(0.f), 0);
+  EXPECT_EQ(quantise_component<std::int8_t>(0.5f), 64);  // 63.5: half away from zero
+  EXPECT_EQ(quantise_component<std::int8_t>(-0.5f), -64);
+  EXPECT_EQ(quantise_component<std::int8_t>(0.49f / 127.f), 0);
+  EXPECT_EQ(quantise_component<std::int8_t>(0.3f), 38);  // 38.1
+  EXPECT_EQ(quantise_component<std::int8_t>(5.f), 127);
+  EXPECT_EQ(quantise_component<std::int8_t>(-5.f), -127);  // never -128
+  EXPECT_EQ(quantise_component<std::int8_t>(std::nanf("")), 0);
+  EXPECT_EQ(quantise_component<std::int16_t>(1.f), 32767);
+  EXPECT_EQ(quantise_component<std::int16_t>(-1.f), -32767);
+  EXPECT_EQ(quantise_component<std::int16_t>(0.3f), 9830);  // 9830.1
+  EXPECT_EQ(quantise_component<std::int16_t>(-std::numeric_limits<float>::infinity()), -32767);
+  const ArcDescriptor d = {0.5f, -0.5f, 0.25f, 0.f, 1.f, -1.f};
+  EXPECT_EQ(quantise<std::int8_t>(d), (ArcDescriptorI8{64, -64, 32, 0, 127, -127}));
+  EXPECT_EQ(quantise<std::int16_t>(d), (ArcDescriptorI16{16384, -16384, 8192, 0, 32767, -32767}));
+}
+
+TEST(DescriptorEncoding, ScaledRadiusIsExactCeiling) {
+  std::int64_t r2 = 0;
+  const std::int64_t i32 = std::numeric_limits<std::int32_t>::max();
+  const std::int64_t i64 = std::numeric_limits<std::int64_t>::max();
+  // 0.3f^2 = 0.0900000035...; * 127^2 = 1451.61... -> 1452.
+  ASSERT_TRUE(scaled_radius2(0.3f, DescriptorEncoding::kInt8, i32, r2));
+  EXPECT_EQ(r2, 1452);
+  // Exactly representable: 0.5^2 * 127^2 = 4032.25 -> 4033; 1^2 * 127^2 stays 16129.
+  ASSERT_TRUE(scaled_radius2(0.5f, DescriptorEncoding::kInt8, i32, r2));
+  EXPECT_EQ(r2, 4033);
+  ASSERT_TRUE(scaled_radius2(1.f, DescriptorEncoding::kInt8, i32, r2));
+  EXPECT_EQ(r2, 16129);
+  ASSERT_TRUE(scaled_radius2(1.f, DescriptorEncoding::kInt16, i64, r2));
+  EXPECT_EQ(r2, 32767LL * 32767LL);
+  // For every threshold: d < r2 exactly when d / scale^2 < threshold^2 (in
+  // exact arithmetic; long double holds these products exactly on x86-64,
+  // double nearly so elsewhere).
+  for (float t : {0.05f, 0.2f, 0.3f, 0.45f, 0.7f, 1.3f, 2.f}) {
+    for (DescriptorEncoding e : {DescriptorEncoding::kInt8, DescriptorEncoding::kInt16}) {
+      ASSERT_TRUE(scaled_radius2(t, e, i64, r2)) << t;
+      const long double s = encoding_scale(e);
+      const long double exact = static_cast<long double>(t * t) * s * s;
+      EXPECT_GE(static_cast<long double>(r2), exact) << t;
+      EXPECT_LT(static_cast<long double>(r2 - 1), exact) << t;
+    }
+  }
+  // Overflow of the search type and bad radii are refused.
+  EXPECT_FALSE(scaled_radius2(2.f, DescriptorEncoding::kInt16, i32, r2));  // 4.29e9
+  EXPECT_TRUE(scaled_radius2(2.f, DescriptorEncoding::kInt16, i64, r2));
+  EXPECT_FALSE(scaled_radius2(1e30f, DescriptorEncoding::kInt8, i64, r2));
+  EXPECT_FALSE(scaled_radius2(0.f, DescriptorEncoding::kInt8, i32, r2));
+  EXPECT_FALSE(scaled_radius2(-1.f, DescriptorEncoding::kInt8, i32, r2));
+  EXPECT_FALSE(scaled_radius2(std::nanf(""), DescriptorEncoding::kInt8, i32, r2));
+  EXPECT_FALSE(
+      scaled_radius2(std::numeric_limits<float>::infinity(), DescriptorEncoding::kInt8, i32, r2));
+}
+
+// Quantised search against the float reference on the same descriptors: the
+// integer domains find nearly the same neighbours (the small difference is
+// rounding at the radius), which is what lets int8 replace float32.
+TEST(DescriptorEncoding, QuantisedSearchAgreesWithFloat) {
+  Rng rng(7);
+  // Queries from the same clusters as the data.
+  auto data = random_descriptors(rng, 20200);
+  const std::vector<ArcDescriptor> queries(data.end() - 200, data.end());
+  data.resize(20000);
+  const Tree<float> f = make_tree<float>(data);
+  const Tree<std::int16_t> s = make_tree<std::int16_t>(encode_all<std::int16_t>(data));
+  const Tree<std::int8_t> b = make_tree<std::int8_t>(encode_all<std::int8_t>(data));
+  std::vector<std::uint32_t> out(data.size());
+  const auto cap = static_cast<std::uint32_t>(out.size());
+  auto ids = [&](std::uint32_t n) {
+    std::vector<std::uint32_t> v(out.begin(), out.begin() + n);
+    std::sort(v.begin(), v.end());
+    return v;
+  };
+  auto overlap = [](const std::vector<std::uint32_t>& a, const std::vector<std::uint32_t>& c) {
+    std::vector<std::uint32_t> both;
+    std::set_intersection(a.begin(), a.end(), c.begin(), c.end(), std::back_inserter(both));
+    return both.size();
+  };
+  std::size_t total = 0, same16 = 0, same8 = 0, got16 = 0, got8 = 0;
+  for (const ArcDescriptor& query : queries) {
+    const auto reference = ids(f.view.radius_search(query, 0.3f * 0.3f, out.data(), cap));
+    const auto r16 = ids(s.view.radius_search(quantise<std::int16_t>(query),
+                                              radius2_of<std::int16_t>(0.3f), out.data(), cap));
+    const auto r8 = ids(b.view.radius_search(quantise<std::int8_t>(query),
+                                             radius2_of<std::int8_t>(0.3f), out.data(), cap));
+    total += reference.size();
+    got16 += r16.size();
+    got8 += r8.size();
+    same16 += overlap(reference, r16);
+    same8 += overlap(reference, r8);
+  }
+  ASSERT_GT(total, 10000u);
+  // int16: rounding of 1/65534 per component; int8: 1/254.
+  EXPECT_GE(same16, total - total / 1000);
+  EXPECT_LE(got16 - same16, total / 1000);
+  EXPECT_GE(same8, total - total / 50);
+  EXPECT_LE(got8 - same8, total / 50);
+  std::printf(
+      "radius 0.3 over 200 queries: float32 %zu, int16 %zu (%zu shared), int8 %zu (%zu shared)\n",
+      total, got16, same16, got8, same8);
 }
 
 }  // namespace
