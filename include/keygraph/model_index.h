@@ -2,10 +2,13 @@
 // the search tree over them, optionally vertex (SIFT) descriptors, plus the
 // pipeline parameters they were built with. Layout: docs/FORMAT.md.
 //
-// Loading is validation, not construction: open() reads the file into one
-// aligned buffer and view() checks every count, offset, size, checksum and
-// stored index before anything is used; the accessors then point into that
-// memory. A corrupt or hostile file yields an error Status, never a crash.
+// Loading is validation, not construction: open() maps the file read-only
+// (or, where mapping fails, reads it into one aligned buffer) and view()
+// uses caller-owned memory; both check every count, offset, size, checksum
+// and stored index before anything is used, and the accessors then point
+// into that memory. A corrupt or hostile file yields an error Status, never
+// a crash. Neither allocates memory proportional to the file (open()'s
+// fallback buffer aside).
 #pragma once
 
 #include <cstddef>
@@ -21,6 +24,7 @@
 namespace kg {
 
 struct KdNode;
+struct KdNodeInt;
 
 struct ModelInfo {
   std::string_view name;
@@ -29,7 +33,8 @@ struct ModelInfo {
   Point2f outline[4];                // model outline (corners, clockwise on screen) in model pixels
   std::uint32_t keypoint_begin = 0;  // global keypoint ids [begin, begin + count)
   std::uint32_t keypoint_count = 0;
-  std::uint32_t arc_begin = 0;  // global arc ids [begin, begin + count)
+  // Arcs between this model's keypoints (informational: arcs are stored in
+  // search-tree order, all models mixed; an arc's model is its keypoints').
   std::uint32_t arc_count = 0;
   std::uint64_t keygraph_count = 0;  // model keygraphs (for reports)
 };
@@ -49,27 +54,36 @@ class ModelIndex {
   ModelIndex(const ModelIndex&) = delete;
   ModelIndex& operator=(const ModelIndex&) = delete;
 
-  // Reads and validates the file at `path`.
+  // Maps (POSIX mmap, read-only) and validates the file at `path`; when the
+  // file cannot be mapped it is read into an aligned buffer instead. The
+  // mapping lives as long as the index; the file must not be modified in
+  // place meanwhile (write_index() replaces files by renaming, which is safe).
   static Status open(const std::string& path, ModelIndex& out);
+  // Reads the file at `path` into an aligned buffer the index owns, then
+  // validates it (what open() falls back to): for files that may change.
+  static Status read(const std::string& path, ModelIndex& out);
   // Validates and uses `size` bytes at `data`, which the caller owns and must
   // keep alive and unchanged while `out` (or a Detector using it) exists.
   // `data` must be 64-byte aligned.
   static Status view(const std::uint8_t* data, std::size_t size, ModelIndex& out);
 
   bool empty() const { return model_count_ == 0; }
+  // Whether the index is a read-only mapping of its file (open()).
+  bool is_mapped() const { return owned_ != nullptr && owned_.get_deleter().mapped > 0; }
   const Params& params() const { return params_; }
   std::uint16_t version_major() const { return version_major_; }
   std::uint16_t version_minor() const { return version_minor_; }
 
   int model_count() const { return static_cast<int>(model_count_); }
   ModelInfo model(int i) const;
-  // Model owning a global arc id (binary search over the models' arc ranges).
-  int model_of_arc(std::uint32_t arc) const;
-  // Model owning a global keypoint id.
+  // Model owning a global keypoint id (binary search over the models'
+  // keypoint ranges); also the model of an arc (arcs()[i].from).
   int model_of_keypoint(std::uint32_t keypoint) const;
 
   std::uint32_t keypoint_count() const { return keypoint_count_; }
   const Point2f* keypoints() const { return keypoints_; }
+  // Arcs in search-tree order: arcs()[slot] is the arc whose descriptor is
+  // in tree slot `slot`, so a tree query's slots index this array directly.
   std::uint32_t arc_count() const { return arc_count_; }
   const ModelArc* arcs() const { return arcs_; }
 
@@ -78,22 +92,39 @@ class ModelIndex {
   // when the index has none (vertex_descriptor == kNone).
   const std::uint8_t* vertex_descriptors() const { return vertex_descriptors_; }
 
-  // Search tree over arc descriptors (see core/kdtree.h for the layout).
-  const ArcDescriptor* tree_points() const { return tree_points_; }
-  const std::uint32_t* tree_ids() const { return tree_ids_; }
-  const KdNode* tree_nodes() const { return tree_nodes_; }
+  // Search tree over arc descriptors (core/kdtree.h has the layout), in
+  // the encoding params().descriptor.encoding names: one descriptor per tree
+  // slot from the accessor of that encoding (the others return nullptr), and
+  // the internal nodes (KdNode for float32, KdNodeInt for int16 and int8).
+  DescriptorEncoding descriptor_encoding() const { return params_.descriptor.encoding; }
+  const ArcDescriptor* descriptors_f32() const;
+  const ArcDescriptorI16* descriptors_i16() const;
+  const ArcDescriptorI8* descriptors_i8() const;
+  const KdNode* tree_nodes_f32() const;
+  const KdNodeInt* tree_nodes_int() const;
+  std::uint32_t tree_node_count() const { return tree_node_count_; }
   int tree_depth() const { return tree_depth_; }
 
+  // The whole index: size in bytes and its first byte (mapped, owned or the
+  // caller's buffer).
+  const std::uint8_t* data() const { return data_; }
   std::size_t byte_size() const { return size_; }
 
  private:
   Status validate(const std::uint8_t* data, std::size_t size);
-  int last_model_starting_at_or_before(std::size_t field, std::uint32_t id) const;
 
-  struct AlignedFree {
+  // Releases open()'s memory: unmaps a mapping of `mapped` bytes, or frees
+  // the aligned fallback buffer when `mapped` is 0.
+  struct Release {
+    Release() noexcept : mapped(0) {}
+    explicit Release(std::size_t bytes) noexcept : mapped(bytes) {}
+    std::size_t mapped;
     void operator()(std::uint8_t* p) const;
   };
-  std::unique_ptr<std::uint8_t, AlignedFree> owned_;
+  // Validates `memory` (open(), read()) and moves it into `out`.
+  static Status adopt(std::unique_ptr<std::uint8_t, Release> memory, std::size_t size,
+                      const std::string& path, ModelIndex& out);
+  std::unique_ptr<std::uint8_t, Release> owned_;
   const std::uint8_t* data_ = nullptr;
   std::size_t size_ = 0;
   std::uint16_t version_major_ = 0;
@@ -107,9 +138,9 @@ class ModelIndex {
   std::uint32_t keypoint_count_ = 0;
   const ModelArc* arcs_ = nullptr;
   std::uint32_t arc_count_ = 0;
-  const ArcDescriptor* tree_points_ = nullptr;
-  const std::uint32_t* tree_ids_ = nullptr;
-  const KdNode* tree_nodes_ = nullptr;
+  const std::uint8_t* tree_descriptors_ = nullptr;
+  const std::uint8_t* tree_nodes_ = nullptr;
+  std::uint32_t tree_node_count_ = 0;
   int tree_depth_ = 0;
   const std::uint8_t* vertex_descriptors_ = nullptr;
 };

@@ -116,6 +116,8 @@ struct DescriptorParams {
   // 0.8 %, and the box in box_in_scene is then lost: a keygraph needs all
   // its vertices similar (tests/unit/test_vertex_descriptor.cpp).
   float vertex_threshold = 1.0f;
+  // Storage and comparison of arc descriptors (see DescriptorEncoding).
+  DescriptorEncoding encoding = DescriptorEncoding::kFloat32;
 };
 
 struct RansacParams {

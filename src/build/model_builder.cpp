@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <system_error>
+#include <type_traits>
 
 #include <opencv2/imgproc.hpp>
 
@@ -14,6 +16,7 @@
 #include "core/arc_descriptor.h"
 #include "core/blur.h"
 #include "core/crc32.h"
+#include "core/descriptor_encoding.h"
 #include "core/index_format.h"
 #include "core/kdtree.h"
 #include "core/keygraph.h"
@@ -23,6 +26,17 @@
 namespace kg {
 
 namespace {
+
+template <class T>
+constexpr DescriptorEncoding encoding_of() {
+  if constexpr (std::is_same_v<T, std::int16_t>) {
+    return DescriptorEncoding::kInt16;
+  } else if constexpr (std::is_same_v<T, std::int8_t>) {
+    return DescriptorEncoding::kInt8;
+  } else {
+    return DescriptorEncoding::kFloat32;
+  }
+}
 
 // Model keypoints: the detector on the image at several scales, mapped back
 // to model pixels, near-duplicates merged (strongest kept).
@@ -124,6 +138,46 @@ Status build_model(const cv::Mat& gray, const std::string& name, const Params& p
   return Status::ok();
 }
 
+namespace {
+
+// The search tree over `descriptors` in the domain of T: quantised (int16,
+// int8) or as computed (float), the arcs permuted into tree order.
+template <class T>
+void encode_tree(const std::vector<ArcDescriptor>& descriptors, std::vector<ModelArc>& arcs,
+                 std::vector<std::uint8_t>& points_bytes, std::vector<std::uint8_t>& node_bytes) {
+  std::vector<KdPoint<T>> source(descriptors.size());
+  for (std::size_t i = 0; i < descriptors.size(); ++i) {
+    if constexpr (std::is_same_v<T, float>) {
+      source[i] = descriptors[i];
+    } else {
+      source[i] = quantise<T>(descriptors[i]);
+    }
+  }
+  std::vector<KdPoint<T>> points;
+  std::vector<std::uint32_t> ids;
+  std::vector<typename KdTraits<T>::Node> nodes;
+  build_kdtree<T>(source.data(), static_cast<std::uint32_t>(source.size()), points, ids, nodes);
+  std::vector<ModelArc> ordered(arcs.size());
+  for (std::size_t slot = 0; slot < ids.size(); ++slot) ordered[slot] = arcs[ids[slot]];
+  arcs.swap(ordered);
+  points_bytes.resize(points.size() * sizeof(KdPoint<T>));
+  if (!points.empty()) std::memcpy(points_bytes.data(), points.data(), points_bytes.size());
+  // Nodes field by field: no padding bytes of the struct reach the file.
+  node_bytes.assign(nodes.size() * format::tree_node_size(encoding_of<T>()), 0);
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    std::uint8_t* p = node_bytes.data() + i * format::tree_node_size(encoding_of<T>());
+    if constexpr (std::is_same_v<T, float>) {
+      format::store<float>(p, nodes[i].split);
+      format::store<std::uint32_t>(p + 4, nodes[i].dim);
+    } else {
+      format::store<std::int16_t>(p, nodes[i].split);
+      format::store<std::uint16_t>(p + 2, nodes[i].dim);
+    }
+  }
+}
+
+}  // namespace
+
 Status serialize_index(const std::vector<BuiltModel>& models, const Params& params,
                        std::vector<std::uint8_t>& bytes) {
   using namespace format;
@@ -148,6 +202,8 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
               model.name +
                   ": no vertex descriptors for every keypoint (build the model with "
                   "the parameters of the index)"};
+    if (model.descriptors.size() != model.arcs.size())
+      return {StatusCode::kInvalidArgument, model.name + ": one descriptor per arc expected"};
     std::uint8_t* r = records.data() + m * kModelRecordSize;
     const auto kp_begin = static_cast<std::uint32_t>(keypoints.size());
     store<std::uint32_t>(r + kModNameOffset, static_cast<std::uint32_t>(strings.size()));
@@ -156,7 +212,6 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
     store<float>(r + kModHeight, static_cast<float>(model.height));
     store<std::uint32_t>(r + kModKeypointBegin, kp_begin);
     store<std::uint32_t>(r + kModKeypointCount, static_cast<std::uint32_t>(model.keypoints.size()));
-    store<std::uint32_t>(r + kModArcBegin, static_cast<std::uint32_t>(arcs.size()));
     store<std::uint32_t>(r + kModArcCount, static_cast<std::uint32_t>(model.arcs.size()));
     store<std::uint64_t>(r + kModKeygraphCount, model.keygraphs);
     // Outline: the image rectangle through the pixel centres of its corners,
@@ -172,32 +227,44 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
       vertex_descriptors.insert(vertex_descriptors.end(), model.vertex_descriptors.begin(),
                                 model.vertex_descriptors.end());
   }
-  std::vector<ArcDescriptor> tree_points;
-  std::vector<std::uint32_t> tree_ids;
-  std::vector<KdNode> tree_nodes;
-  build_kdtree(descriptors.data(), static_cast<std::uint32_t>(descriptors.size()), tree_points,
-               tree_ids, tree_nodes);
+  if (arcs.size() > 0xFFFFFFFFu || keypoints.size() > 0xFFFFFFFFu)
+    return {StatusCode::kInvalidArgument, "more than 2^32 - 1 arcs or keypoints"};
+  // Search tree in the parameters' encoding; arcs permuted into tree order.
+  const DescriptorEncoding encoding = params.descriptor.encoding;
+  std::vector<std::uint8_t> tree_points, tree_nodes;
+  switch (encoding) {
+    case DescriptorEncoding::kFloat32:
+      encode_tree<float>(descriptors, arcs, tree_points, tree_nodes);
+      break;
+    case DescriptorEncoding::kInt16:
+      encode_tree<std::int16_t>(descriptors, arcs, tree_points, tree_nodes);
+      break;
+    case DescriptorEncoding::kInt8:
+      encode_tree<std::int8_t>(descriptors, arcs, tree_points, tree_nodes);
+      break;
+  }
+  const auto encoding_id = static_cast<std::uint32_t>(encoding);
 
   struct Payload {
     std::uint32_t id;
+    std::uint32_t encoding;
     const void* data;
     std::size_t size;
     std::uint32_t count;
   };
+  const auto arc_count = static_cast<std::uint32_t>(arcs.size());
   const Payload payloads[kLastSectionId] = {
-      {kSectionModels, records.data(), records.size(), static_cast<std::uint32_t>(models.size())},
-      {kSectionStrings, strings.data(), strings.size(), static_cast<std::uint32_t>(strings.size())},
-      {kSectionKeypoints, keypoints.data(), keypoints.size() * sizeof(Point2f),
+      {kSectionModels, 0, records.data(), records.size(),
+       static_cast<std::uint32_t>(models.size())},
+      {kSectionStrings, 0, strings.data(), strings.size(),
+       static_cast<std::uint32_t>(strings.size())},
+      {kSectionKeypoints, 0, keypoints.data(), keypoints.size() * sizeof(Point2f),
        static_cast<std::uint32_t>(keypoints.size())},
-      {kSectionArcs, arcs.data(), arcs.size() * sizeof(ModelArc),
-       static_cast<std::uint32_t>(arcs.size())},
-      {kSectionDescriptors, tree_points.data(), tree_points.size() * sizeof(ArcDescriptor),
-       static_cast<std::uint32_t>(tree_points.size())},
-      {kSectionTreeIds, tree_ids.data(), tree_ids.size() * sizeof(std::uint32_t),
-       static_cast<std::uint32_t>(tree_ids.size())},
-      {kSectionTreeNodes, tree_nodes.data(), tree_nodes.size() * sizeof(KdNode),
-       static_cast<std::uint32_t>(tree_nodes.size())},
-      {kSectionVertexDescriptors, vertex_descriptors.data(), vertex_descriptors.size(),
+      {kSectionTreeArcs, 0, arcs.data(), arcs.size() * sizeof(ModelArc), arc_count},
+      {kSectionDescriptors, encoding_id, tree_points.data(), tree_points.size(), arc_count},
+      {kSectionTreeNodes, encoding_id, tree_nodes.data(), tree_nodes.size(),
+       static_cast<std::uint32_t>(tree_nodes.size() / tree_node_size(encoding))},
+      {kSectionVertexDescriptors, 0, vertex_descriptors.data(), vertex_descriptors.size(),
        static_cast<std::uint32_t>(vertex_descriptors.size() / kVertexDescriptorSize)},
   };
   const std::size_t params_offset = kHeaderSize;
@@ -226,7 +293,7 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
     if (p.size > 0) std::memcpy(d + offsets[i], p.data, p.size);
     std::uint8_t* e = d + table_offset + i * kSectionEntrySize;
     store<std::uint32_t>(e + kEntId, p.id);
-    store<std::uint32_t>(e + kEntEncoding, p.id == kSectionDescriptors ? kFloat32 : 0U);
+    store<std::uint32_t>(e + kEntEncoding, p.encoding);
     store<std::uint64_t>(e + kEntOffset, offsets[i]);
     store<std::uint64_t>(e + kEntSize, p.size);
     store<std::uint32_t>(e + kEntCount, p.count);

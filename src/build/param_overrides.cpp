@@ -82,6 +82,10 @@ const std::map<std::string, Setter>& setters() {
            return false;
          return true;
        }},
+      {"descriptor.encoding",
+       [](Params& p, const std::string& v) {
+         return parse_descriptor_encoding(v, p.descriptor.encoding);
+       }},
       {"descriptor.vertex_threshold",
        field(&Params::descriptor, &DescriptorParams::vertex_threshold)},
       {"ransac.confidence", field(&Params::ransac, &RansacParams::confidence)},
@@ -99,6 +103,19 @@ const std::map<std::string, Setter>& setters() {
 }
 
 }  // namespace
+
+bool parse_descriptor_encoding(const std::string& text, DescriptorEncoding& out) {
+  if (text == "float32") {
+    out = DescriptorEncoding::kFloat32;
+  } else if (text == "int16") {
+    out = DescriptorEncoding::kInt16;
+  } else if (text == "int8") {
+    out = DescriptorEncoding::kInt8;
+  } else {
+    return false;
+  }
+  return true;
+}
 
 Status apply_param_override(const std::string& assignment, Params& params) {
   const std::size_t eq = assignment.find('=');

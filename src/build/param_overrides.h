@@ -14,6 +14,9 @@ namespace kg {
 // (format::validate_params). Unknown names and unparsable values are errors.
 Status apply_param_override(const std::string& assignment, Params& params);
 
+// "float32", "int16" or "int8" (DescriptorParams::encoding); false otherwise.
+bool parse_descriptor_encoding(const std::string& text, DescriptorEncoding& out);
+
 // Names accepted by apply_param_override, for help texts.
 std::vector<std::string> param_names();
 

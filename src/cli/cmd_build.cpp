@@ -1,5 +1,6 @@
 // keygraph build [--name NAME]... [--detector hessian|mser] [--structure 2|3|4]
-//                [--vertex-descriptor none|sift] [--roi X,Y,W,H] MODEL... -o OUT.kgi
+//                [--vertex-descriptor none|sift] [--encoding float32|int16|int8]
+//                [--roi X,Y,W,H] MODEL... -o OUT.kgi
 // --roi applies to the model image that follows it: the model is that
 // rectangle of the image (model pixel (0,0) is image pixel (X,Y)).
 #include <cstdio>
@@ -10,6 +11,7 @@
 
 #include "build/image_io.h"
 #include "build/model_builder.h"
+#include "build/param_overrides.h"
 #include "cli/commands.h"
 
 namespace kg::cli {
@@ -36,7 +38,7 @@ int cmd_build(const Args& args) {
     const std::string& a = args[i];
     const bool has_value = i + 1 < args.size();
     if (a == "--name" || a == "-o" || a == "--output" || a == "--detector" || a == "--structure" ||
-        a == "--vertex-descriptor" || a == "--roi") {
+        a == "--vertex-descriptor" || a == "--encoding" || a == "--roi") {
       if (!has_value) return fail("build: " + a + " needs a value");
       const std::string& v = args[++i];
       if (a == "--name") {
@@ -61,6 +63,9 @@ int cmd_build(const Args& args) {
         } else {
           return fail("build: unknown vertex descriptor '" + v + "' (none or sift)");
         }
+      } else if (a == "--encoding") {
+        if (!parse_descriptor_encoding(v, params.descriptor.encoding))
+          return fail("build: unknown encoding '" + v + "' (float32, int16 or int8)");
       } else if (a == "--structure") {
         if (v != "2" && v != "3" && v != "4") return fail("build: --structure takes 2, 3 or 4");
         params.graph.structure = static_cast<Structure>(v[0] - '0');

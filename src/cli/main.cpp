@@ -94,6 +94,7 @@ void usage(std::FILE* out) {
       "commands:\n"
       "  build [--name NAME]... [--roi X,Y,W,H] [--detector hessian|mser]\n"
       "        [--structure 2|3|4] [--vertex-descriptor none|sift]\n"
+      "        [--encoding float32|int16|int8]\n"
       "        MODEL.png... -o OUT.kgi     compile model images into one index\n"
       "  detect --index I.kgi [--json] [--draw OUT.png] SCENE...\n"
       "                                    find the index's models in scene images\n"

@@ -41,7 +41,7 @@ Status missing_vertex_descriptors() {
 struct Detector::Impl {
   const ModelIndex* index = nullptr;
   Limits limits;
-  KdTreeView tree;
+  ArcSearch search;
   DetectStats stats;
 
   HessianDetector hessian;
@@ -75,8 +75,7 @@ struct Detector::Impl {
 Detector::Detector(const ModelIndex& index, const Limits& limits) : impl_(new Impl) {
   impl_->index = &index;
   impl_->limits = limits;
-  impl_->tree = KdTreeView(index.tree_points(), index.tree_ids(), index.arc_count(),
-                           index.tree_nodes(), index.tree_depth());
+  impl_->search = ArcSearch(index);
   impl_->detected.reserve(static_cast<std::size_t>(std::max(0, limits.max_keypoints)));
   impl_->matches.reserve(static_cast<std::size_t>(std::max(0, limits.max_correspondences)));
   if (const std::uint8_t* v = index.vertex_descriptors()) {
@@ -224,7 +223,7 @@ Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count
   t = Clock::now();
   SelectionInput in;
   in.index = index;
-  in.tree = tree;
+  in.search = &search;
   in.blurred = view_of(blurred);
   in.scene_points = scene_points.data();
   in.triangulation = &triangulation;

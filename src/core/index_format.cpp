@@ -1,51 +1,15 @@
 #include "core/index_format.h"
 
+#include "core/descriptor_encoding.h"
+#include "core/kdtree.h"
+
 #include <cmath>
+#include <limits>
 #include <string>
 #include <type_traits>
 
 namespace kg::format {
 namespace {
-
-// The one place that lists the parameters' order in the file: writer and
-// reader both walk it, so they cannot disagree.
-template <class P, class F>
-void visit_params(P& p, F&& f) {
-  f(p.keypoints.detector);
-  f(p.graph.structure);
-  f(p.graph.scene_sampling);
-  f(p.keypoints.hessian_threshold);
-  f(p.keypoints.hessian_octaves);
-  f(p.keypoints.hessian_levels);
-  f(p.keypoints.mser_delta);
-  f(p.keypoints.mser_min_area);
-  f(p.keypoints.mser_max_area);
-  f(p.keypoints.model_scales);
-  f(p.keypoints.model_merge_distance);
-  f(p.keypoints.max_model_keypoints);
-  f(p.graph.min_distance);
-  f(p.graph.max_distance);
-  f(p.graph.scene_sample_distance);
-  f(p.graph.max_anisotropy);
-  f(p.descriptor.blur_sigma);
-  f(p.descriptor.profile_length);
-  f(p.descriptor.coefficients);
-  f(p.descriptor.parallel_offset);
-  f(p.descriptor.similarity_threshold);
-  f(p.ransac.confidence);
-  f(p.ransac.max_iterations);
-  f(p.ransac.inlier_threshold);
-  f(p.ransac.min_inliers);
-  f(p.ransac.min_inlier_keygraphs);
-  f(p.ransac.max_scale_change);
-  f(p.ransac.max_perspective);
-  f(p.ransac.max_instances);
-  f(p.ransac.min_verification_z);
-  f(p.ransac.seed);
-  // Format 1.1 (zero in 1.0 files: no vertex descriptors).
-  f(p.descriptor.vertex_descriptor);
-  f(p.descriptor.vertex_threshold);
-}
 
 template <class T>
 constexpr std::size_t stored_size() {
@@ -69,7 +33,7 @@ Status bad(const std::string& field, const std::string& why) {
 void serialize_params(const Params& params, std::uint8_t* out) {
   std::memset(out, 0, kParamsSize);
   std::size_t at = 0;
-  visit_params(params, [&](const auto& field) {
+  visit_params(params, [&](const char*, const auto& field) {
     using T = std::decay_t<decltype(field)>;
     if constexpr (std::is_enum_v<T>) {
       out[at] = static_cast<std::uint8_t>(field);
@@ -82,11 +46,12 @@ void serialize_params(const Params& params, std::uint8_t* out) {
 
 Status parse_params(const std::uint8_t* in, std::size_t size, Params& params) {
   std::size_t needed = 0;
-  visit_params(params,
-               [&](auto& field) { needed += stored_size<std::decay_t<decltype(field)>>(); });
+  visit_params(params, [&](const char*, auto& field) {
+    needed += stored_size<std::decay_t<decltype(field)>>();
+  });
   if (size < needed) return {StatusCode::kCorruptData, "parameter block too small"};
   std::size_t at = 0;
-  visit_params(params, [&](auto& field) {
+  visit_params(params, [&](const char*, auto& field) {
     using T = std::decay_t<decltype(field)>;
     if constexpr (std::is_enum_v<T>) {
       field = static_cast<T>(in[at]);
@@ -144,12 +109,22 @@ Status validate_params(const Params& p) {
     return bad("vertex_descriptor",
                "is unknown (" +
                    std::to_string(static_cast<unsigned>(p.descriptor.vertex_descriptor)) + ")");
-  // 0 is allowed without vertex descriptors: format 1.0 files store no value.
+  // 0 is allowed without vertex descriptors (the value is then unused).
   if (!(std::isfinite(p.descriptor.vertex_threshold) && p.descriptor.vertex_threshold >= 0.f &&
         p.descriptor.vertex_threshold <= 2.f) ||
       (p.descriptor.vertex_descriptor != VertexDescriptor::kNone &&
        p.descriptor.vertex_threshold == 0.f))
     return bad("vertex_threshold", "must be in (0, 2]");
+  const auto encoding = static_cast<unsigned>(p.descriptor.encoding);
+  if (encoding > 2) return bad("encoding", "is unknown (" + std::to_string(encoding) + ")");
+  // The similarity radius must fit the integer search's squared distances.
+  std::int64_t scaled = 0;
+  const std::int64_t limit = p.descriptor.encoding == DescriptorEncoding::kInt8
+                                 ? std::numeric_limits<KdTraits<std::int8_t>::Dist>::max()
+                                 : std::numeric_limits<KdTraits<std::int16_t>::Dist>::max();
+  if (p.descriptor.encoding != DescriptorEncoding::kFloat32 &&
+      !scaled_radius2(p.descriptor.similarity_threshold, p.descriptor.encoding, limit, scaled))
+    return bad("similarity_threshold", "overflows the encoding's squared distances");
   if (!(p.ransac.confidence > 0.0 && p.ransac.confidence < 1.0))
     return bad("confidence", "must be in (0, 1)");
   if (p.ransac.max_iterations < 1 || p.ransac.max_iterations > 10000000)

@@ -16,8 +16,9 @@ namespace kg::format {
 // PNG-style magic: the high-bit byte catches 7-bit transfers, CR LF and the
 // SUB/LF tail catch text-mode conversions and `type` on DOS.
 inline constexpr std::uint8_t kMagic[8] = {0x89, 'K', 'G', 'I', '\r', '\n', 0x1A, '\n'};
-inline constexpr std::uint16_t kVersionMajor = 1;
-inline constexpr std::uint16_t kVersionMinor = 1;  // 1.1: vertex descriptors
+// 2.0: arcs in tree order (no tree-id section), encoded descriptors.
+inline constexpr std::uint16_t kVersionMajor = 2;
+inline constexpr std::uint16_t kVersionMinor = 0;
 inline constexpr std::size_t kAlignment = 64;
 
 inline constexpr std::size_t kHeaderSize = 64;
@@ -44,23 +45,24 @@ inline constexpr std::size_t kEntCount = 24;
 inline constexpr std::size_t kEntCrc = 28;
 
 enum SectionId : std::uint32_t {
-  kSectionModels = 1,       // ModelRecord per model
-  kSectionStrings = 2,      // UTF-8 model names
-  kSectionKeypoints = 3,    // float32 x, y per keypoint
-  kSectionArcs = 4,         // uint32 from, to per arc (global keypoint ids)
-  kSectionDescriptors = 5,  // per tree slot: kDescriptorSize components
-  kSectionTreeIds = 6,      // uint32 arc id per tree slot
-  kSectionTreeNodes = 7,    // float32 split, uint32 dimension per internal node
-  // Format 1.1: kVertexDescriptorSize bytes (SIFT) per keypoint, or empty.
-  kSectionVertexDescriptors = 8,
+  kSectionModels = 1,             // ModelRecord per model
+  kSectionStrings = 2,            // UTF-8 model names
+  kSectionKeypoints = 3,          // float32 x, y per keypoint
+  kSectionTreeArcs = 4,           // uint32 from, to per tree slot (global keypoint ids)
+  kSectionDescriptors = 5,        // per tree slot: kDescriptorSize components, encoded
+  kSectionTreeNodes = 6,          // split and dimension per internal node, encoded
+  kSectionVertexDescriptors = 7,  // kVertexDescriptorSize bytes (SIFT) per keypoint, or empty
 };
-// Sections 1..kSectionCount are in every index (format 1.0) and required.
-// The writer writes every section up to kLastSectionId, empty or not; the
-// reader takes a later section that is absent as empty, so 1.0 files load.
+// Sections 1..kSectionCount are in every index and required (empty ones
+// included). Ids above are skipped by the reader: room for minor versions.
 inline constexpr std::uint32_t kSectionCount = 7;
-inline constexpr std::uint32_t kLastSectionId = 8;
+inline constexpr std::uint32_t kLastSectionId = 7;
 
-enum DescriptorEncoding : std::uint32_t { kFloat32 = 0 };
+// Bytes per tree node: f32 split + u32 dimension (float32), i16 split + u16
+// dimension (int16, int8).
+inline constexpr std::size_t tree_node_size(DescriptorEncoding e) {
+  return e == DescriptorEncoding::kFloat32 ? 8 : 4;
+}
 
 // Model record (kModelRecordSize bytes).
 inline constexpr std::size_t kModelRecordSize = 80;
@@ -70,10 +72,10 @@ inline constexpr std::size_t kModWidth = 8;
 inline constexpr std::size_t kModHeight = 12;
 inline constexpr std::size_t kModKeypointBegin = 16;
 inline constexpr std::size_t kModKeypointCount = 20;
-inline constexpr std::size_t kModArcBegin = 24;
-inline constexpr std::size_t kModArcCount = 28;
+inline constexpr std::size_t kModArcCount = 24;  // arcs leaving the model's keypoints
+inline constexpr std::size_t kModReserved = 28;  // u32, zero
 inline constexpr std::size_t kModKeygraphCount = 32;
-inline constexpr std::size_t kModOutline = 40;  // 8 x float32
+inline constexpr std::size_t kModOutline = 40;  // 8 x float32, then 8 reserved bytes
 
 inline std::size_t align_up(std::size_t v) {
   return (v + kAlignment - 1) & ~(kAlignment - 1);
@@ -90,6 +92,50 @@ inline T load(const std::uint8_t* p) {
 template <class T>
 inline void store(std::uint8_t* p, T v) {
   std::memcpy(p, &v, sizeof(T));
+}
+
+// The one place that lists the parameters, in their order in the file, with
+// their names (as `--set NAME=VALUE` and `keygraph inspect` spell them):
+// writer, reader and inspector all walk it, so they cannot disagree. Calls
+// f(name, field) per field; P is Params or const Params.
+template <class P, class F>
+void visit_params(P& p, F&& f) {
+  f("keypoints.detector", p.keypoints.detector);
+  f("graph.structure", p.graph.structure);
+  f("graph.scene_sampling", p.graph.scene_sampling);
+  f("keypoints.hessian_threshold", p.keypoints.hessian_threshold);
+  f("keypoints.hessian_octaves", p.keypoints.hessian_octaves);
+  f("keypoints.hessian_levels", p.keypoints.hessian_levels);
+  f("keypoints.mser_delta", p.keypoints.mser_delta);
+  f("keypoints.mser_min_area", p.keypoints.mser_min_area);
+  f("keypoints.mser_max_area", p.keypoints.mser_max_area);
+  f("keypoints.model_scales", p.keypoints.model_scales);
+  f("keypoints.model_merge_distance", p.keypoints.model_merge_distance);
+  f("keypoints.max_model_keypoints", p.keypoints.max_model_keypoints);
+  f("graph.min_distance", p.graph.min_distance);
+  f("graph.max_distance", p.graph.max_distance);
+  f("graph.scene_sample_distance", p.graph.scene_sample_distance);
+  f("graph.max_anisotropy", p.graph.max_anisotropy);
+  f("descriptor.blur_sigma", p.descriptor.blur_sigma);
+  f("descriptor.profile_length", p.descriptor.profile_length);
+  f("descriptor.coefficients", p.descriptor.coefficients);
+  f("descriptor.parallel_offset", p.descriptor.parallel_offset);
+  f("descriptor.similarity_threshold", p.descriptor.similarity_threshold);
+  f("ransac.confidence", p.ransac.confidence);
+  f("ransac.max_iterations", p.ransac.max_iterations);
+  f("ransac.inlier_threshold", p.ransac.inlier_threshold);
+  f("ransac.min_inliers", p.ransac.min_inliers);
+  f("ransac.min_inlier_keygraphs", p.ransac.min_inlier_keygraphs);
+  f("ransac.max_scale_change", p.ransac.max_scale_change);
+  f("ransac.max_perspective", p.ransac.max_perspective);
+  f("ransac.max_instances", p.ransac.max_instances);
+  f("ransac.min_verification_z", p.ransac.min_verification_z);
+  f("ransac.seed", p.ransac.seed);
+  f("descriptor.vertex_descriptor", p.descriptor.vertex_descriptor);
+  f("descriptor.vertex_threshold", p.descriptor.vertex_threshold);
+  f("descriptor.encoding", p.descriptor.encoding);
+  // Later minor versions append here; the block's zero tail is what an
+  // older file holds for them.
 }
 
 // Parameters block <-> Params. parse_params validates every value.

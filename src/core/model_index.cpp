@@ -1,6 +1,8 @@
 #include "keygraph/model_index.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <new>
@@ -8,7 +10,17 @@
 
 #include <sys/stat.h>
 
+#if defined(__unix__) || defined(__APPLE__)
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <unistd.h>
+#define KG_HAVE_MMAP 1
+#else
+#define KG_HAVE_MMAP 0
+#endif
+
 #include "core/crc32.h"
+#include "core/descriptor_encoding.h"
 #include "core/index_format.h"
 #include "core/kdtree.h"
 
@@ -39,12 +51,10 @@ const char* section_name(std::uint32_t id) {
       return "strings";
     case kSectionKeypoints:
       return "keypoints";
-    case kSectionArcs:
-      return "arcs";
+    case kSectionTreeArcs:
+      return "tree arcs";
     case kSectionDescriptors:
       return "descriptors";
-    case kSectionTreeIds:
-      return "tree ids";
     case kSectionTreeNodes:
       return "tree nodes";
     case kSectionVertexDescriptors:
@@ -61,9 +71,24 @@ bool host_is_little_endian() {
   return first == 1;
 }
 
+Status read_error(const std::string& path) {
+  return {StatusCode::kIoError, "cannot read index " + path};
+}
+
+Status too_small(const std::string& path, std::size_t size) {
+  return corrupt(path + ": file too small for a keygraph index (" + std::to_string(size) +
+                 " bytes)");
+}
+
 }  // namespace
 
-void ModelIndex::AlignedFree::operator()(std::uint8_t* p) const {
+void ModelIndex::Release::operator()(std::uint8_t* p) const {
+#if KG_HAVE_MMAP
+  if (mapped > 0) {
+    ::munmap(p, mapped);
+    return;
+  }
+#endif
   ::operator delete[](p, std::align_val_t(kAlignment));
 }
 
@@ -72,40 +97,78 @@ ModelIndex::~ModelIndex() = default;
 ModelIndex::ModelIndex(ModelIndex&&) noexcept = default;
 ModelIndex& ModelIndex::operator=(ModelIndex&&) noexcept = default;
 
-Status ModelIndex::open(const std::string& path, ModelIndex& out) {
+Status ModelIndex::adopt(std::unique_ptr<std::uint8_t, Release> memory, std::size_t size,
+                         const std::string& path, ModelIndex& out) {
+  ModelIndex index;
+  Status s = index.validate(memory.get(), size);
+  if (!s) return {s.code(), path + ": " + s.message()};
+  index.owned_ = std::move(memory);
+  out = std::move(index);
+  return Status::ok();
+}
+
+Status ModelIndex::read(const std::string& path, ModelIndex& out) {
   struct stat info {};
   if (::stat(path.c_str(), &info) != 0) return {StatusCode::kNotFound, "cannot open index " + path};
   if (!S_ISREG(info.st_mode)) return {StatusCode::kInvalidArgument, path + ": not a regular file"};
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (f == nullptr) return {StatusCode::kNotFound, "cannot open index " + path};
-  std::fseek(f, 0, SEEK_END);
-  const long end = std::ftell(f);
-  std::fseek(f, 0, SEEK_SET);
-  if (end < 0) {
-    std::fclose(f);
-    return {StatusCode::kIoError, "cannot read index " + path};
-  }
-  const auto size = static_cast<std::size_t>(end);
+  const auto size = static_cast<std::uint64_t>(info.st_size);
   if (size < kHeaderSize) {
     std::fclose(f);
-    return corrupt(path + ": file too small for a keygraph index (" + std::to_string(size) +
-                   " bytes)");
+    return too_small(path, static_cast<std::size_t>(size));
   }
-  std::unique_ptr<std::uint8_t, AlignedFree> buffer(static_cast<std::uint8_t*>(
-      ::operator new[](size, std::align_val_t(kAlignment), std::nothrow)));
+  if (size > static_cast<std::uint64_t>(PTRDIFF_MAX)) {
+    std::fclose(f);
+    return {StatusCode::kResourceExhausted, path + ": too large to load"};
+  }
+  std::unique_ptr<std::uint8_t, Release> buffer(
+      static_cast<std::uint8_t*>(::operator new[](static_cast<std::size_t>(size),
+                                                  std::align_val_t(kAlignment), std::nothrow)),
+      Release{0});
   if (!buffer) {
     std::fclose(f);
     return {StatusCode::kResourceExhausted, path + ": not enough memory for the index"};
   }
-  const std::size_t got = std::fread(buffer.get(), 1, size, f);
+  const std::size_t got = std::fread(buffer.get(), 1, static_cast<std::size_t>(size), f);
+  // One byte more than stat() reported means the file grew meanwhile.
+  const bool longer = got == size && std::fgetc(f) != EOF;
   std::fclose(f);
-  if (got != size) return {StatusCode::kIoError, "short read on index " + path};
-  ModelIndex index;
-  Status s = index.validate(buffer.get(), size);
-  if (!s) return {s.code(), path + ": " + s.message()};
-  index.owned_ = std::move(buffer);
-  out = std::move(index);
-  return Status::ok();
+  if (got != size || longer) return read_error(path + " (file changed while reading)");
+  return adopt(std::move(buffer), static_cast<std::size_t>(size), path, out);
+}
+
+Status ModelIndex::open(const std::string& path, ModelIndex& out) {
+#if KG_HAVE_MMAP
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return {StatusCode::kNotFound, "cannot open index " + path};
+  struct stat info {};
+  if (::fstat(fd, &info) != 0) {
+    ::close(fd);
+    return read_error(path);
+  }
+  if (!S_ISREG(info.st_mode)) {
+    ::close(fd);
+    return {StatusCode::kInvalidArgument, path + ": not a regular file"};
+  }
+  const auto size = static_cast<std::uint64_t>(info.st_size);
+  if (size < kHeaderSize) {
+    ::close(fd);
+    return too_small(path, static_cast<std::size_t>(size));
+  }
+  void* mapped =
+      size <= static_cast<std::uint64_t>(PTRDIFF_MAX)
+          ? ::mmap(nullptr, static_cast<std::size_t>(size), PROT_READ, MAP_PRIVATE, fd, 0)
+          : MAP_FAILED;
+  ::close(fd);  // the mapping keeps the file
+  if (mapped != MAP_FAILED) {
+    std::unique_ptr<std::uint8_t, Release> memory(static_cast<std::uint8_t*>(mapped),
+                                                  Release{static_cast<std::size_t>(size)});
+    return adopt(std::move(memory), static_cast<std::size_t>(size), path, out);
+  }
+#endif
+  // No mmap here, or it failed (file system without mapping support): copy.
+  return read(path, out);
 }
 
 Status ModelIndex::view(const std::uint8_t* data, std::size_t size, ModelIndex& out) {
@@ -120,6 +183,8 @@ Status ModelIndex::view(const std::uint8_t* data, std::size_t size, ModelIndex& 
 }
 
 Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
+  // Error messages are built only on failure: a valid index loads without
+  // allocating (beyond nothing at all).
   if (!host_is_little_endian()) return {StatusCode::kUnsupportedVersion, "big-endian host"};
   if (size < kHeaderSize) return corrupt("file too small for a keygraph index");
   if (std::memcmp(d + kOffMagic, kMagic, sizeof(kMagic)) != 0) {
@@ -129,10 +194,16 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   }
   const auto major = load<std::uint16_t>(d + kOffMajor);
   const auto minor = load<std::uint16_t>(d + kOffMinor);
-  if (major != kVersionMajor)
+  if (major != kVersionMajor) {
+    const std::string version = "index format version " + std::to_string(major) + "." +
+                                std::to_string(minor) + " is not supported (this reader reads " +
+                                std::to_string(kVersionMajor) + ".x";
+    if (major < kVersionMajor)
+      return {StatusCode::kUnsupportedVersion,
+              version + "): rebuild the index from its model images with keygraph build"};
     return {StatusCode::kUnsupportedVersion,
-            "index format version " + std::to_string(major) + "." + std::to_string(minor) +
-                " is not supported (this reader reads " + std::to_string(kVersionMajor) + ".x)"};
+            version + "): it was written by a newer keygraph; update the reader"};
+  }
   const auto header_size = load<std::uint32_t>(d + kOffHeaderSize);
   const auto file_size = load<std::uint64_t>(d + kOffFileSize);
   if (header_size != kHeaderSize)
@@ -161,6 +232,7 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
 
   Status s = parse_params(d + params_offset, params_size, params_);
   if (!s) return s;
+  const DescriptorEncoding encoding = params_.descriptor.encoding;
 
   Section sections[kLastSectionId + 1];
   for (std::uint32_t i = 0; i < section_count; ++i) {
@@ -168,20 +240,21 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
     const auto id = load<std::uint32_t>(e + kEntId);
     if (id == 0 || id > kLastSectionId) continue;  // unknown sections: newer minor versions
     Section& sec = sections[id];
-    const std::string name = section_name(id);
-    if (sec.present) return corrupt("section table: duplicate " + name + " section");
+    const char* name = section_name(id);
+    if (sec.present) return corrupt(std::string("section table: duplicate ") + name + " section");
     sec.present = true;
     sec.encoding = load<std::uint32_t>(e + kEntEncoding);
     sec.offset = load<std::uint64_t>(e + kEntOffset);
     sec.size = load<std::uint64_t>(e + kEntSize);
     sec.count = load<std::uint32_t>(e + kEntCount);
     sec.crc = load<std::uint32_t>(e + kEntCrc);
-    if (sec.offset % kAlignment != 0) return corrupt(name + " section: offset not 64-byte aligned");
+    if (sec.offset % kAlignment != 0)
+      return corrupt(std::string(name) + " section: offset not 64-byte aligned");
     if (sec.offset < table_end || sec.offset > size || sec.size > size - sec.offset)
-      return corrupt(name + " section: offset " + std::to_string(sec.offset) + " size " +
-                     std::to_string(sec.size) + " out of bounds");
+      return corrupt(std::string(name) + " section: offset " + std::to_string(sec.offset) +
+                     " size " + std::to_string(sec.size) + " out of bounds");
     if (crc32(d + sec.offset, static_cast<std::size_t>(sec.size)) != sec.crc)
-      return corrupt(name + " section: checksum mismatch");
+      return corrupt(std::string(name) + " section: checksum mismatch");
   }
   for (std::uint32_t id = 1; id <= kSectionCount; ++id) {
     if (!sections[id].present) return corrupt(std::string(section_name(id)) + " section missing");
@@ -190,27 +263,32 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
     const Section& sec = sections[id];
     if (sec.size != static_cast<std::uint64_t>(sec.count) * element)
       return corrupt(std::string(section_name(id)) + " section: size " + std::to_string(sec.size) +
-                     " does not match count " + std::to_string(sec.count));
+                     " does not match count " + std::to_string(sec.count) + " x " +
+                     std::to_string(element) + " bytes");
     return Status::ok();
   };
   const Section& models = sections[kSectionModels];
   const Section& strings = sections[kSectionStrings];
   const Section& keypoints = sections[kSectionKeypoints];
-  const Section& arcs = sections[kSectionArcs];
+  const Section& arcs = sections[kSectionTreeArcs];
   const Section& descriptors = sections[kSectionDescriptors];
-  const Section& ids = sections[kSectionTreeIds];
   const Section& nodes = sections[kSectionTreeNodes];
-  const Section& vertex = sections[kSectionVertexDescriptors];  // absent (1.0): empty
+  const Section& vertex = sections[kSectionVertexDescriptors];
+  // The descriptor and node sections name the encoding the parameters name.
+  for (const std::uint32_t id : {kSectionDescriptors, kSectionTreeNodes}) {
+    if (sections[id].encoding != static_cast<std::uint32_t>(encoding))
+      return corrupt(std::string(section_name(id)) + " section: encoding " +
+                     std::to_string(sections[id].encoding) + " differs from parameter encoding " +
+                     std::to_string(static_cast<unsigned>(encoding)) + " (" +
+                     encoding_name(encoding) + ")");
+  }
   if (!(s = expect_size(kSectionModels, kModelRecordSize))) return s;
+  if (!(s = expect_size(kSectionStrings, 1))) return s;
   if (!(s = expect_size(kSectionKeypoints, sizeof(Point2f)))) return s;
-  if (!(s = expect_size(kSectionArcs, sizeof(ModelArc)))) return s;
-  if (descriptors.encoding != kFloat32)
-    return corrupt("descriptors section: unknown encoding " + std::to_string(descriptors.encoding));
-  if (!(s = expect_size(kSectionDescriptors, sizeof(ArcDescriptor)))) return s;
-  if (!(s = expect_size(kSectionTreeIds, sizeof(std::uint32_t)))) return s;
-  if (!(s = expect_size(kSectionTreeNodes, sizeof(KdNode)))) return s;
+  if (!(s = expect_size(kSectionTreeArcs, sizeof(ModelArc)))) return s;
+  if (!(s = expect_size(kSectionDescriptors, encoded_descriptor_size(encoding)))) return s;
+  if (!(s = expect_size(kSectionTreeNodes, tree_node_size(encoding)))) return s;
   if (!(s = expect_size(kSectionVertexDescriptors, kVertexDescriptorSize))) return s;
-  if (strings.size != strings.count) return corrupt("strings section: size does not match count");
   if (models.count == 0) return corrupt("models section: no models");
   // One vertex descriptor per keypoint exactly when the parameters ask for them.
   const bool want_vertex = params_.descriptor.vertex_descriptor != VertexDescriptor::kNone;
@@ -219,9 +297,9 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
                    ", expected " + std::to_string(want_vertex ? keypoints.count : 0U) +
                    (want_vertex ? " (one per keypoint: parameter vertex_descriptor is sift)"
                                 : " (parameter vertex_descriptor is none)"));
-  if (descriptors.count != arcs.count || ids.count != arcs.count)
-    return corrupt("tree sections: slot count differs from arc count " +
-                   std::to_string(arcs.count));
+  if (descriptors.count != arcs.count)
+    return corrupt("descriptors section: " + std::to_string(descriptors.count) +
+                   " descriptors for " + std::to_string(arcs.count) + " tree arcs");
   const int depth = kdtree_depth(arcs.count);
   if (nodes.count != (1ULL << depth) - 1)
     return corrupt("tree nodes section: " + std::to_string(nodes.count) + " nodes, expected " +
@@ -230,88 +308,139 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
 
   // Model records: names, ranges, outlines.
   const std::uint8_t* rec = d + models.offset;
-  std::uint32_t next_keypoint = 0, next_arc = 0;
+  std::uint32_t next_keypoint = 0;
+  std::uint64_t arc_total = 0;
   for (std::uint32_t m = 0; m < models.count; ++m, rec += kModelRecordSize) {
-    const std::string where = "model " + std::to_string(m) + ": ";
+    auto model_error = [m](const char* what) {
+      return corrupt("model " + std::to_string(m) + ": " + what);
+    };
     const auto name_offset = load<std::uint32_t>(rec + kModNameOffset);
     const auto name_length = load<std::uint32_t>(rec + kModNameLength);
     if (name_length == 0 || name_offset > strings.count ||
         name_length > strings.count - name_offset)
-      return corrupt(where + "name out of bounds");
+      return model_error("name out of bounds");
     const float w = load<float>(rec + kModWidth), h = load<float>(rec + kModHeight);
-    if (!(w >= 1.f && h >= 1.f && w < 1e6f && h < 1e6f)) return corrupt(where + "bad image size");
+    if (!(w >= 1.f && h >= 1.f && w < 1e6f && h < 1e6f)) return model_error("bad image size");
     for (int c = 0; c < 8; ++c) {
-      if (!std::isfinite(load<float>(rec + kModOutline + 4 * c)))
-        return corrupt(where + "bad outline");
+      if (!std::isfinite(load<float>(rec + kModOutline + 4 * c))) return model_error("bad outline");
     }
-    // Models own consecutive, non-overlapping keypoint and arc ranges.
-    if (load<std::uint32_t>(rec + kModKeypointBegin) != next_keypoint ||
-        load<std::uint32_t>(rec + kModArcBegin) != next_arc)
-      return corrupt(where + "keypoint or arc range not contiguous");
+    // Models own consecutive, non-overlapping keypoint ranges.
+    if (load<std::uint32_t>(rec + kModKeypointBegin) != next_keypoint)
+      return model_error("keypoint range not contiguous");
     const auto kp_count = load<std::uint32_t>(rec + kModKeypointCount);
-    const auto arc_count = load<std::uint32_t>(rec + kModArcCount);
-    if (kp_count > keypoints.count - next_keypoint || arc_count > arcs.count - next_arc)
-      return corrupt(where + "keypoint or arc range out of bounds");
+    if (kp_count > keypoints.count - next_keypoint)
+      return model_error("keypoint range out of bounds");
     next_keypoint += kp_count;
-    next_arc += arc_count;
+    arc_total += load<std::uint32_t>(rec + kModArcCount);
   }
-  if (next_keypoint != keypoints.count || next_arc != arcs.count)
-    return corrupt("models section: ranges do not cover all keypoints and arcs");
+  if (next_keypoint != keypoints.count)
+    return corrupt("models section: keypoint ranges do not cover all keypoints");
+  if (arc_total != arcs.count)
+    return corrupt("models section: arc counts add up to " + std::to_string(arc_total) + ", not " +
+                   std::to_string(arcs.count));
 
   const auto* kp = reinterpret_cast<const Point2f*>(d + keypoints.offset);
   for (std::uint32_t i = 0; i < keypoints.count; ++i) {
     if (!std::isfinite(kp[i].x) || !std::isfinite(kp[i].y))
       return corrupt("keypoint " + std::to_string(i) + ": not finite");
   }
-  // Every arc joins two distinct keypoints of the model that owns the arc.
+  // These are needed by model_of_keypoint() below.
+  models_ = d + models.offset;
+  model_count_ = models.count;
+  // Every arc joins two distinct keypoints of one model, and each model
+  // record's arc count is the number of arcs starting in it. Counted in
+  // chunks of models with a fixed array: no allocation.
   const auto* arc = reinterpret_cast<const ModelArc*>(d + arcs.offset);
-  rec = d + models.offset;
-  for (std::uint32_t m = 0; m < models.count; ++m, rec += kModelRecordSize) {
-    const auto kb = load<std::uint32_t>(rec + kModKeypointBegin);
-    const auto ke = kb + load<std::uint32_t>(rec + kModKeypointCount);
-    const auto ab = load<std::uint32_t>(rec + kModArcBegin);
-    const auto ae = ab + load<std::uint32_t>(rec + kModArcCount);
-    for (std::uint32_t a = ab; a < ae; ++a) {
-      if (arc[a].from < kb || arc[a].from >= ke || arc[a].to < kb || arc[a].to >= ke ||
-          arc[a].from == arc[a].to)
-        return corrupt("arc " + std::to_string(a) + ": keypoint ids outside model " +
+  constexpr std::uint32_t kChunk = 256;
+  std::uint32_t per_model[kChunk];
+  for (std::uint32_t first = 0; first < models.count; first += kChunk) {
+    const std::uint32_t last = std::min(models.count, first + kChunk);
+    std::fill(per_model, per_model + kChunk, 0U);
+    for (std::uint32_t a = 0; a < arcs.count; ++a) {
+      const ModelArc& x = arc[a];
+      if (x.from >= keypoints.count || x.to >= keypoints.count || x.from == x.to)
+        return corrupt("tree arc " + std::to_string(a) + ": keypoint ids " +
+                       std::to_string(x.from) + ", " + std::to_string(x.to) + " invalid (" +
+                       std::to_string(keypoints.count) + " keypoints)");
+      const auto m = static_cast<std::uint32_t>(model_of_keypoint(x.from));
+      if (first == 0 && static_cast<std::uint32_t>(model_of_keypoint(x.to)) != m)
+        return corrupt("tree arc " + std::to_string(a) + ": keypoint ids outside model " +
                        std::to_string(m));
+      if (m >= first && m < last) ++per_model[m - first];
+    }
+    for (std::uint32_t m = first; m < last; ++m) {
+      const auto stored = load<std::uint32_t>(models_ + m * kModelRecordSize + kModArcCount);
+      if (stored != per_model[m - first])
+        return corrupt("model " + std::to_string(m) + ": arc count " + std::to_string(stored) +
+                       ", but " + std::to_string(per_model[m - first]) + " arcs start in it");
     }
   }
-  const auto* desc = reinterpret_cast<const ArcDescriptor*>(d + descriptors.offset);
-  for (std::uint32_t i = 0; i < descriptors.count; ++i) {
-    for (float v : desc[i]) {
-      if (!std::isfinite(v)) return corrupt("descriptor " + std::to_string(i) + ": not finite");
+  // Descriptors: finite (float32) or within [-scale, scale] (int16, int8),
+  // so integer squared distances cannot overflow.
+  const std::uint8_t* desc = d + descriptors.offset;
+  const std::uint8_t* node = d + nodes.offset;
+  const std::int32_t scale = encoding_scale(encoding);
+  auto bad_descriptor = [](std::uint32_t i) {
+    return corrupt("descriptor " + std::to_string(i) + ": not finite or out of range");
+  };
+  auto bad_node = [](std::uint32_t i) {
+    return corrupt("tree nodes: node " + std::to_string(i) + " has a bad split");
+  };
+  switch (encoding) {
+    case DescriptorEncoding::kFloat32: {
+      const auto* p = reinterpret_cast<const ArcDescriptor*>(desc);
+      for (std::uint32_t i = 0; i < descriptors.count; ++i) {
+        for (float v : p[i]) {
+          if (!std::isfinite(v)) return bad_descriptor(i);
+        }
+      }
+      const auto* n = reinterpret_cast<const KdNode*>(node);
+      for (std::uint32_t i = 0; i < nodes.count; ++i) {
+        if (n[i].dim >= static_cast<std::uint32_t>(kDescriptorSize) || !std::isfinite(n[i].split))
+          return bad_node(i);
+      }
+      break;
+    }
+    case DescriptorEncoding::kInt16: {
+      const auto* p = reinterpret_cast<const ArcDescriptorI16*>(desc);
+      for (std::uint32_t i = 0; i < descriptors.count; ++i) {
+        for (std::int16_t v : p[i]) {
+          if (v < -scale) return bad_descriptor(i);  // -32768
+        }
+      }
+      break;
+    }
+    case DescriptorEncoding::kInt8: {
+      const auto* p = reinterpret_cast<const ArcDescriptorI8*>(desc);
+      for (std::uint32_t i = 0; i < descriptors.count; ++i) {
+        for (std::int8_t v : p[i]) {
+          if (v < -scale) return bad_descriptor(i);  // -128
+        }
+      }
+      break;
     }
   }
-  const auto* slot_ids = reinterpret_cast<const std::uint32_t*>(d + ids.offset);
-  for (std::uint32_t i = 0; i < ids.count; ++i) {
-    if (slot_ids[i] >= arcs.count)
-      return corrupt("tree ids: slot " + std::to_string(i) + " names arc " +
-                     std::to_string(slot_ids[i]) + " of " + std::to_string(arcs.count));
-  }
-  const auto* tree_nodes = reinterpret_cast<const KdNode*>(d + nodes.offset);
-  for (std::uint32_t i = 0; i < nodes.count; ++i) {
-    if (tree_nodes[i].dim >= static_cast<std::uint32_t>(kDescriptorSize) ||
-        !std::isfinite(tree_nodes[i].split))
-      return corrupt("tree nodes: node " + std::to_string(i) + " has a bad split");
+  if (encoding != DescriptorEncoding::kFloat32) {
+    const auto* n = reinterpret_cast<const KdNodeInt*>(node);
+    for (std::uint32_t i = 0; i < nodes.count; ++i) {
+      if (n[i].dim >= kDescriptorSize || n[i].split < -scale || n[i].split > scale)
+        return bad_node(i);
+    }
   }
 
   data_ = d;
   size_ = size;
   version_major_ = major;
   version_minor_ = minor;
-  models_ = d + models.offset;
-  model_count_ = models.count;
   strings_ = reinterpret_cast<const char*>(d + strings.offset);
   strings_size_ = strings.count;
   keypoints_ = kp;
   keypoint_count_ = keypoints.count;
   arcs_ = arc;
   arc_count_ = arcs.count;
-  tree_points_ = desc;
-  tree_ids_ = slot_ids;
-  tree_nodes_ = tree_nodes;
+  tree_descriptors_ = desc;
+  tree_nodes_ = node;
+  tree_node_count_ = nodes.count;
   tree_depth_ = depth;
   vertex_descriptors_ = vertex.count > 0 ? d + vertex.offset : nullptr;
   return Status::ok();
@@ -331,20 +460,19 @@ ModelInfo ModelIndex::model(int i) const {
   }
   info.keypoint_begin = load<std::uint32_t>(rec + kModKeypointBegin);
   info.keypoint_count = load<std::uint32_t>(rec + kModKeypointCount);
-  info.arc_begin = load<std::uint32_t>(rec + kModArcBegin);
   info.arc_count = load<std::uint32_t>(rec + kModArcCount);
   info.keygraph_count = load<std::uint64_t>(rec + kModKeygraphCount);
   return info;
 }
 
-int ModelIndex::last_model_starting_at_or_before(std::size_t field, std::uint32_t id) const {
+int ModelIndex::model_of_keypoint(std::uint32_t keypoint) const {
   // Ranges are contiguous and ordered (checked in validate()); the owner is
-  // the last model whose range starts at or before id.
+  // the last model whose range starts at or before the keypoint.
   int lo = 0, hi = static_cast<int>(model_count_) - 1;
   while (lo < hi) {
     const int mid = (lo + hi + 1) / 2;
-    if (load<std::uint32_t>(models_ + static_cast<std::size_t>(mid) * kModelRecordSize + field) <=
-        id) {
+    if (load<std::uint32_t>(models_ + static_cast<std::size_t>(mid) * kModelRecordSize +
+                            kModKeypointBegin) <= keypoint) {
       lo = mid;
     } else {
       hi = mid - 1;
@@ -353,12 +481,30 @@ int ModelIndex::last_model_starting_at_or_before(std::size_t field, std::uint32_
   return lo;
 }
 
-int ModelIndex::model_of_arc(std::uint32_t arc) const {
-  return last_model_starting_at_or_before(kModArcBegin, arc);
+const ArcDescriptor* ModelIndex::descriptors_f32() const {
+  return descriptor_encoding() == DescriptorEncoding::kFloat32
+             ? reinterpret_cast<const ArcDescriptor*>(tree_descriptors_)
+             : nullptr;
 }
-
-int ModelIndex::model_of_keypoint(std::uint32_t keypoint) const {
-  return last_model_starting_at_or_before(kModKeypointBegin, keypoint);
+const ArcDescriptorI16* ModelIndex::descriptors_i16() const {
+  return descriptor_encoding() == DescriptorEncoding::kInt16
+             ? reinterpret_cast<const ArcDescriptorI16*>(tree_descriptors_)
+             : nullptr;
+}
+const ArcDescriptorI8* ModelIndex::descriptors_i8() const {
+  return descriptor_encoding() == DescriptorEncoding::kInt8
+             ? reinterpret_cast<const ArcDescriptorI8*>(tree_descriptors_)
+             : nullptr;
+}
+const KdNode* ModelIndex::tree_nodes_f32() const {
+  return descriptor_encoding() == DescriptorEncoding::kFloat32
+             ? reinterpret_cast<const KdNode*>(tree_nodes_)
+             : nullptr;
+}
+const KdNodeInt* ModelIndex::tree_nodes_int() const {
+  return descriptor_encoding() != DescriptorEncoding::kFloat32
+             ? reinterpret_cast<const KdNodeInt*>(tree_nodes_)
+             : nullptr;
 }
 
 }  // namespace kg

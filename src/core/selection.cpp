@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/arc_descriptor.h"
+#include "core/descriptor_encoding.h"
 #include "core/sampling.h"
 #include "core/vertex_descriptor.h"
 
@@ -68,6 +70,45 @@ bool plausible_local_map(const Point2f* m, const Point2f* s, int k, const Params
 
 }  // namespace
 
+ArcSearch::ArcSearch(const ModelIndex& index) {
+  encoding_ = index.params().descriptor.encoding;
+  const float radius = index.params().descriptor.similarity_threshold;
+  radius2_ = radius * radius;
+  const std::uint32_t n = index.arc_count();
+  const int depth = index.tree_depth();
+  switch (encoding_) {
+    case DescriptorEncoding::kFloat32:
+      f32_ = KdTreeView(index.descriptors_f32(), nullptr, n, index.tree_nodes_f32(), depth);
+      break;
+    case DescriptorEncoding::kInt16:
+      i16_ = KdTreeView16(index.descriptors_i16(), nullptr, n, index.tree_nodes_int(), depth);
+      if (!scaled_radius2(radius, encoding_, std::numeric_limits<KdTreeView16::Dist>::max(),
+                          radius2_scaled_))
+        radius2_scaled_ = 0;  // unreachable: validate_params checked the scaled radius
+      break;
+    case DescriptorEncoding::kInt8:
+      i8_ = KdTreeView8(index.descriptors_i8(), nullptr, n, index.tree_nodes_int(), depth);
+      if (!scaled_radius2(radius, encoding_, std::numeric_limits<KdTreeView8::Dist>::max(),
+                          radius2_scaled_))
+        radius2_scaled_ = 0;
+      break;
+  }
+}
+
+std::uint32_t ArcSearch::radius_search(const ArcDescriptor& q, std::uint32_t* out,
+                                       std::uint32_t capacity) const {
+  switch (encoding_) {
+    case DescriptorEncoding::kFloat32:
+      return f32_.radius_search(q, radius2_, out, capacity);
+    case DescriptorEncoding::kInt16:
+      return i16_.radius_search(quantise<std::int16_t>(q), radius2_scaled_, out, capacity);
+    case DescriptorEncoding::kInt8:
+      return i8_.radius_search(quantise<std::int8_t>(q),
+                               static_cast<KdTreeView8::Dist>(radius2_scaled_), out, capacity);
+  }
+  return 0;
+}
+
 void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, const Limits& limits,
                       DetectStats& stats) {
   if (state_[e] == kLooked) {
@@ -86,10 +127,9 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
   ArcDescriptor d;
   if (!arc_descriptor(in.blurred, a, b, params.descriptor, profile_, d)) return;
   ++stats.arcs_described;
-  const float r = params.descriptor.similarity_threshold;
   const auto cap = static_cast<std::uint32_t>(limits.max_arc_matches);
   found_.resize(cap);
-  const std::uint32_t total = in.tree.radius_search(d, r * r, found_.data(), cap);
+  const std::uint32_t total = in.search->radius_search(d, found_.data(), cap);
   if (total > cap) stats.truncated_arc_matches = true;
   stats.arc_matches += total;
   const std::uint32_t n = std::min(total, cap);

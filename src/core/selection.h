@@ -23,9 +23,35 @@
 
 namespace kg {
 
+// The model index's search tree in its descriptor encoding, searched with
+// float descriptors: the query is quantised as the model descriptors were
+// (core/descriptor_encoding.h) and compared against the similarity
+// threshold scaled into the same domain. Returns tree slots, which are
+// indices into ModelIndex::arcs(). Allocates nothing.
+class ArcSearch {
+ public:
+  ArcSearch() = default;
+  explicit ArcSearch(const ModelIndex& index);
+
+  DescriptorEncoding encoding() const { return encoding_; }
+  // Slots of the model arcs whose descriptor is within
+  // params.descriptor.similarity_threshold of q (see KdTreeView::radius_search
+  // for `capacity` and the return value).
+  std::uint32_t radius_search(const ArcDescriptor& q, std::uint32_t* out,
+                              std::uint32_t capacity) const;
+
+ private:
+  DescriptorEncoding encoding_ = DescriptorEncoding::kFloat32;
+  KdTreeView f32_;
+  KdTreeView16 i16_;
+  KdTreeView8 i8_;
+  float radius2_ = 0.f;              // float32
+  std::int64_t radius2_scaled_ = 0;  // int16, int8
+};
+
 struct SelectionInput {
   const ModelIndex* index = nullptr;
-  KdTreeView tree;
+  const ArcSearch* search = nullptr;
   ImageView blurred;                      // scene blurred for profiles
   const Point2f* scene_points = nullptr;  // sampled scene keypoints
   const Delaunay* triangulation = nullptr;

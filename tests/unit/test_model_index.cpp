@@ -1,6 +1,8 @@
-// The .kgi model index: writer/reader round trip on real models, byte-exact
-// determinism, atomic file writes, and the reader's validation: every kind of
-// damage is an error Status that names the problem, never a crash.
+// The .kgi model index (format 2.0): writer/reader round trip on real models
+// in each descriptor encoding, byte-exact determinism, golden files, atomic
+// file writes, mapping, allocation-free views, and the reader's validation:
+// every kind of damage is an error Status that names the problem, never a
+// crash.
 #include "keygraph/model_index.h"
 
 #include <gtest/gtest.h>
@@ -14,6 +16,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <memory>
 #include <new>
 #include <string>
@@ -22,10 +25,14 @@
 
 #include <opencv2/core.hpp>
 
+#include "alloc_counter.h"
+#include "build/desktop_detect.h"
 #include "build/model_builder.h"
 #include "core/crc32.h"
+#include "core/descriptor_encoding.h"
 #include "core/index_format.h"
 #include "core/kdtree.h"
+#include "core/selection.h"
 #include "test_data.h"
 
 namespace kg {
@@ -126,11 +133,20 @@ void reseal(Bytes& b) {
 
 // --- Real models, built once ----------------------------------------------
 
+constexpr DescriptorEncoding kEncodings[] = {DescriptorEncoding::kFloat32,
+                                             DescriptorEncoding::kInt16, DescriptorEncoding::kInt8};
+
+Params with_encoding(DescriptorEncoding e, Params p = Params{}) {
+  p.descriptor.encoding = e;
+  return p;
+}
+
 struct Corpus {
   std::string error;
   Params params;
   std::vector<BuiltModel> models;  // box.png, a 200x200 crop of graf1.png
-  Bytes bytes;                     // serialize_index(models, params)
+  Bytes bytes;                     // serialize_index(models, params): the default encoding
+  Bytes encoded[3];                // the same in each encoding (index: DescriptorEncoding)
   Bytes small;                     // two small crops (box.png, graf1.png): for the bit-flip sweep
 };
 
@@ -152,6 +168,11 @@ const Corpus& corpus() {
     if (k.error.empty() && graf.empty()) k.error = "graf1.png missing (install opencv-doc)";
     if (k.error.empty()) {
       const Status s = serialize_index(k.models, k.params, k.bytes);
+      if (!s) k.error = s.message();
+    }
+    for (DescriptorEncoding e : kEncodings) {
+      if (!k.error.empty()) break;
+      const Status s = serialize_index(k.models, with_encoding(e), k.encoded[static_cast<int>(e)]);
       if (!s) k.error = s.message();
     }
     // Small enough that thousands of full validations stay fast under ASan.
@@ -178,6 +199,7 @@ class ModelIndexTest : public ::testing::Test {
   }
   const std::vector<BuiltModel>& models() const { return corpus().models; }
   const Bytes& bytes() const { return corpus().bytes; }
+  const Bytes& encoded(DescriptorEncoding e) const { return corpus().encoded[static_cast<int>(e)]; }
 };
 
 // Writes `p`'s parameter block over the index's (serialize_params does not
@@ -204,11 +226,26 @@ void expect_same_params(const Params& got, const Params& want) {
   EXPECT_EQ(got.descriptor.profile_length, want.descriptor.profile_length);
   EXPECT_EQ(got.descriptor.coefficients, want.descriptor.coefficients);
   EXPECT_EQ(got.descriptor.similarity_threshold, want.descriptor.similarity_threshold);
+  EXPECT_EQ(got.descriptor.encoding, want.descriptor.encoding);
   EXPECT_EQ(got.ransac.confidence, want.ransac.confidence);
   EXPECT_EQ(got.ransac.max_iterations, want.ransac.max_iterations);
   EXPECT_EQ(got.ransac.inlier_threshold, want.ransac.inlier_threshold);
   EXPECT_EQ(got.ransac.max_instances, want.ransac.max_instances);
   EXPECT_EQ(got.ransac.seed, want.ransac.seed);
+}
+
+// The descriptor in tree slot `slot`, decoded to float (integer encodings:
+// divided by the scale) and encoded as the index stores it.
+bool slot_holds(const ModelIndex& index, std::uint32_t slot, const ArcDescriptor& d) {
+  switch (index.descriptor_encoding()) {
+    case DescriptorEncoding::kFloat32:
+      return index.descriptors_f32()[slot] == d;
+    case DescriptorEncoding::kInt16:
+      return index.descriptors_i16()[slot] == quantise<std::int16_t>(d);
+    case DescriptorEncoding::kInt8:
+      return index.descriptors_i8()[slot] == quantise<std::int8_t>(d);
+  }
+  return false;
 }
 
 // Checks everything the reader exposes against the builder's data.
@@ -217,8 +254,9 @@ void expect_matches(const ModelIndex& index, const std::vector<BuiltModel>& mode
   EXPECT_FALSE(index.empty());
   EXPECT_EQ(index.version_major(), format::kVersionMajor);
   EXPECT_EQ(index.version_minor(), format::kVersionMinor);
-  std::uint32_t kp_begin = 0, arc_begin = 0;
-  std::vector<ArcDescriptor> descriptors;  // global arc id -> descriptor
+  std::uint32_t kp_begin = 0, arcs = 0;
+  // (from, to) in global keypoint ids -> the builder's descriptor.
+  std::map<std::pair<std::uint32_t, std::uint32_t>, ArcDescriptor> built;
   for (int m = 0; m < index.model_count(); ++m) {
     SCOPED_TRACE("model " + std::to_string(m));
     const BuiltModel& bm = models[static_cast<std::size_t>(m)];
@@ -228,7 +266,6 @@ void expect_matches(const ModelIndex& index, const std::vector<BuiltModel>& mode
     EXPECT_EQ(info.height, static_cast<float>(bm.height));
     EXPECT_EQ(info.keypoint_begin, kp_begin);
     EXPECT_EQ(info.keypoint_count, bm.keypoints.size());
-    EXPECT_EQ(info.arc_begin, arc_begin);
     EXPECT_EQ(info.arc_count, bm.arcs.size());
     EXPECT_EQ(info.keygraph_count, bm.keygraphs);
     // Outline: the image rectangle through corner pixel centres, clockwise.
@@ -242,45 +279,55 @@ void expect_matches(const ModelIndex& index, const std::vector<BuiltModel>& mode
       const Point2f& p = index.keypoints()[kp_begin + i];
       ASSERT_TRUE(p.x == bm.keypoints[i].x && p.y == bm.keypoints[i].y) << "keypoint " << i;
     }
-    for (std::size_t i = 0; i < bm.arcs.size(); ++i) {
-      const ModelArc& a = index.arcs()[arc_begin + i];
-      ASSERT_TRUE(a.from == bm.arcs[i].from + kp_begin && a.to == bm.arcs[i].to + kp_begin)
-          << "arc " << i;
-    }
-    descriptors.insert(descriptors.end(), bm.descriptors.begin(), bm.descriptors.end());
+    for (std::size_t i = 0; i < bm.arcs.size(); ++i)
+      built[{bm.arcs[i].from + kp_begin, bm.arcs[i].to + kp_begin}] = bm.descriptors[i];
     // Owner lookups at both ends of each range (and the middle).
     if (info.keypoint_count > 0) {
       EXPECT_EQ(index.model_of_keypoint(kp_begin), m);
       EXPECT_EQ(index.model_of_keypoint(kp_begin + info.keypoint_count / 2), m);
       EXPECT_EQ(index.model_of_keypoint(kp_begin + info.keypoint_count - 1), m);
     }
-    if (info.arc_count > 0) {
-      EXPECT_EQ(index.model_of_arc(arc_begin), m);
-      EXPECT_EQ(index.model_of_arc(arc_begin + info.arc_count / 2), m);
-      EXPECT_EQ(index.model_of_arc(arc_begin + info.arc_count - 1), m);
-    }
     kp_begin += info.keypoint_count;
-    arc_begin += info.arc_count;
+    arcs += info.arc_count;
   }
   EXPECT_EQ(index.keypoint_count(), kp_begin);
-  EXPECT_EQ(index.arc_count(), arc_begin);
+  EXPECT_EQ(index.arc_count(), arcs);
   EXPECT_EQ(index.model(-1).name, "");
   EXPECT_EQ(index.model(index.model_count()).name, "");
 
-  // Tree: every slot holds the descriptor of the arc it names, and every
-  // arc appears exactly once.
-  EXPECT_EQ(index.tree_depth(), kdtree_depth(index.arc_count()));
-  std::vector<int> seen(index.arc_count(), 0);
+  // Tree arcs: every built arc exactly once, in some slot whose descriptor
+  // is that arc's (encoded); both ends in one model.
+  ASSERT_EQ(built.size(), index.arc_count()) << "duplicate arcs in the builder's models";
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> seen;
+  std::vector<std::uint32_t> per_model(models.size(), 0);
   for (std::uint32_t slot = 0; slot < index.arc_count(); ++slot) {
-    const std::uint32_t id = index.tree_ids()[slot];
-    ASSERT_LT(id, index.arc_count());
-    ++seen[id];
-    ASSERT_TRUE(index.tree_points()[slot] == descriptors[id]) << "slot " << slot;
+    const ModelArc& a = index.arcs()[slot];
+    const auto it = built.find({a.from, a.to});
+    ASSERT_TRUE(it != built.end()) << "slot " << slot << " holds an unknown arc";
+    ASSERT_EQ(++seen[it->first], 1) << "slot " << slot << " repeats an arc";
+    ASSERT_TRUE(slot_holds(index, slot, it->second)) << "slot " << slot;
+    const int m = index.model_of_keypoint(a.from);
+    ASSERT_EQ(index.model_of_keypoint(a.to), m);
+    ++per_model[static_cast<std::size_t>(m)];
   }
-  for (std::uint32_t a = 0; a < index.arc_count(); ++a) ASSERT_EQ(seen[a], 1) << "arc " << a;
+  for (int m = 0; m < index.model_count(); ++m)
+    EXPECT_EQ(per_model[static_cast<std::size_t>(m)], index.model(m).arc_count);
+  EXPECT_EQ(index.tree_depth(), kdtree_depth(index.arc_count()));
   const std::uint32_t nodes = (1u << index.tree_depth()) - 1;
-  for (std::uint32_t n = 0; n < nodes; ++n)
-    ASSERT_LT(index.tree_nodes()[n].dim, static_cast<std::uint32_t>(kDescriptorSize));
+  ASSERT_EQ(index.tree_node_count(), nodes);
+  const DescriptorEncoding e = index.descriptor_encoding();
+  EXPECT_EQ(index.descriptors_f32() != nullptr, e == DescriptorEncoding::kFloat32);
+  EXPECT_EQ(index.descriptors_i16() != nullptr, e == DescriptorEncoding::kInt16);
+  EXPECT_EQ(index.descriptors_i8() != nullptr, e == DescriptorEncoding::kInt8);
+  EXPECT_EQ(index.tree_nodes_f32() != nullptr, e == DescriptorEncoding::kFloat32);
+  EXPECT_EQ(index.tree_nodes_int() != nullptr, e != DescriptorEncoding::kFloat32);
+  for (std::uint32_t n = 0; n < nodes; ++n) {
+    if (e == DescriptorEncoding::kFloat32) {
+      ASSERT_LT(index.tree_nodes_f32()[n].dim, static_cast<std::uint32_t>(kDescriptorSize));
+    } else {
+      ASSERT_LT(index.tree_nodes_int()[n].dim, static_cast<std::uint32_t>(kDescriptorSize));
+    }
+  }
 }
 
 TEST_F(ModelIndexTest, RoundTripThroughView) {
@@ -298,6 +345,87 @@ TEST_F(ModelIndexTest, RoundTripThroughView) {
             buffer.data() + buffer.size());
 }
 
+TEST_F(ModelIndexTest, RoundTripInEachEncoding) {
+  for (DescriptorEncoding e : kEncodings) {
+    SCOPED_TRACE(encoding_name(e));
+    const Bytes& b = encoded(e);
+    AlignedBytes buffer(b);
+    ModelIndex index;
+    const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
+    ASSERT_TRUE(s) << s.message();
+    EXPECT_EQ(index.descriptor_encoding(), e);
+    expect_matches(index, models());
+    expect_same_params(index.params(), with_encoding(e));
+    // Section sizes follow the encoding: 24, 12 or 6 bytes per descriptor,
+    // 8 or 4 per tree node; the arcs are 8 bytes in every encoding.
+    EXPECT_EQ(section_size(b, format::kSectionDescriptors),
+              std::size_t{index.arc_count()} * encoded_descriptor_size(e));
+    EXPECT_EQ(section_size(b, format::kSectionTreeNodes),
+              std::size_t{index.tree_node_count()} * format::tree_node_size(e));
+    EXPECT_EQ(section_size(b, format::kSectionTreeArcs), std::size_t{index.arc_count()} * 8);
+    for (std::uint32_t id : {format::kSectionDescriptors, format::kSectionTreeNodes})
+      EXPECT_EQ(load<std::uint32_t>(b.data() + entry(b, id) + format::kEntEncoding),
+                static_cast<std::uint32_t>(e));
+  }
+  // Smaller encodings make smaller files (int8: about 14 bytes per arc).
+  EXPECT_LT(encoded(DescriptorEncoding::kInt16).size(),
+            encoded(DescriptorEncoding::kFloat32).size());
+  EXPECT_LT(encoded(DescriptorEncoding::kInt8).size(), encoded(DescriptorEncoding::kInt16).size());
+  const double arcs = static_cast<double>(models()[0].arcs.size() + models()[1].arcs.size());
+  EXPECT_LE(static_cast<double>(encoded(DescriptorEncoding::kInt8).size()) / arcs, 16.0);
+}
+
+// The search through the index (ArcSearch: quantised query, scaled radius)
+// finds exactly the slots a brute-force scan of the stored descriptors finds
+// in the same domain, in each encoding.
+TEST_F(ModelIndexTest, ArcSearchEqualsBruteForceOnStoredDescriptors) {
+  for (DescriptorEncoding e : kEncodings) {
+    SCOPED_TRACE(encoding_name(e));
+    AlignedBytes buffer(encoded(e));
+    ModelIndex index;
+    ASSERT_TRUE(ModelIndex::view(buffer.data(), buffer.size(), index));
+    const ArcSearch search(index);
+    const std::uint32_t n = index.arc_count();
+    const float r = index.params().descriptor.similarity_threshold;
+    std::int64_t r2 = 0;
+    if (e != DescriptorEncoding::kFloat32) {
+      ASSERT_TRUE(scaled_radius2(r, e, std::numeric_limits<std::int64_t>::max(), r2));
+    }
+    std::vector<std::uint32_t> out(n);
+    std::size_t matches = 0;
+    // Queries: builder descriptors of every 499th arc of box, slightly moved.
+    const BuiltModel& box = models()[0];
+    for (std::size_t q = 0; q < box.descriptors.size(); q += 499) {
+      ArcDescriptor query = box.descriptors[q];
+      query[q % kDescriptorSize] += 0.05f;
+      std::vector<std::uint32_t> expected;
+      for (std::uint32_t slot = 0; slot < n; ++slot) {
+        bool near = false;
+        switch (e) {
+          case DescriptorEncoding::kFloat32:
+            near = kd_distance2<float>(index.descriptors_f32()[slot], query) < r * r;
+            break;
+          case DescriptorEncoding::kInt16:
+            near = kd_distance2<std::int16_t>(index.descriptors_i16()[slot],
+                                              quantise<std::int16_t>(query)) < r2;
+            break;
+          case DescriptorEncoding::kInt8:
+            near = kd_distance2<std::int8_t>(index.descriptors_i8()[slot],
+                                             quantise<std::int8_t>(query)) < r2;
+            break;
+        }
+        if (near) expected.push_back(slot);
+      }
+      const std::uint32_t found = search.radius_search(query, out.data(), n);
+      std::vector<std::uint32_t> got(out.begin(), out.begin() + found);
+      std::sort(got.begin(), got.end());
+      ASSERT_EQ(got, expected) << "query " << q;
+      matches += found;
+    }
+    EXPECT_GT(matches, 0u);
+  }
+}
+
 TEST_F(ModelIndexTest, NonDefaultParamsRoundTrip) {
   Params p;
   p.keypoints.detector = KeypointDetector::kMser;
@@ -307,6 +435,7 @@ TEST_F(ModelIndexTest, NonDefaultParamsRoundTrip) {
   p.graph.max_distance = 80.f;
   p.descriptor.similarity_threshold = 0.25f;
   p.descriptor.profile_length = 40;
+  p.descriptor.encoding = DescriptorEncoding::kInt16;
   p.ransac.confidence = 0.995;
   p.ransac.max_iterations = 777;
   p.ransac.inlier_threshold = 3.25;
@@ -333,10 +462,6 @@ TEST_F(ModelIndexTest, OwnerLookupsOnManyModels) {
   ModelIndex index;
   ASSERT_TRUE(ModelIndex::view(buffer.data(), buffer.size(), index));
   expect_matches(index, many);
-  for (std::uint32_t a = 0; a < index.arc_count(); a += 97) {
-    const ModelInfo info = index.model(index.model_of_arc(a));
-    ASSERT_TRUE(a >= info.arc_begin && a < info.arc_begin + info.arc_count) << a;
-  }
   for (std::uint32_t k = 0; k < index.keypoint_count(); ++k) {
     const ModelInfo info = index.model(index.model_of_keypoint(k));
     ASSERT_TRUE(k >= info.keypoint_begin && k < info.keypoint_begin + info.keypoint_count) << k;
@@ -374,7 +499,7 @@ TEST_F(ModelIndexTest, SerializeRejectsBadInput) {
   EXPECT_FALSE(serialize_index(models(), bad, b));
 }
 
-// --- Vertex descriptors (format 1.1) ----------------------------------------
+// --- Vertex descriptors -----------------------------------------------------
 
 Params sift_params() {
   Params p;
@@ -508,23 +633,11 @@ TEST_F(ModelIndexTest, RejectsVertexDescriptorCountMismatch) {
   EXPECT_TRUE(
       rejected(b, "vertex descriptors section: count " + std::to_string(n) + ", expected 0"));
 
-  // A section this reader does not know is skipped: as a 1.0 file, which
-  // has no vertex descriptor section, a default index still loads...
-  b = bytes();
-  store<std::uint32_t>(b.data() + entry(b, id) + format::kEntId, 99);
-  fix_header_crc(b);
-  {
-    AlignedBytes buffer(b);
-    ModelIndex index;
-    const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
-    ASSERT_TRUE(s) << s.message();
-    EXPECT_EQ(index.vertex_descriptors(), nullptr);
-  }
-  // ...but one whose parameters ask for SIFT does not.
+  // The section is required even when empty, and SIFT parameters need it.
   b = sc.bytes;
   store<std::uint32_t>(b.data() + entry(b, id) + format::kEntId, 99);
   fix_header_crc(b);
-  EXPECT_TRUE(rejected(b, "vertex descriptors section: count 0"));
+  EXPECT_TRUE(rejected(b, "vertex descriptors section missing"));
 
   // The payload is checksummed like every section.
   b = sc.bytes;
@@ -545,7 +658,7 @@ TEST_F(ModelIndexTest, RejectsBadVertexDescriptorParameters) {
     put_params(b, p);
     EXPECT_TRUE(rejected(b, "parameter vertex_threshold")) << bad;
   }
-  // Without vertex descriptors a 0 threshold is what a 1.0 file holds.
+  // Without vertex descriptors the threshold is unused and may be 0.
   p = Params{};
   p.descriptor.vertex_threshold = 0.f;
   b = bytes();
@@ -616,8 +729,24 @@ TEST_F(ModelIndexTest, WriteAndOpenFile) {
   ModelIndex index;
   s = ModelIndex::open(path, index);
   ASSERT_TRUE(s) << s.message();
+  EXPECT_TRUE(index.is_mapped()) << "open() maps regular files";
   expect_matches(index, models());
   expect_same_params(index.params(), Params{});
+  EXPECT_EQ(0, std::memcmp(index.data(), bytes().data(), bytes().size()));
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(index.data()) % format::kAlignment, 0u);
+
+  // read(), open()'s fallback, copies into an aligned buffer.
+  ModelIndex copied;
+  s = ModelIndex::read(path, copied);
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_FALSE(copied.is_mapped());
+  expect_matches(copied, models());
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(copied.data()) % format::kAlignment, 0u);
+  // Moving keeps the mapping alive and valid.
+  ModelIndex moved = std::move(index);
+  EXPECT_TRUE(moved.is_mapped());
+  expect_matches(moved, models());
+  index = std::move(moved);
 
   // Overwriting an existing index replaces it whole.
   std::vector<BuiltModel> one = {models()[1]};
@@ -627,9 +756,12 @@ TEST_F(ModelIndexTest, WriteAndOpenFile) {
   ASSERT_TRUE(ModelIndex::open(path, replaced));
   EXPECT_EQ(replaced.model_count(), 1);
   EXPECT_EQ(replaced.model(0).name, "graf1_crop");
-  // The earlier index owns its own buffer and is unaffected.
+  // The earlier index maps the replaced file (renamed over, so its inode
+  // lives on) and is unaffected; so is the copy.
   EXPECT_EQ(index.model_count(), 2);
   EXPECT_EQ(index.model(1).name, "graf1_crop");
+  expect_matches(index, models());
+  expect_matches(copied, models());
 }
 
 TEST_F(ModelIndexTest, WriteIntoMissingDirectoryFails) {
@@ -671,6 +803,15 @@ TEST_F(ModelIndexTest, OpenRejectsBadFiles) {
   EXPECT_FALSE(s);
   EXPECT_NE(s.message().find("truncated"), std::string::npos) << s.message();
   EXPECT_NE(s.message().find("truncated.kgi"), std::string::npos) << "message names the file";
+  // read() says the same.
+  s = ModelIndex::read(truncated.string(), index);
+  EXPECT_FALSE(s);
+  EXPECT_NE(s.message().find("truncated"), std::string::npos) << s.message();
+  s = ModelIndex::read((dir.path() / "absent.kgi").string(), index);
+  EXPECT_EQ(s.code(), StatusCode::kNotFound) << s.message();
+  s = ModelIndex::read(dir.path().string(), index);
+  EXPECT_FALSE(s);
+  EXPECT_TRUE(index.empty());
 }
 
 TEST_F(ModelIndexTest, OpenRejectsDirectory) {
@@ -683,6 +824,148 @@ TEST_F(ModelIndexTest, OpenRejectsDirectory) {
   EXPECT_FALSE(s);
   EXPECT_FALSE(s.message().empty());
   EXPECT_TRUE(index.empty()) << "failed opens leave the output untouched";
+}
+
+// --- Allocation ---------------------------------------------------------------
+
+// view() of a valid index allocates nothing, whatever its size or encoding;
+// open() maps, so its allocations do not grow with the file either.
+TEST_F(ModelIndexTest, ViewAllocatesNothing) {
+  std::vector<const Bytes*> all = {&bytes(), &corpus().small};
+  for (DescriptorEncoding e : kEncodings) all.push_back(&encoded(e));
+  if (sift_corpus().error.empty()) all.push_back(&sift_corpus().bytes);
+  for (const Bytes* b : all) {
+    AlignedBytes buffer(*b);
+    ModelIndex index;
+    long allocations = 0;
+    {
+      test::AllocationCounter counter;
+      const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
+      allocations = counter.count();
+      ASSERT_TRUE(s) << s.message();
+    }
+    EXPECT_EQ(allocations, 0) << b->size() << "-byte index";
+    // Nor does the search: a query through the index.
+    const ArcSearch search(index);
+    std::uint32_t out[256];
+    test::AllocationCounter counter;
+    const std::uint32_t found = search.radius_search(models()[0].descriptors[0], out, 256);
+    EXPECT_EQ(counter.count(), 0);
+    (void)found;
+  }
+  TempDir dir;
+  ASSERT_FALSE(dir.path().empty());
+  long opened[2] = {0, 0};
+  const Bytes* files[2] = {&corpus().small, &bytes()};
+  for (int i = 0; i < 2; ++i) {
+    const std::string path = (dir.path() / ("f" + std::to_string(i) + ".kgi")).string();
+    write_file(path, *files[i]);
+    ModelIndex index;
+    test::AllocationCounter counter;
+    const Status s = ModelIndex::open(path, index);
+    opened[i] = counter.count();
+    ASSERT_TRUE(s) << s.message();
+    ASSERT_TRUE(index.is_mapped());
+  }
+  EXPECT_EQ(opened[0], opened[1]) << "open() allocations grow with the file";
+  EXPECT_LE(opened[1], 2);
+}
+
+// --- Golden files -------------------------------------------------------------
+//
+// tests/data/golden-<major>.<minor>-<encoding>.kgi: the 96x96 crop at
+// (100, 50) of opencv-doc's box.png, model name "box_crop", default
+// parameters except the encoding. The current version's files must be what
+// the writer produces today, byte for byte; every golden file in
+// tests/data, including earlier minor versions', must load and detect the
+// crop in box.png (readers keep reading earlier minor versions).
+//
+// After a deliberate format or default-parameter change, regenerate the
+// current version's files and commit them:
+//   KG_UPDATE_GOLDEN=1 <build>/tests/test_model_index --gtest_filter='Golden*'
+// A new minor version writes new file names: keep the old files. Bytes can
+// also differ on another platform (the reference is x86-64 Debian bookworm,
+// g++ 12, OpenCV 4.6: float rounding, FMA contraction, resampling): there,
+// treat a mismatch as a finding to investigate, not a file to regenerate.
+
+constexpr DescriptorEncoding kGoldenEncodings[] = {DescriptorEncoding::kFloat32,
+                                                   DescriptorEncoding::kInt8};
+const cv::Rect kGoldenCrop(100, 50, 96, 96);
+
+std::filesystem::path golden_dir() {
+  // This file is tests/unit/test_model_index.cpp; the goldens are in tests/data.
+  return std::filesystem::path(__FILE__).parent_path().parent_path() / "data";
+}
+
+std::filesystem::path golden_path(DescriptorEncoding e) {
+  return golden_dir() / ("golden-" + std::to_string(format::kVersionMajor) + "." +
+                         std::to_string(format::kVersionMinor) + "-" + encoding_name(e) + ".kgi");
+}
+
+TEST(Golden, RebuildIsByteIdentical) {
+  const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+  ASSERT_FALSE(box.empty()) << "box.png missing (install opencv-doc)";
+  ASSERT_TRUE(std::filesystem::is_directory(golden_dir())) << golden_dir();
+  const char* update = std::getenv("KG_UPDATE_GOLDEN");
+  for (DescriptorEncoding e : kGoldenEncodings) {
+    SCOPED_TRACE(golden_path(e).string());
+    const Params params = with_encoding(e);
+    std::vector<BuiltModel> models(1);
+    ASSERT_TRUE(build_model(box(kGoldenCrop).clone(), "box_crop", params, models[0]));
+    Bytes rebuilt;
+    ASSERT_TRUE(serialize_index(models, params, rebuilt));
+    if (update != nullptr && std::string(update) == "1") {
+      const Status s = write_index(models, params, golden_path(e).string());
+      ASSERT_TRUE(s) << s.message();
+      std::printf("wrote %s (%zu bytes)\n", golden_path(e).string().c_str(), rebuilt.size());
+      continue;
+    }
+    const Bytes golden = read_file(golden_path(e));
+    ASSERT_FALSE(golden.empty()) << "missing; run with KG_UPDATE_GOLDEN=1 to create it";
+    EXPECT_EQ(golden.size(), rebuilt.size());
+    std::size_t first = 0;
+    while (first < golden.size() && first < rebuilt.size() && golden[first] == rebuilt[first])
+      ++first;
+    EXPECT_TRUE(golden == rebuilt)
+        << "the writer no longer reproduces the golden file (first difference at byte " << first
+        << "). If the format or the defaults changed on purpose, regenerate: see the comment "
+           "above this test";
+  }
+}
+
+TEST(Golden, EveryGoldenLoadsAndDetects) {
+  const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+  ASSERT_FALSE(box.empty()) << "box.png missing (install opencv-doc)";
+  std::vector<std::filesystem::path> goldens;
+  std::error_code ec;
+  for (const auto& f : std::filesystem::directory_iterator(golden_dir(), ec)) {
+    const std::string name = f.path().filename().string();
+    if (name.rfind("golden-", 0) == 0 && f.path().extension() == ".kgi")
+      goldens.push_back(f.path());
+  }
+  std::sort(goldens.begin(), goldens.end());
+  ASSERT_GE(goldens.size(), 2u) << "no golden files in " << golden_dir();
+  for (const auto& path : goldens) {
+    SCOPED_TRACE(path.filename().string());
+    ModelIndex index;
+    const Status s = ModelIndex::open(path.string(), index);
+    ASSERT_TRUE(s) << s.message();
+    ASSERT_EQ(index.model_count(), 1);
+    EXPECT_EQ(index.model(0).name, "box_crop");
+    DesktopDetector detector(index);
+    DetectionList found;
+    ASSERT_TRUE(detector.detect(box, found));
+    ASSERT_EQ(found.size(), 1u);
+    EXPECT_EQ(found[0].model_id, 0);
+    const float x0 = static_cast<float>(kGoldenCrop.x), y0 = static_cast<float>(kGoldenCrop.y);
+    const float x1 = x0 + static_cast<float>(kGoldenCrop.width - 1);
+    const float y1 = y0 + static_cast<float>(kGoldenCrop.height - 1);
+    const Point2f want[4] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+    for (int c = 0; c < 4; ++c) {
+      EXPECT_NEAR(found[0].corners[c].x, want[c].x, 3.f) << "corner " << c;
+      EXPECT_NEAR(found[0].corners[c].y, want[c].y, 3.f) << "corner " << c;
+    }
+  }
 }
 
 // --- Corruption -------------------------------------------------------------
@@ -747,13 +1030,26 @@ TEST_F(ModelIndexTest, RejectsTruncation) {
 }
 
 TEST_F(ModelIndexTest, RejectsOtherMajorVersion) {
-  for (std::uint16_t major : {std::uint16_t{0}, std::uint16_t{2}, std::uint16_t{0xFFFF}}) {
+  for (std::uint16_t major :
+       {std::uint16_t{0}, std::uint16_t{1}, std::uint16_t{3}, std::uint16_t{0xFFFF}}) {
     Bytes b = bytes();
     store<std::uint16_t>(b.data() + format::kOffMajor, major);
     fix_header_crc(b);
     EXPECT_TRUE(
         rejected(b, "version " + std::to_string(major) + ".", StatusCode::kUnsupportedVersion));
+    // Older files: rebuild them; newer ones: update the reader.
+    EXPECT_TRUE(rejected(b, major < format::kVersionMajor ? "rebuild the index" : "newer keygraph",
+                         StatusCode::kUnsupportedVersion));
   }
+  // A real 1.1 header (as keygraph 1.1 wrote it) says which version it is.
+  Bytes old = bytes();
+  store<std::uint16_t>(old.data() + format::kOffMajor, 1);
+  store<std::uint16_t>(old.data() + format::kOffMinor, 1);
+  fix_header_crc(old);
+  EXPECT_TRUE(rejected(old,
+                       "index format version 1.1 is not supported (this reader reads 2.x): "
+                       "rebuild the index",
+                       StatusCode::kUnsupportedVersion));
   // A newer minor version of the same major is readable (new sections and
   // parameters are additive).
   Bytes b = bytes();
@@ -798,27 +1094,31 @@ TEST_F(ModelIndexTest, RejectsHeaderDamage) {
   EXPECT_TRUE(rejected(b, "section table out of bounds"));
 }
 
+const char* const kSectionNames[] = {
+    "",          "models",      "strings",    "keypoints",
+    "tree arcs", "descriptors", "tree nodes", "vertex descriptors"};
+
 TEST_F(ModelIndexTest, RejectsFlippedByteInEachSection) {
-  const char* names[] = {"",     "models",      "strings",  "keypoints",
-                         "arcs", "descriptors", "tree ids", "tree nodes"};
-  for (std::uint32_t id = 1; id <= format::kSectionCount; ++id) {
-    ASSERT_GT(section_size(bytes(), id), 0u) << names[id];
+  // The vertex descriptor section is empty here (SIFT tests cover it).
+  for (std::uint32_t id = 1; id < format::kSectionVertexDescriptors; ++id) {
+    const char* name = kSectionNames[id];
+    ASSERT_GT(section_size(bytes(), id), 0u) << name;
     for (std::size_t where :
          {std::size_t{0}, section_size(bytes(), id) / 2, section_size(bytes(), id) - 1}) {
       Bytes b = bytes();
       b[section_offset(b, id) + where] ^= 0x01;
-      EXPECT_TRUE(rejected(b, std::string(names[id]) + " section: checksum mismatch"))
-          << names[id] << " byte " << where;
+      EXPECT_TRUE(rejected(b, std::string(name) + " section: checksum mismatch"))
+          << name << " byte " << where;
     }
   }
 }
 
 TEST_F(ModelIndexTest, RejectsBadSectionTable) {
-  const std::size_t e = entry(bytes(), format::kSectionArcs);
+  const std::size_t e = entry(bytes(), format::kSectionTreeArcs);
   Bytes b = bytes();
   store<std::uint64_t>(b.data() + e + format::kEntOffset, b.size() + 64);
   fix_header_crc(b);
-  EXPECT_TRUE(rejected(b, "arcs section: offset"));
+  EXPECT_TRUE(rejected(b, "tree arcs section: offset"));
   b = bytes();
   store<std::uint64_t>(b.data() + e + format::kEntSize, ~std::uint64_t{0} - 8);
   fix_header_crc(b);
@@ -838,82 +1138,180 @@ TEST_F(ModelIndexTest, RejectsBadSectionTable) {
   store<std::uint32_t>(b.data() + e + format::kEntCount,
                        load<std::uint32_t>(b.data() + e + format::kEntCount) + 1);
   fix_header_crc(b);
+  EXPECT_TRUE(rejected(b, "tree arcs section: size"));
   EXPECT_TRUE(rejected(b, "does not match count"));
-  // Two arcs sections; the tree-nodes section then missing.
+  // Two tree-arcs sections; the tree-nodes section then missing.
   b = bytes();
   store<std::uint32_t>(b.data() + entry(b, format::kSectionTreeNodes) + format::kEntId,
-                       format::kSectionArcs);
+                       format::kSectionTreeArcs);
   fix_header_crc(b);
-  EXPECT_TRUE(rejected(b, "duplicate arcs section"));
+  EXPECT_TRUE(rejected(b, "duplicate tree arcs section"));
   b = bytes();
   store<std::uint32_t>(b.data() + entry(b, format::kSectionTreeNodes) + format::kEntId, 99);
   fix_header_crc(b);
   EXPECT_TRUE(rejected(b, "tree nodes section missing"));
+  // Every section is required, empty ones too.
   b = bytes();
-  store<std::uint32_t>(b.data() + entry(b, format::kSectionDescriptors) + format::kEntEncoding, 3);
+  store<std::uint32_t>(b.data() + entry(b, format::kSectionVertexDescriptors) + format::kEntId, 99);
   fix_header_crc(b);
-  EXPECT_TRUE(rejected(b, "unknown encoding"));
+  EXPECT_TRUE(rejected(b, "vertex descriptors section missing"));
+  // Descriptor and node sections name the parameters' encoding.
+  for (std::uint32_t id : {format::kSectionDescriptors, format::kSectionTreeNodes}) {
+    for (std::uint32_t bad : {0u, 1u, 2u, 3u, 0xFFFFFFFFu}) {
+      if (bad == static_cast<std::uint32_t>(Params{}.descriptor.encoding)) continue;
+      b = bytes();
+      store<std::uint32_t>(b.data() + entry(b, id) + format::kEntEncoding, bad);
+      fix_header_crc(b);
+      EXPECT_TRUE(rejected(b, std::string(kSectionNames[id]) + " section: encoding " +
+                                  std::to_string(bad) + " differs from parameter encoding"));
+    }
+  }
+}
+
+TEST_F(ModelIndexTest, UnknownSectionsAreSkipped) {
+  // A later minor version may add sections: an extra table entry (id 99,
+  // here describing the strings' bytes) fits in the padding before the
+  // first section and is ignored.
+  Bytes b = bytes();
+  const std::size_t end = table_end(b);
+  ASSERT_LE(end + format::kSectionEntrySize, section_offset(b, format::kSectionModels));
+  std::memcpy(b.data() + end, b.data() + entry(b, format::kSectionStrings),
+              format::kSectionEntrySize);
+  store<std::uint32_t>(b.data() + end + format::kEntId, 99);
+  store<std::uint32_t>(b.data() + format::kOffSectionCount,
+                       static_cast<std::uint32_t>(section_count(b) + 1));
+  fix_header_crc(b);
+  AlignedBytes buffer(b);
+  ModelIndex index;
+  const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
+  ASSERT_TRUE(s) << s.message();
+  expect_matches(index, models());
+}
+
+// Offset of tree arc `slot`'s field (0: from, 4: to).
+std::size_t tree_arc(const Bytes& b, std::uint32_t slot, std::size_t field) {
+  return section_offset(b, format::kSectionTreeArcs) + 8 * std::size_t{slot} + field;
 }
 
 TEST_F(ModelIndexTest, RejectsOutOfRangeArcKeypoint) {
-  const std::size_t arcs = section_offset(bytes(), format::kSectionArcs);
   const auto total =
       static_cast<std::uint32_t>(models()[0].keypoints.size() + models()[1].keypoints.size());
+  const auto first_of_1 = static_cast<std::uint32_t>(models()[0].keypoints.size());
   // Past every keypoint.
   Bytes b = bytes();
-  store<std::uint32_t>(b.data() + arcs + 4, total);
+  store<std::uint32_t>(b.data() + tree_arc(b, 0, 4), total);
   reseal(b);
-  EXPECT_TRUE(rejected(b, "arc 0: keypoint ids outside model 0"));
+  EXPECT_TRUE(rejected(b, "tree arc 0: keypoint ids"));
+  EXPECT_TRUE(rejected(b, "invalid (" + std::to_string(total) + " keypoints)"));
   b = bytes();
-  store<std::uint32_t>(b.data() + arcs, 0xFFFFFFFFu);
+  store<std::uint32_t>(b.data() + tree_arc(b, 7, 0), 0xFFFFFFFFu);
   reseal(b);
-  EXPECT_TRUE(rejected(b, "arc 0: keypoint ids outside model 0"));
-  // A valid keypoint, but of another model.
-  const auto first_of_1 = static_cast<std::uint32_t>(models()[0].arcs.size());
+  EXPECT_TRUE(rejected(b, "tree arc 7: keypoint ids 4294967295"));
+  // A valid keypoint, but of the other model than the arc's start.
   b = bytes();
-  store<std::uint32_t>(b.data() + arcs + 8 * first_of_1, 0);
+  const std::uint32_t from = load<std::uint32_t>(b.data() + tree_arc(b, 3, 0));
+  const std::uint32_t owner = from < first_of_1 ? 0 : 1;
+  store<std::uint32_t>(b.data() + tree_arc(b, 3, 4), owner == 0 ? first_of_1 : 0);
   reseal(b);
-  EXPECT_TRUE(rejected(b, "arc " + std::to_string(first_of_1) + ": keypoint ids outside model 1"));
+  EXPECT_TRUE(rejected(b, "tree arc 3: keypoint ids outside model " + std::to_string(owner)));
   // A loop.
   b = bytes();
-  store<std::uint32_t>(b.data() + arcs + 4, load<std::uint32_t>(b.data() + arcs));
+  store<std::uint32_t>(b.data() + tree_arc(b, 0, 4),
+                       load<std::uint32_t>(b.data() + tree_arc(b, 0, 0)));
   reseal(b);
-  EXPECT_TRUE(rejected(b, "arc 0:"));
+  EXPECT_TRUE(rejected(b, "tree arc 0:"));
 }
 
-TEST_F(ModelIndexTest, RejectsOutOfRangeTreeId) {
-  const std::size_t ids = section_offset(bytes(), format::kSectionTreeIds);
-  const auto arcs = static_cast<std::uint32_t>(models()[0].arcs.size() + models()[1].arcs.size());
-  for (std::uint32_t bad : {arcs, arcs + 1, 0xFFFFFFFFu}) {
-    Bytes b = bytes();
-    store<std::uint32_t>(b.data() + ids + 4 * 5, bad);
-    reseal(b);
-    EXPECT_TRUE(rejected(b, "tree ids: slot 5 names arc " + std::to_string(bad)));
-  }
-  const std::size_t nodes = section_offset(bytes(), format::kSectionTreeNodes);
-  Bytes b = bytes();
+TEST_F(ModelIndexTest, RejectsBadTreeNodesAndDescriptors) {
+  // float32: node dimension, split not finite, descriptor not finite.
+  const Bytes& f32 = encoded(DescriptorEncoding::kFloat32);
+  std::size_t nodes = section_offset(f32, format::kSectionTreeNodes);
+  Bytes b = f32;
   store<std::uint32_t>(b.data() + nodes + 4, static_cast<std::uint32_t>(kDescriptorSize));
   reseal(b);
   EXPECT_TRUE(rejected(b, "tree nodes: node 0 has a bad split"));
+  b = f32;
+  store<float>(b.data() + nodes + 8 * 2, std::numeric_limits<float>::infinity());
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "tree nodes: node 2 has a bad split"));
+  b = f32;
+  store<float>(b.data() + section_offset(b, format::kSectionDescriptors) + 24 * 9 + 4,
+               std::nanf(""));
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "descriptor 9: not finite"));
+
+  // int16 and int8: dimension, split and components within [-scale, scale]
+  // (so integer squared distances cannot overflow).
+  for (DescriptorEncoding e : {DescriptorEncoding::kInt16, DescriptorEncoding::kInt8}) {
+    SCOPED_TRACE(encoding_name(e));
+    const Bytes& good = encoded(e);
+    nodes = section_offset(good, format::kSectionTreeNodes);
+    const std::size_t desc = section_offset(good, format::kSectionDescriptors);
+    const auto scale = static_cast<std::int16_t>(encoding_scale(e));
+    b = good;
+    store<std::uint16_t>(b.data() + nodes + 4 * 1 + 2, static_cast<std::uint16_t>(kDescriptorSize));
+    reseal(b);
+    EXPECT_TRUE(rejected(b, "tree nodes: node 1 has a bad split"));
+    for (std::int16_t bad :
+         {static_cast<std::int16_t>(scale + 1), static_cast<std::int16_t>(-scale - 1)}) {
+      if (e == DescriptorEncoding::kInt16 && bad > 0) continue;  // 32768 is not an int16
+      b = good;
+      store<std::int16_t>(b.data() + nodes + 4 * 3, bad);
+      reseal(b);
+      EXPECT_TRUE(rejected(b, "tree nodes: node 3 has a bad split")) << bad;
+    }
+    b = good;
+    if (e == DescriptorEncoding::kInt16) {
+      store<std::int16_t>(b.data() + desc + 12 * 5 + 2, -32768);
+    } else {
+      b[desc + 6 * 5 + 1] = 0x80;  // -128
+    }
+    reseal(b);
+    EXPECT_TRUE(rejected(b, "descriptor 5: not finite or out of range"));
+    // The extremes themselves are valid.
+    b = good;
+    if (e == DescriptorEncoding::kInt16) {
+      store<std::int16_t>(b.data() + desc + 12 * 5 + 2, -32767);
+    } else {
+      b[desc + 6 * 5 + 1] = 0x81;  // -127
+    }
+    reseal(b);
+    EXPECT_TRUE(try_view(b));
+  }
 }
 
 TEST_F(ModelIndexTest, RejectsBadModelRecords) {
-  const std::size_t rec1 =
-      section_offset(bytes(), format::kSectionModels) + format::kModelRecordSize;
+  const std::size_t rec0 = section_offset(bytes(), format::kSectionModels);
+  const std::size_t rec1 = rec0 + format::kModelRecordSize;
   Bytes b = bytes();
   store<std::uint32_t>(b.data() + rec1 + format::kModKeypointBegin,
                        load<std::uint32_t>(b.data() + rec1 + format::kModKeypointBegin) + 1);
   reseal(b);
-  EXPECT_TRUE(rejected(b, "model 1: keypoint or arc range not contiguous"));
+  EXPECT_TRUE(rejected(b, "model 1: keypoint range not contiguous"));
+  b = bytes();
+  store<std::uint32_t>(b.data() + rec1 + format::kModKeypointCount, 0x7FFFFFFFu);
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "model 1: keypoint range out of bounds"));
+  b = bytes();
+  store<std::uint32_t>(b.data() + rec1 + format::kModKeypointCount,
+                       load<std::uint32_t>(b.data() + rec1 + format::kModKeypointCount) - 1);
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "keypoint ranges do not cover"));
+  // Arc counts: their sum is the tree arc count, and each is the number of
+  // arcs starting in the model.
   b = bytes();
   store<std::uint32_t>(b.data() + rec1 + format::kModArcCount, 0x7FFFFFFFu);
   reseal(b);
-  EXPECT_TRUE(rejected(b, "model 1: keypoint or arc range out of bounds"));
+  EXPECT_TRUE(rejected(b, "models section: arc counts add up to"));
   b = bytes();
+  store<std::uint32_t>(b.data() + rec0 + format::kModArcCount,
+                       load<std::uint32_t>(b.data() + rec0 + format::kModArcCount) + 1);
   store<std::uint32_t>(b.data() + rec1 + format::kModArcCount,
                        load<std::uint32_t>(b.data() + rec1 + format::kModArcCount) - 1);
   reseal(b);
-  EXPECT_TRUE(rejected(b, "ranges do not cover"));
+  EXPECT_TRUE(rejected(b, "model 0: arc count " + std::to_string(models()[0].arcs.size() + 1) +
+                              ", but " + std::to_string(models()[0].arcs.size()) +
+                              " arcs start in it"));
   b = bytes();
   store<std::uint32_t>(b.data() + rec1 + format::kModNameLength, 1000);
   reseal(b);
@@ -931,10 +1329,6 @@ TEST_F(ModelIndexTest, RejectsBadModelRecords) {
                std::numeric_limits<float>::infinity());
   reseal(b);
   EXPECT_TRUE(rejected(b, "keypoint 3: not finite"));
-  b = bytes();
-  store<float>(b.data() + section_offset(b, format::kSectionDescriptors) + 4, std::nanf(""));
-  reseal(b);
-  EXPECT_TRUE(rejected(b, "descriptor 0: not finite"));
 }
 
 TEST_F(ModelIndexTest, RejectsBadParameterValues) {
@@ -967,6 +1361,22 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
   b = bytes();
   put_params(b, p);
   EXPECT_TRUE(rejected(b, "parameter max_instances"));
+
+  p = Params{};
+  p.descriptor.encoding = static_cast<DescriptorEncoding>(3);
+  b = bytes();
+  put_params(b, p);
+  EXPECT_TRUE(rejected(b, "parameter encoding is unknown (3)"));
+  // A valid encoding that is not the one the sections hold.
+  for (DescriptorEncoding e : kEncodings) {
+    for (DescriptorEncoding other : kEncodings) {
+      if (other == e) continue;
+      b = encoded(e);
+      put_params(b, with_encoding(other));
+      EXPECT_TRUE(rejected(
+          b, "differs from parameter encoding " + std::to_string(static_cast<int>(other))));
+    }
+  }
 
   b = bytes();
   store<std::uint32_t>(b.data() + format::kOffParamsSize, 16);
