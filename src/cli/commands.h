@@ -17,6 +17,7 @@ int cmd_build(const Args& args);
 int cmd_detect(const Args& args);
 int cmd_demo(const Args& args);
 int cmd_eval(const Args& args);
+int cmd_inspect(const Args& args);
 
 // "keygraph: <message>" on stderr; returns 1.
 int fail(const std::string& message);

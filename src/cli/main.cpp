@@ -103,6 +103,8 @@ void usage(std::FILE* out) {
       "  eval --dataset DIR [--subsets a,b] [--crops N] [--size S] [--centre]\n"
       "       [--seed N] [--set NAME=VALUE]... [--csv FILE]\n"
       "                                    crops of img1 found in img2..6 (Oxford layout)\n"
+      "  inspect I.kgi                     header, parameters, sections (checksums\n"
+      "                                    verified), models and bytes per arc\n"
       "  help                              this text\n");
 }
 
@@ -117,6 +119,7 @@ int run(int argc, char** argv) {
   if (command == "detect") return kg::cli::cmd_detect(args);
   if (command == "demo") return kg::cli::cmd_demo(args);
   if (command == "eval") return kg::cli::cmd_eval(args);
+  if (command == "inspect") return kg::cli::cmd_inspect(args);
   if (command == "help" || command == "--help" || command == "-h") {
     usage(stdout);
     return 0;

@@ -105,6 +105,8 @@ expect_failure "build: --roi outside the image" \
   "$KG" build --roi 0,0,5000,10 "$DATA/box.png" -o "$CASE/out.kgi"
 next_case
 expect_failure "build: unknown option" "$KG" build --bogus "$DATA/box.png" -o "$CASE/out.kgi"
+next_case
+expect_failure "build: bad --encoding" "$KG" build --encoding int4 "$DATA/box.png" -o "$CASE/o.kgi"
 
 # --- a real index (also the positive build check) -----------------------------
 INDEX=$WORK/box.kgi
@@ -155,6 +157,60 @@ next_case
 expect_failure "detect: no scene" "$KG" detect --index "$INDEX"
 next_case
 expect_failure "detect: unknown option" "$KG" detect --index "$INDEX" --bogus "$SCENE"
+
+# --- inspect -----------------------------------------------------------------
+checks=$((checks + 1))
+if "$KG" inspect "$INDEX" >"$LOG/stdout" 2>"$LOG/stderr"; then
+  [ -s "$LOG/stderr" ] && bad "inspect: succeeded but wrote to stderr: $(cat "$LOG/stderr")"
+  grep -Eq '^ +[0-9]+ +box +[0-9]+ +[0-9]+ ' "$LOG/stdout" ||
+    bad "inspect: no model line for 'box' in: $(cat "$LOG/stdout")"
+  # Seven sections, every checksum verified.
+  [ "$(grep -Ec '^ +[0-9]+ .* crc ok$' "$LOG/stdout")" -eq 7 ] ||
+    bad "inspect: expected 7 'crc ok' sections in: $(cat "$LOG/stdout")"
+  grep -q 'crc BAD' "$LOG/stdout" && bad "inspect: a good index shows 'crc BAD'"
+  grep -Eq '^format 2\.[0-9]+, ' "$LOG/stdout" || bad "inspect: no format line"
+  grep -Eq '^  descriptor\.encoding +(float32|int16|int8)$' "$LOG/stdout" ||
+    bad "inspect: parameter descriptor.encoding not shown"
+  grep -Eq '^bytes per arc: [0-9.]+ ' "$LOG/stdout" || bad "inspect: no bytes-per-arc line"
+else
+  bad "inspect of a good index failed: $(cat "$LOG/stderr")"
+fi
+# Each encoding builds, and inspect reports it.
+for enc in float32 int16 int8; do
+  checks=$((checks + 1))
+  if "$KG" build --encoding $enc "$DATA/box.png" -o "$WORK/box-$enc.kgi" >"$LOG/stdout" 2>"$LOG/stderr" &&
+    "$KG" inspect "$WORK/box-$enc.kgi" >"$LOG/stdout" 2>"$LOG/stderr"; then
+    grep -Eq "^  descriptor\.encoding +$enc\$" "$LOG/stdout" ||
+      bad "inspect: --encoding $enc index does not say $enc"
+    grep -Eq "^ +5 +descriptors +$enc " "$LOG/stdout" ||
+      bad "inspect: descriptors section of the $enc index not marked $enc"
+  else
+    bad "build/inspect --encoding $enc failed: $(cat "$LOG/stderr")"
+  fi
+done
+next_case
+size=$(wc -c <"$INDEX" | tr -d ' ')
+cp "$INDEX" "$CASE/corrupt.kgi"
+# Change one byte in the middle of the file (inside a section's payload).
+byte=$(od -An -tu1 -j $((size / 2)) -N1 "$INDEX" | tr -d ' ')
+if [ "$byte" = 85 ]; then new='\252'; else new='\125'; fi
+printf "$new" | dd of="$CASE/corrupt.kgi" bs=1 seek=$((size / 2)) conv=notrunc 2>/dev/null
+cmp -s "$INDEX" "$CASE/corrupt.kgi" && bad "inspect: failed to corrupt the copy"
+expect_failure "inspect: corrupt index" "$KG" inspect "$CASE/corrupt.kgi"
+grep -q 'crc BAD' "$LOG/stdout" || bad "inspect: corrupt index shows no 'crc BAD' section"
+grep -q 'checksum mismatch' "$LOG/stderr" || bad "inspect: corrupt index: $(cat "$LOG/stderr")"
+next_case
+head -c $((size / 2)) "$INDEX" >"$CASE/half.kgi"
+expect_failure "inspect: truncated index" "$KG" inspect "$CASE/half.kgi"
+next_case
+cp "$IN/text.png" "$CASE/index.kgi"
+expect_failure "inspect: text file as index" "$KG" inspect "$CASE/index.kgi"
+next_case
+expect_failure "inspect: missing index" "$KG" inspect "$CASE/missing.kgi"
+next_case
+expect_failure "inspect: no index" "$KG" inspect
+next_case
+expect_failure "inspect: two indexes" "$KG" inspect "$INDEX" "$INDEX"
 
 # --- other commands ---------------------------------------------------------
 next_case

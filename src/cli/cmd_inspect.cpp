@@ -1,0 +1,223 @@
+// keygraph inspect I.kgi
+// Prints the header, every parameter, the section table with each section's
+// checksum verified, per-model counts and sizes, and the bytes per arc.
+// A file the reader rejects exits 1 with the reader's message on one stderr
+// line (after the header and table, when those could be read, so that the
+// damaged section shows as "crc BAD").
+#include <cinttypes>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "cli/commands.h"
+#include "core/crc32.h"
+#include "core/descriptor_encoding.h"
+#include "core/index_format.h"
+#include "keygraph/model_index.h"
+
+namespace kg::cli {
+
+namespace {
+
+using namespace format;
+
+const char* section_name(std::uint32_t id) {
+  switch (id) {
+    case kSectionModels:
+      return "models";
+    case kSectionStrings:
+      return "strings";
+    case kSectionKeypoints:
+      return "keypoints";
+    case kSectionTreeArcs:
+      return "tree arcs";
+    case kSectionDescriptors:
+      return "descriptors";
+    case kSectionTreeNodes:
+      return "tree nodes";
+    case kSectionVertexDescriptors:
+      return "vertex descriptors";
+    default:
+      return "(unknown)";
+  }
+}
+
+std::string value_text(KeypointDetector v) {
+  return v == KeypointDetector::kHessian ? "hessian"
+         : v == KeypointDetector::kMser  ? "mser"
+                                         : std::to_string(static_cast<int>(v));
+}
+std::string value_text(Structure v) {
+  return std::to_string(static_cast<int>(v));
+}
+std::string value_text(SceneSampling v) {
+  return v == SceneSampling::kRandom      ? "random"
+         : v == SceneSampling::kStrongest ? "strongest"
+                                          : std::to_string(static_cast<int>(v));
+}
+std::string value_text(VertexDescriptor v) {
+  return v == VertexDescriptor::kNone   ? "none"
+         : v == VertexDescriptor::kSift ? "sift"
+                                        : std::to_string(static_cast<int>(v));
+}
+std::string value_text(DescriptorEncoding v) {
+  return encoding_name(v);
+}
+// The shortest of %.Ng (N from `digits` up to `max_digits`) that reads back
+// as the same value.
+template <class T>
+std::string shortest(T v, int digits, int max_digits) {
+  char buf[40];
+  for (; digits < max_digits; ++digits) {
+    std::snprintf(buf, sizeof(buf), "%.*g", digits, static_cast<double>(v));
+    if (static_cast<T>(std::strtod(buf, nullptr)) == v) return buf;
+  }
+  std::snprintf(buf, sizeof(buf), "%.*g", max_digits, static_cast<double>(v));
+  return buf;
+}
+std::string value_text(float v) {
+  return shortest(v, 6, 9);
+}
+std::string value_text(double v) {
+  return shortest(v, 15, 17);
+}
+std::string value_text(int v) {
+  return std::to_string(v);
+}
+std::string value_text(std::uint64_t v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "0x%016" PRIx64, v);
+  return buf;
+}
+
+// Header and section table straight from the bytes, each section's CRC
+// checked: what can be shown of a file before (or without) validation.
+// Returns false when not even that can be read.
+bool print_layout(const std::vector<std::uint8_t>& b) {
+  const std::size_t n = b.size();
+  if (n < kHeaderSize || std::memcmp(b.data(), kMagic, sizeof(kMagic)) != 0) return false;
+  const std::uint8_t* d = b.data();
+  const auto table_offset = load<std::uint32_t>(d + kOffTableOffset);
+  const auto section_count = load<std::uint32_t>(d + kOffSectionCount);
+  const std::uint64_t table_end =
+      static_cast<std::uint64_t>(table_offset) + std::uint64_t{section_count} * kSectionEntrySize;
+  if (section_count > 64 || table_offset < kHeaderSize || table_end > n) return false;
+  std::uint8_t zero[4] = {0, 0, 0, 0};
+  std::uint32_t crc = crc32(d, kOffHeaderCrc);
+  crc = crc32(zero, 4, crc);
+  crc = crc32(d + kOffHeaderCrc + 4, static_cast<std::size_t>(table_end) - kOffHeaderCrc - 4, crc);
+  const auto major = load<std::uint16_t>(d + kOffMajor);
+  std::printf("format %u.%u, %zu bytes (header says %" PRIu64 "), header crc %s\n", major,
+              load<std::uint16_t>(d + kOffMinor), n, load<std::uint64_t>(d + kOffFileSize),
+              crc == load<std::uint32_t>(d + kOffHeaderCrc) ? "ok" : "BAD");
+  std::printf("parameter block at %u, %u bytes; section table at %u, %u sections\n",
+              load<std::uint32_t>(d + kOffParamsOffset), load<std::uint32_t>(d + kOffParamsSize),
+              table_offset, section_count);
+  std::printf("\nsections:\n  %2s  %-18s %8s %10s %10s %8s  %s\n", "id", "name", "encoding",
+              "offset", "size", "count", "crc");
+  for (std::uint32_t i = 0; i < section_count; ++i) {
+    const std::uint8_t* e = d + table_offset + std::size_t{i} * kSectionEntrySize;
+    const auto id = load<std::uint32_t>(e + kEntId);
+    const auto encoding = load<std::uint32_t>(e + kEntEncoding);
+    const auto offset = load<std::uint64_t>(e + kEntOffset);
+    const auto size = load<std::uint64_t>(e + kEntSize);
+    const char* check = "out of bounds";
+    if (offset <= n && size <= n - offset)
+      check = crc32(d + offset, static_cast<std::size_t>(size)) == load<std::uint32_t>(e + kEntCrc)
+                  ? "ok"
+                  : "BAD";
+    // Names and encodings as this version defines them.
+    const char* name = major == kVersionMajor ? section_name(id) : "-";
+    std::string enc = "-";
+    if (major == kVersionMajor && (id == kSectionDescriptors || id == kSectionTreeNodes))
+      enc = encoding <= 2 ? encoding_name(static_cast<DescriptorEncoding>(encoding))
+                          : std::to_string(encoding);
+    std::printf("  %2u  %-18s %8s %10" PRIu64 " %10" PRIu64 " %8u  crc %s\n", id, name, enc.c_str(),
+                offset, size, load<std::uint32_t>(e + kEntCount), check);
+  }
+  return true;
+}
+
+void print_index(const ModelIndex& index) {
+  std::printf("\nparameters:\n");
+  visit_params(index.params(), [](const char* name, const auto& value) {
+    std::printf("  %-34s %s\n", name, value_text(value).c_str());
+  });
+
+  const DescriptorEncoding encoding = index.descriptor_encoding();
+  const double descriptor_bytes = static_cast<double>(encoded_descriptor_size(encoding));
+  const double node_bytes =
+      static_cast<double>(index.tree_node_count()) * static_cast<double>(tree_node_size(encoding));
+  const double arcs = index.arc_count();
+  const bool sift = index.vertex_descriptors() != nullptr;
+  const double per_keypoint = 8.0 + (sift ? kVertexDescriptorSize : 0);
+  std::printf(
+      "\nmodels (bytes: record, name, keypoints%s, arcs with descriptors, share of the "
+      "tree nodes):\n",
+      sift ? " with vertex descriptors" : "");
+  std::printf("  %3s  %-20s %9s %9s %12s %12s %9s\n", "#", "name", "keypoints", "arcs", "keygraphs",
+              "bytes", "bytes/arc");
+  for (int m = 0; m < index.model_count(); ++m) {
+    const ModelInfo info = index.model(m);
+    const double bytes = static_cast<double>(kModelRecordSize + info.name.size()) +
+                         per_keypoint * info.keypoint_count +
+                         (8.0 + descriptor_bytes) * info.arc_count +
+                         (arcs > 0 ? node_bytes * info.arc_count / arcs : 0.0);
+    std::printf("  %3d  %-20.*s %9u %9u %12" PRIu64 " %12.0f %9.2f\n", m,
+                static_cast<int>(info.name.size()), info.name.data(), info.keypoint_count,
+                info.arc_count, info.keygraph_count, bytes,
+                info.arc_count > 0 ? bytes / info.arc_count : 0.0);
+  }
+  const double size = static_cast<double>(index.byte_size());
+  std::printf(
+      "\ntotal: %d models, %u keypoints, %u arcs, %u tree nodes (depth %d), %s "
+      "descriptors\n",
+      index.model_count(), index.keypoint_count(), index.arc_count(), index.tree_node_count(),
+      index.tree_depth(), encoding_name(encoding));
+  if (arcs > 0) {
+    std::printf(
+        "bytes per arc: %.2f (file %zu bytes / %u arcs): tree arcs 8, descriptors %.0f, "
+        "tree nodes %.2f, keypoints %.2f, the rest %.2f\n",
+        size / arcs, index.byte_size(), index.arc_count(), descriptor_bytes, node_bytes / arcs,
+        per_keypoint * index.keypoint_count() / arcs,
+        (size - node_bytes - (8.0 + descriptor_bytes) * arcs -
+         per_keypoint * index.keypoint_count()) /
+            arcs);
+  }
+}
+
+}  // namespace
+
+int cmd_inspect(const Args& args) {
+  std::string path;
+  for (const std::string& a : args) {
+    if (!a.empty() && a[0] == '-') return fail("inspect: unknown option " + a);
+    if (!path.empty()) return fail("inspect: one index at a time");
+    path = a;
+  }
+  if (path.empty()) return fail("inspect: no index given (keygraph inspect I.kgi)");
+  // Validation first, through the reader the detector uses (it also rejects
+  // directories and missing files with a clear message).
+  ModelIndex index;
+  const Status status = ModelIndex::open(path, index);
+  std::vector<std::uint8_t> bytes;
+  if (status.code() != StatusCode::kNotFound && status.code() != StatusCode::kInvalidArgument) {
+    std::ifstream in(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  std::printf("index: %s\n", path.c_str());
+  const bool shown = print_layout(bytes);
+  std::fflush(stdout);
+  if (!status) return fail(status.message());
+  if (!shown) return fail(path + ": cannot read the section table");
+  std::printf("mapped: %s\n", index.is_mapped() ? "yes" : "no (read into memory)");
+  print_index(index);
+  return 0;
+}
+
+}  // namespace kg::cli
