@@ -1,0 +1,177 @@
+#include "platform/files/file_source.h"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <filesystem>
+#include <system_error>
+#include <utility>
+
+#if KG_PLATFORM_FILES_OPENCV
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#endif
+
+namespace kg::platform {
+namespace fs = std::filesystem;
+
+namespace {
+
+bool has_image_extension(const fs::path& p) {
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  static const char* const kExtensions[] = {".pgm", ".png",  ".jpg", ".jpeg", ".bmp",
+                                            ".tif", ".tiff", ".ppm", ".pnm",  ".webp"};
+  for (const char* e : kExtensions) {
+    if (ext == e) return true;
+  }
+  return false;
+}
+
+std::uint64_t monotonic_ns() {
+  // steady_clock is CLOCK_MONOTONIC on Linux.
+  return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                        std::chrono::steady_clock::now().time_since_epoch())
+                                        .count());
+}
+
+}  // namespace
+
+struct FileSource::Decoded {
+#if KG_PLATFORM_FILES_OPENCV
+  cv::Mat gray;
+#endif
+};
+
+bool file_source_uses_opencv() {
+  return KG_PLATFORM_FILES_OPENCV != 0;
+}
+
+Status list_image_files(const std::string& dir, std::vector<std::string>& out) {
+  out.clear();
+  std::error_code ec;
+  const fs::file_status st = fs::status(dir, ec);
+  if (st.type() == fs::file_type::not_found) {
+    return {StatusCode::kNotFound, "files: " + dir + ": no such directory"};
+  }
+  if (ec) return {StatusCode::kIoError, "files: " + dir + ": " + ec.message()};
+  if (!fs::is_directory(st)) return {StatusCode::kIoError, "files: " + dir + ": not a directory"};
+  fs::directory_iterator it(dir, ec);
+  if (ec) return {StatusCode::kIoError, "files: " + dir + ": cannot list: " + ec.message()};
+  for (; it != fs::directory_iterator(); it.increment(ec)) {
+    if (ec) break;
+    std::error_code ec2;
+    if (it->is_regular_file(ec2) && has_image_extension(it->path())) {
+      out.push_back(it->path().string());
+    }
+  }
+  if (ec) return {StatusCode::kIoError, "files: " + dir + ": cannot list: " + ec.message()};
+  std::sort(out.begin(), out.end());
+  return Status::ok();
+}
+
+FileSource::FileSource(std::vector<std::string> paths, FileSourceOptions options)
+    : paths_(std::move(paths)), options_(options), decoded_(std::make_unique<Decoded>()) {}
+
+FileSource::~FileSource() = default;
+
+Status FileSource::start() {
+  stop();
+  std::vector<std::string> files;
+  for (const std::string& p : paths_) {
+    std::error_code ec;
+    const fs::file_status st = fs::status(p, ec);
+    if (st.type() == fs::file_type::not_found) {
+      return {StatusCode::kNotFound, "files: " + p + ": no such file or directory"};
+    }
+    if (ec) return {StatusCode::kIoError, "files: " + p + ": " + ec.message()};
+    if (fs::is_directory(st)) {
+      std::vector<std::string> listed;
+      if (Status s = list_image_files(p, listed); !s) return s;
+      files.insert(files.end(), listed.begin(), listed.end());
+    } else {
+      files.push_back(p);
+    }
+  }
+  if (files.empty()) {
+    std::string where;
+    for (const std::string& p : paths_) where += (where.empty() ? "" : ", ") + p;
+    return {StatusCode::kNotFound,
+            "files: no image files in " + (where.empty() ? std::string("(no paths)") : where)};
+  }
+  files_ = std::move(files);
+  position_ = 0;
+  sequence_ = 0;
+  started_ = true;
+  return Status::ok();
+}
+
+Status FileSource::decode(const std::string& path, Frame& out) {
+  if (Status s = read_file(path, bytes_); !s) {
+    return {kBadFrameCode, "files: " + s.message()};
+  }
+  if (is_pgm(bytes_.data(), bytes_.size())) {
+    if (Status s = decode_pgm(bytes_.data(), bytes_.size(), path, gray_); !s) {
+      return {kBadFrameCode, "files: " + s.message()};
+    }
+    out.image = gray_.view();
+    return Status::ok();
+  }
+#if KG_PLATFORM_FILES_OPENCV
+  // imdecode reports most problems with an empty result; some throw.
+  try {
+    const cv::Mat raw(1, static_cast<int>(bytes_.size()), CV_8U, bytes_.data());
+    decoded_->gray = cv::imdecode(raw, cv::IMREAD_GRAYSCALE);
+  } catch (const cv::Exception&) {
+    decoded_->gray.release();
+  }
+  if (decoded_->gray.empty() || decoded_->gray.type() != CV_8UC1) {
+    return {kBadFrameCode, "files: " + path + ": not an image OpenCV can decode"};
+  }
+  const cv::Mat& g = decoded_->gray;
+  out.image = ImageView(g.data, g.cols, g.rows, static_cast<std::ptrdiff_t>(g.step));
+  return Status::ok();
+#else
+  return {kBadFrameCode, "files: " + path +
+                             ": not a binary PGM (P5); this build has no OpenCV imgcodecs, so it "
+                             "reads PGM files only"};
+#endif
+}
+
+Status FileSource::next(Frame& out, int /*timeout_ms*/) {
+  if (!started_) return {StatusCode::kInvalidArgument, "files: next() before start()"};
+  if (position_ >= files_.size()) {
+    if (!options_.loop) {
+      return {kEndOfStreamCode,
+              "files: end of stream after " + std::to_string(files_.size()) + " files"};
+    }
+    position_ = 0;
+  }
+  const std::string& path = files_[position_++];
+  if (Status s = decode(path, out); !s) return s;
+  out.timestamp_ns = monotonic_ns();
+  out.sequence = sequence_++;
+  return Status::ok();
+}
+
+void FileSource::stop() {
+  started_ = false;
+  files_.clear();
+  position_ = 0;
+  bytes_ = {};
+  gray_ = {};
+#if KG_PLATFORM_FILES_OPENCV
+  decoded_->gray.release();
+#endif
+}
+
+std::string FileSource::description() const {
+  std::string d = "files";
+  for (const std::string& p : paths_) d += " " + p;
+  if (started_) d += ": " + std::to_string(files_.size()) + " images";
+  d += file_source_uses_opencv() ? " (decoders: PGM, OpenCV imgcodecs)" : " (decoder: PGM only)";
+  return d;
+}
+
+}  // namespace kg::platform
