@@ -1,0 +1,50 @@
+# Shared part of the Debian cross toolchain files; included by
+# aarch64-linux-gnu.cmake and arm-linux-gnueabihf.cmake after they set:
+#   KG_CROSS_TRIPLE     GNU triple of Debian's cross compiler packages
+#   KG_CROSS_PROCESSOR  CMAKE_SYSTEM_PROCESSOR value
+#   KG_CROSS_ARCH_FLAGS architecture flags for C and C++
+#   KG_CROSS_QEMU       qemu-user binary that runs the target's programs
+#
+# Compilers: /usr/bin/<triple>-gcc and -g++ (apt-get install g++-<triple>).
+# Target headers and libraries: the cross packages' root /usr/<triple>, plus
+# Debian multiarch paths (/usr/lib/<triple>, e.g. from libfoo-dev:arm64).
+# Architecture-independent packages on the host (Eigen's CMake package in
+# /usr/share/eigen3) stay visible; host programs are used as they are.
+set(CMAKE_SYSTEM_NAME Linux)
+set(CMAKE_SYSTEM_PROCESSOR ${KG_CROSS_PROCESSOR})
+set(CMAKE_LIBRARY_ARCHITECTURE ${KG_CROSS_TRIPLE})
+
+set(CMAKE_C_COMPILER /usr/bin/${KG_CROSS_TRIPLE}-gcc)
+set(CMAKE_CXX_COMPILER /usr/bin/${KG_CROSS_TRIPLE}-g++)
+if(NOT EXISTS ${CMAKE_CXX_COMPILER})
+  message(FATAL_ERROR "${CMAKE_CXX_COMPILER} not found: apt-get install g++-${KG_CROSS_TRIPLE}")
+endif()
+
+# *_FLAGS_INIT: the flags every configuration starts from, kept here and out
+# of the project's CMakeLists.txt.
+set(CMAKE_C_FLAGS_INIT "${KG_CROSS_ARCH_FLAGS}")
+set(CMAKE_CXX_FLAGS_INIT "${KG_CROSS_ARCH_FLAGS}")
+
+# Search the target root first; "/" comes second so that multiarch target
+# libraries (/usr/lib/<triple>, found through CMAKE_LIBRARY_ARCHITECTURE) and
+# architecture-independent CMake packages (/usr/share/<name>/cmake) are found,
+# while the host's own libraries in /usr/lib/<host triple> are not searched.
+set(CMAKE_FIND_ROOT_PATH /usr/${KG_CROSS_TRIPLE} /)
+set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
+set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)
+set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)
+set(CMAKE_FIND_ROOT_PATH_MODE_PACKAGE ONLY)
+
+# pkg-config: the target's .pc files only, never the host's (a host
+# libcamera.pc would link x86 libraries into an ARM build).
+set(ENV{PKG_CONFIG_LIBDIR} "/usr/lib/${KG_CROSS_TRIPLE}/pkgconfig:/usr/${KG_CROSS_TRIPLE}/lib/pkgconfig:/usr/share/pkgconfig")
+set(ENV{PKG_CONFIG_PATH} "")
+set(ENV{PKG_CONFIG_SYSROOT_DIR} "")
+
+# Cross-built programs (tests) run under qemu-user when it is installed:
+# CMake uses this for ctest and gtest_discover_tests. -L points the emulator
+# at the target's dynamic loader and libraries.
+find_program(KG_CROSS_QEMU_PROGRAM ${KG_CROSS_QEMU} PATHS /usr/bin NO_CMAKE_FIND_ROOT_PATH)
+if(KG_CROSS_QEMU_PROGRAM)
+  set(CMAKE_CROSSCOMPILING_EMULATOR ${KG_CROSS_QEMU_PROGRAM} -L /usr/${KG_CROSS_TRIPLE})
+endif()
