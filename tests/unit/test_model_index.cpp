@@ -148,6 +148,7 @@ struct Corpus {
   Bytes bytes;                     // serialize_index(models, params): the default encoding
   Bytes encoded[3];                // the same in each encoding (index: DescriptorEncoding)
   Bytes small;                     // two small crops (box.png, graf1.png): for the bit-flip sweep
+  Bytes small_encoded[3];          // the same in each encoding
 };
 
 std::string build(const cv::Mat& gray, const std::string& name, BuiltModel& out) {
@@ -183,6 +184,12 @@ const Corpus& corpus() {
       k.error = build(graf(cv::Rect(350, 250, 80, 80)).clone(), "graf1_small", small[1]);
     if (k.error.empty()) {
       const Status s = serialize_index(small, k.params, k.small);
+      if (!s) k.error = s.message();
+    }
+    for (DescriptorEncoding e : kEncodings) {
+      if (!k.error.empty()) break;
+      const Status s =
+          serialize_index(small, with_encoding(e), k.small_encoded[static_cast<int>(e)]);
       if (!s) k.error = s.message();
     }
     return k;
@@ -1397,61 +1404,125 @@ TEST_F(ModelIndexTest, RejectsUnalignedOrNullBuffer) {
   EXPECT_FALSE(ModelIndex::view(nullptr, bytes().size(), index));
 }
 
-// One bit flipped at thousands of places: every flip inside a checksummed
-// range (header..table, section payloads) must be rejected; a flip in
-// alignment padding (checked by nothing) must load. Nothing may crash or read out of bounds
-// (CI runs this under ASan).
+// One bit flipped at thousands of places, in each encoding: every flip
+// inside a checksummed range (header..table, section payloads) must be
+// rejected; a flip in alignment padding (checked by nothing) must load.
+// Nothing may crash or read out of bounds (CI runs this under ASan).
 TEST_F(ModelIndexTest, BitFlipSweep) {
-  const Bytes& good = corpus().small;
-  const std::size_t n = good.size();
-  std::vector<bool> covered(n, false);
-  for (std::size_t i = 0; i < table_end(good); ++i) covered[i] = true;
-  for (std::uint32_t id = 1; id <= format::kSectionCount; ++id) {
-    const std::size_t off = section_offset(good, id), size = section_size(good, id);
-    for (std::size_t i = off; i < off + size; ++i) covered[i] = true;
-  }
-  std::vector<std::size_t> positions;
-  // Every byte of header, parameters and table (rejected early, so cheap)...
-  for (std::size_t i = 0; i < table_end(good); ++i) positions.push_back(i);
-  // ...and 2000 spread over the whole file, offset so they hit varied bytes.
-  constexpr std::size_t kSpread = 2000;
-  for (std::size_t k = 0; k < kSpread; ++k) positions.push_back((k * n) / kSpread + (k * 7) % 61);
-  // Every padding byte range gets a flip at its start and end.
-  for (std::size_t i = 1; i < n; ++i) {
-    if (covered[i] != covered[i - 1]) {
-      positions.push_back(i - 1);
-      positions.push_back(i);
+  for (DescriptorEncoding e : kEncodings) {
+    SCOPED_TRACE(encoding_name(e));
+    const Bytes& good = corpus().small_encoded[static_cast<int>(e)];
+    const std::size_t n = good.size();
+    std::vector<bool> covered(n, false);
+    for (std::size_t i = 0; i < table_end(good); ++i) covered[i] = true;
+    for (std::uint32_t id = 1; id <= format::kSectionCount; ++id) {
+      const std::size_t off = section_offset(good, id), size = section_size(good, id);
+      for (std::size_t i = off; i < off + size; ++i) covered[i] = true;
     }
-  }
-  positions.push_back(n - 1);
+    std::vector<std::size_t> positions;
+    // Every byte of header, parameters and table (rejected early, so cheap)...
+    for (std::size_t i = 0; i < table_end(good); ++i) positions.push_back(i);
+    // ...and 2000 spread over the whole file, offset so they hit varied bytes.
+    constexpr std::size_t kSpread = 2000;
+    for (std::size_t k = 0; k < kSpread; ++k) positions.push_back((k * n) / kSpread + (k * 7) % 61);
+    // Every padding byte range gets a flip at its start and end.
+    for (std::size_t i = 1; i < n; ++i) {
+      if (covered[i] != covered[i - 1]) {
+        positions.push_back(i - 1);
+        positions.push_back(i);
+      }
+    }
+    positions.push_back(n - 1);
 
-  AlignedBytes scratch(good);  // reused: copying 1 MB per flip would dominate
-  auto* data = const_cast<std::uint8_t*>(scratch.data());
-  int rejected_count = 0, loaded = 0;
-  for (std::size_t k = 0; k < positions.size(); ++k) {
-    const std::size_t at = positions[k] < n ? positions[k] : n - 1;
-    const auto mask = static_cast<std::uint8_t>(1u << (k % 8));
-    data[at] ^= mask;
-    ModelIndex index;
-    const Status s = ModelIndex::view(data, n, index);
-    data[at] ^= mask;
-    if (s) {
-      ++loaded;
-      ASSERT_FALSE(covered[at]) << "flip of bit " << k % 8 << " at checksummed byte " << at
-                                << " was not detected";
-      ASSERT_EQ(index.model_count(), 2);
-    } else {
-      ++rejected_count;
-      ASSERT_FALSE(s.message().empty()) << "byte " << at;
-      ASSERT_TRUE(covered[at]) << "flip at padding byte " << at << " rejected: " << s.message();
+    AlignedBytes scratch(good);  // reused: copying per flip would dominate
+    auto* data = const_cast<std::uint8_t*>(scratch.data());
+    int rejected_count = 0, loaded = 0;
+    for (std::size_t k = 0; k < positions.size(); ++k) {
+      const std::size_t at = positions[k] < n ? positions[k] : n - 1;
+      const auto mask = static_cast<std::uint8_t>(1u << (k % 8));
+      data[at] ^= mask;
+      ModelIndex index;
+      const Status s = ModelIndex::view(data, n, index);
+      data[at] ^= mask;
+      if (s) {
+        ++loaded;
+        ASSERT_FALSE(covered[at]) << "flip of bit " << k % 8 << " at checksummed byte " << at
+                                  << " was not detected";
+        ASSERT_EQ(index.model_count(), 2);
+      } else {
+        ++rejected_count;
+        ASSERT_FALSE(s.message().empty()) << "byte " << at;
+        ASSERT_TRUE(covered[at]) << "flip at padding byte " << at << " rejected: " << s.message();
+      }
     }
+    EXPECT_GT(rejected_count, 2000);
+    std::printf("bit-flip sweep (%s): %zu-byte index, %d flips rejected, %d in padding loaded\n",
+                encoding_name(e), n, rejected_count, loaded);
+    EXPECT_GT(loaded, 0) << "no flip landed in padding; the sweep misses the padding case";
+    // The scratch buffer is back to the original.
+    EXPECT_EQ(0, std::memcmp(data, good.data(), n));
   }
-  EXPECT_GT(rejected_count, 2000);
-  std::printf("bit-flip sweep: %zu-byte index, %d flips rejected, %d in padding loaded\n", n,
-              rejected_count, loaded);
-  EXPECT_GT(loaded, 0) << "no flip landed in padding; the sweep misses the padding case";
-  // The scratch buffer is back to the original.
-  EXPECT_EQ(0, std::memcmp(data, good.data(), n));
+}
+
+// Past the checksums: random bytes written into section payloads with every
+// CRC recomputed, as a hostile file would. The reader's own checks must
+// reject the damage or leave an index that searches and detects without
+// fault (CI runs this under ASan and UBSan).
+TEST_F(ModelIndexTest, ResealedMutationsAreRejectedOrHarmless) {
+  const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+  ASSERT_FALSE(box.empty());
+  std::uint64_t state = 0x9E3779B97F4A7C15ULL;
+  auto next = [&state] {  // xorshift64*: deterministic
+    state ^= state >> 12;
+    state ^= state << 25;
+    state ^= state >> 27;
+    return state * 0x2545F4914F6CDD1DULL;
+  };
+  for (DescriptorEncoding e : kEncodings) {
+    SCOPED_TRACE(encoding_name(e));
+    const Bytes& good = corpus().small_encoded[static_cast<int>(e)];
+    int rejected_count = 0, loaded = 0, detected = 0;
+    for (int k = 0; k < 1500; ++k) {
+      Bytes b = good;
+      // A section with bytes (1..6: models to tree nodes), a byte in it.
+      const auto id = static_cast<std::uint32_t>(1 + next() % 6);
+      const std::size_t size = section_size(b, id);
+      if (size == 0) continue;
+      const std::size_t at = section_offset(b, id) + next() % size;
+      const auto value = static_cast<std::uint8_t>(next());
+      if (b[at] == value) continue;
+      b[at] = value;
+      reseal(b);
+      AlignedBytes buffer(b);
+      ModelIndex index;
+      const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
+      if (!s) {
+        ++rejected_count;
+        ASSERT_FALSE(s.message().empty());
+        continue;
+      }
+      ++loaded;
+      // Search with real descriptors; every slot returned indexes the arcs.
+      const ArcSearch search(index);
+      std::uint32_t out[512];
+      for (std::size_t q = 0; q < models()[0].descriptors.size(); q += 997) {
+        const std::uint32_t found = search.radius_search(models()[0].descriptors[q], out, 512);
+        for (std::uint32_t i = 0; i < std::min<std::uint32_t>(found, 512); ++i)
+          ASSERT_LT(out[i], index.arc_count());
+      }
+      // And a full detection now and then (the slow part).
+      if (loaded % 20 == 1) {
+        DesktopDetector detector(index);
+        DetectionList found;
+        ASSERT_TRUE(detector.detect(box, found));
+        ++detected;
+      }
+    }
+    std::printf("resealed mutations (%s): %d rejected, %d loaded (%d detections run)\n",
+                encoding_name(e), rejected_count, loaded, detected);
+    EXPECT_GT(rejected_count, 0);
+    EXPECT_GT(loaded, 0);
+  }
 }
 
 }  // namespace
