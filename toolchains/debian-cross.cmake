@@ -21,9 +21,11 @@ if(NOT EXISTS ${CMAKE_CXX_COMPILER})
 endif()
 
 # *_FLAGS_INIT: the flags every configuration starts from, kept here and out
-# of the project's CMakeLists.txt.
-set(CMAKE_C_FLAGS_INIT "${KG_CROSS_ARCH_FLAGS}")
-set(CMAKE_CXX_FLAGS_INIT "${KG_CROSS_ARCH_FLAGS}")
+# of the project's CMakeLists.txt. -Wno-psabi silences GCC's notes that the
+# ABI for passing some types changed in GCC 7.1 (armhf) and 10.1 (aarch64):
+# everything in a build comes from the same GCC 12.
+set(CMAKE_C_FLAGS_INIT "${KG_CROSS_ARCH_FLAGS} -Wno-psabi")
+set(CMAKE_CXX_FLAGS_INIT "${KG_CROSS_ARCH_FLAGS} -Wno-psabi")
 
 # Search the target root first; "/" comes second so that multiarch target
 # libraries (/usr/lib/<triple>, found through CMAKE_LIBRARY_ARCHITECTURE) and
