@@ -119,6 +119,24 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
   begin_[e] = static_cast<std::uint32_t>(pool_.size());
   count_[e] = 0;
   count = 0;
+  // The reverse arc b -> a was looked up already: model arcs similar to it
+  // are, reversed, the ones similar to a -> b (reversing a profile maps its
+  // descriptor by x -> e^{2 pi i x / l} conj(F(x)), a Euclidean isometry,
+  // and the model holds both directions of every arc), so reuse them
+  // instead of describing and searching again. Only arcs within one
+  // quantisation step of the threshold can differ.
+  const int opposite = in.triangulation->halfedges()[e];
+  if (opposite >= 0 && state_[opposite] == kLooked) {
+    const std::uint32_t from = begin_[opposite], n = count_[opposite];
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const std::uint64_t k = pool_[from + i];
+      pool_.push_back(key(to_of(k), from_of(k)));
+    }
+    std::sort(pool_.begin() + begin_[e], pool_.end());
+    count_[e] = n;
+    count = n;
+    return;
+  }
   const std::vector<int>& tri = in.triangulation->triangles();
   const Point2f a = in.scene_points[tri[e]];
   const Point2f b = in.scene_points[tri[Delaunay::next(e)]];
