@@ -67,7 +67,7 @@ TEST(LibcameraSource, UnknownCameraIdIsNotFound) {
 TEST(LibcameraSource, FirstCameraWhenThereIsNone) {
   std::vector<std::string> ids;
   ASSERT_TRUE(list_libcamera_cameras(ids));
-  if (!ids.empty()) GTEST_SKIP() << "this machine has a camera; the no-camera error is not checked";
+  if (!ids.empty()) GTEST_SKIP() << "camera present: the no camera device error is not checked";
   LibcameraSource src(LibcameraOptions{});
   const Status s = src.start();
   EXPECT_EQ(s.code(), StatusCode::kNotFound);
