@@ -25,21 +25,39 @@ std::string errno_text(int negative_errno) {
 }
 
 // libcamera allows one CameraManager per process (a second one is a fatal
-// error inside libcamera), so every source shares this one. The deleter
-// holds the mutex, so a new manager is never built while the last one is
-// still being destroyed on another thread.
-std::recursive_mutex g_manager_mutex;
+// error inside libcamera), so every source shares this one. A weak_ptr
+// expires before its deleter runs, so the last owner may still be
+// destroying the manager on another thread when the next one is wanted:
+// `g_manager_alive` stays true until the destructor has returned, and a new
+// manager waits for it.
+std::mutex g_manager_mutex;
+std::condition_variable g_manager_destroyed;
 std::weak_ptr<lc::CameraManager> g_manager;
+bool g_manager_alive = false;
+
+void destroy_manager(lc::CameraManager* manager) {
+  delete manager;  // stops the manager; no new one starts meanwhile
+  {
+    std::lock_guard<std::mutex> lock(g_manager_mutex);
+    g_manager_alive = false;
+  }
+  g_manager_destroyed.notify_all();
+}
 
 Status acquire_manager(std::shared_ptr<lc::CameraManager>& out) {
-  std::lock_guard<std::recursive_mutex> lock(g_manager_mutex);
-  out = g_manager.lock();
-  if (out) return Status::ok();
-  std::shared_ptr<lc::CameraManager> manager(new lc::CameraManager, [](lc::CameraManager* m) {
-    std::lock_guard<std::recursive_mutex> deleter_lock(g_manager_mutex);
-    delete m;  // stops the manager
-  });
+  out.reset();  // outside the lock: it may run the deleter
+  std::unique_lock<std::mutex> lock(g_manager_mutex);
+  for (;;) {
+    out = g_manager.lock();
+    if (out) return Status::ok();
+    if (!g_manager_alive) break;
+    g_manager_destroyed.wait(lock);
+  }
+  g_manager_alive = true;
+  std::shared_ptr<lc::CameraManager> manager(new lc::CameraManager, destroy_manager);
   if (const int r = manager->start(); r < 0) {
+    lock.unlock();  // the deleter takes the lock
+    manager.reset();
     return {StatusCode::kIoError,
             "libcamera: the camera manager failed to start: " + errno_text(r)};
   }
