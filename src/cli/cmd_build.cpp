@@ -1,8 +1,9 @@
 // keygraph build [--name NAME]... [--detector hessian|mser] [--structure 2|3|4]
 //                [--vertex-descriptor none|sift] [--encoding float32|int16|int8]
 //                [--roi X,Y,W,H] MODEL... -o OUT.kgi
-// --roi applies to the model image that follows it: the model is that
-// rectangle of the image (model pixel (0,0) is image pixel (X,Y)).
+// --name and --roi apply to the model image that follows them: --roi makes
+// the model that rectangle of the image (model pixel (0,0) is image pixel
+// (X,Y)); without --name the model is named after the file's stem.
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -32,6 +33,7 @@ int cmd_build(const Args& args) {
   std::vector<std::string> names, paths;
   std::vector<std::optional<cv::Rect>> rois;
   std::optional<cv::Rect> pending_roi;
+  std::optional<std::string> pending_name;
   std::string output;
   Params params;
   for (std::size_t i = 0; i < args.size(); ++i) {
@@ -42,7 +44,8 @@ int cmd_build(const Args& args) {
       if (!has_value) return fail("build: " + a + " needs a value");
       const std::string& v = args[++i];
       if (a == "--name") {
-        names.push_back(v);
+        if (pending_name) return fail("build: two --name options for one model image");
+        pending_name = v;
       } else if (a == "--roi") {
         cv::Rect roi;
         if (!parse_roi(v, roi)) return fail("build: --roi takes X,Y,W,H (pixels), got '" + v + "'");
@@ -78,18 +81,19 @@ int cmd_build(const Args& args) {
       paths.push_back(a);
       rois.push_back(pending_roi);
       pending_roi.reset();
+      names.push_back(pending_name ? *pending_name : std::filesystem::path(a).stem().string());
+      pending_name.reset();
     }
   }
   if (pending_roi) return fail("build: --roi must come before the model image it applies to");
+  if (pending_name) return fail("build: --name must come before the model image it applies to");
   if (paths.empty()) return fail("build: no model images given");
   if (output.empty()) return fail("build: no output given (-o OUT.kgi)");
-  if (names.size() > paths.size()) return fail("build: more --name options than model images");
 
   std::vector<BuiltModel> models;
   std::set<std::string> seen;
   for (std::size_t i = 0; i < paths.size(); ++i) {
-    const std::string name =
-        i < names.size() ? names[i] : std::filesystem::path(paths[i]).stem().string();
+    const std::string& name = names[i];
     if (name.empty()) return fail("build: empty model name for " + paths[i]);
     if (!seen.insert(name).second) return fail("build: duplicate model name '" + name + "'");
     cv::Mat gray;

@@ -107,6 +107,12 @@ next_case
 expect_failure "build: unknown option" "$KG" build --bogus "$DATA/box.png" -o "$CASE/out.kgi"
 next_case
 expect_failure "build: bad --encoding" "$KG" build --encoding int4 "$DATA/box.png" -o "$CASE/o.kgi"
+next_case
+expect_failure "build: --name after the last image" \
+  "$KG" build "$DATA/box.png" --name late -o "$CASE/out.kgi"
+next_case
+expect_failure "build: two --name for one image" \
+  "$KG" build --name a --name b "$DATA/box.png" -o "$CASE/out.kgi"
 
 # --- a real index (also the positive build check) -----------------------------
 INDEX=$WORK/box.kgi
@@ -121,6 +127,16 @@ else
   bad "build box.png failed: $(cat "$LOG/stderr")"
 fi
 [ -s "$INDEX" ] || die "no index to continue with ($failures failure(s) so far)"
+
+# --name and --roi name the image that follows them; others keep their stem.
+checks=$((checks + 1))
+if "$KG" build "$DATA/box.png" --name crop --roi 10,10,200,200 "$DATA/box.png" \
+  -o "$WORK/named.kgi" >"$LOG/stdout" 2>"$LOG/stderr"; then
+  names=$(sed -n 's/^\([a-z]*\): [0-9]* keypoints.*/\1/p' "$LOG/stdout" | tr '\n' ' ')
+  [ "$names" = "box crop " ] || bad "build: model names '$names', expected 'box crop '"
+else
+  bad "build with --name before the second image failed: $(cat "$LOG/stderr")"
+fi
 
 # --- detect failures --------------------------------------------------------
 SCENE=$DATA/box_in_scene.png
