@@ -14,10 +14,8 @@ namespace kg {
 // (format::validate_params). Unknown names and unparsable values are errors.
 Status apply_param_override(const std::string& assignment, Params& params);
 
-// "float32", "int16" or "int8" (DescriptorParams::encoding); false otherwise.
-bool parse_descriptor_encoding(const std::string& text, DescriptorEncoding& out);
-
-// Names accepted by apply_param_override, for help texts.
+// Names accepted by apply_param_override (every stored parameter, in file
+// order), for help texts.
 std::vector<std::string> param_names();
 
 }  // namespace kg

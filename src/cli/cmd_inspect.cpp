@@ -18,6 +18,7 @@
 #include "core/crc32.h"
 #include "core/descriptor_encoding.h"
 #include "core/index_format.h"
+#include "core/param_names.h"
 #include "keygraph/model_index.h"
 
 namespace kg::cli {
@@ -26,47 +27,10 @@ namespace {
 
 using namespace format;
 
-const char* section_name(std::uint32_t id) {
-  switch (id) {
-    case kSectionModels:
-      return "models";
-    case kSectionStrings:
-      return "strings";
-    case kSectionKeypoints:
-      return "keypoints";
-    case kSectionTreeArcs:
-      return "tree arcs";
-    case kSectionDescriptors:
-      return "descriptors";
-    case kSectionTreeNodes:
-      return "tree nodes";
-    case kSectionVertexDescriptors:
-      return "vertex descriptors";
-    default:
-      return "(unknown)";
-  }
-}
-
-std::string value_text(KeypointDetector v) {
-  return v == KeypointDetector::kHessian ? "hessian"
-         : v == KeypointDetector::kMser  ? "mser"
-                                         : std::to_string(static_cast<int>(v));
-}
-std::string value_text(Structure v) {
-  return std::to_string(static_cast<int>(v));
-}
-std::string value_text(SceneSampling v) {
-  return v == SceneSampling::kRandom      ? "random"
-         : v == SceneSampling::kStrongest ? "strongest"
-                                          : std::to_string(static_cast<int>(v));
-}
-std::string value_text(VertexDescriptor v) {
-  return v == VertexDescriptor::kNone   ? "none"
-         : v == VertexDescriptor::kSift ? "sift"
-                                        : std::to_string(static_cast<int>(v));
-}
-std::string value_text(DescriptorEncoding v) {
-  return encoding_name(v);
+template <class E, class = std::enable_if_t<std::is_enum_v<E>>>
+std::string value_text(E v) {
+  const char* name = enum_name(v);
+  return name != nullptr ? name : std::to_string(static_cast<int>(v));
 }
 // The shortest of %.Ng (N from `digits` up to `max_digits`) that reads back
 // as the same value.

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "core/param_names.h"
 #include "keygraph/params.h"
 #include "keygraph/types.h"
 
@@ -28,15 +29,8 @@ inline constexpr std::size_t encoded_descriptor_size(DescriptorEncoding e) {
 }
 
 inline const char* encoding_name(DescriptorEncoding e) {
-  switch (e) {
-    case DescriptorEncoding::kFloat32:
-      return "float32";
-    case DescriptorEncoding::kInt16:
-      return "int16";
-    case DescriptorEncoding::kInt8:
-      return "int8";
-  }
-  return "unknown";
+  const char* name = enum_name(e);
+  return name != nullptr ? name : "unknown";
 }
 
 // round(v * scale), saturated to [-scale, scale]; NaN gives 0. Rounding is
