@@ -1,6 +1,6 @@
 // keygraph build [--name NAME]... [--detector hessian|mser] [--structure 2|3|4]
 //                [--vertex-descriptor none|sift] [--encoding float32|int16|int8]
-//                [--roi X,Y,W,H] MODEL... -o OUT.kgi
+//                [--roi X,Y,W,H] [--set NAME=VALUE]... MODEL... -o OUT.kgi
 // --name and --roi apply to the model image that follows them: --roi makes
 // the model that rectangle of the image (model pixel (0,0) is image pixel
 // (X,Y)); without --name the model is named after the file's stem.
@@ -14,6 +14,7 @@
 #include "build/model_builder.h"
 #include "build/param_overrides.h"
 #include "cli/commands.h"
+#include "core/param_names.h"
 
 namespace kg::cli {
 
@@ -40,7 +41,7 @@ int cmd_build(const Args& args) {
     const std::string& a = args[i];
     const bool has_value = i + 1 < args.size();
     if (a == "--name" || a == "-o" || a == "--output" || a == "--detector" || a == "--structure" ||
-        a == "--vertex-descriptor" || a == "--encoding" || a == "--roi") {
+        a == "--vertex-descriptor" || a == "--encoding" || a == "--roi" || a == "--set") {
       if (!has_value) return fail("build: " + a + " needs a value");
       const std::string& v = args[++i];
       if (a == "--name") {
@@ -67,8 +68,10 @@ int cmd_build(const Args& args) {
           return fail("build: unknown vertex descriptor '" + v + "' (none or sift)");
         }
       } else if (a == "--encoding") {
-        if (!parse_descriptor_encoding(v, params.descriptor.encoding))
+        if (!parse_enum(v.c_str(), params.descriptor.encoding))
           return fail("build: unknown encoding '" + v + "' (float32, int16 or int8)");
+      } else if (a == "--set") {
+        if (Status s = apply_param_override(v, params); !s) return fail("build: " + s.message());
       } else if (a == "--structure") {
         if (v != "2" && v != "3" && v != "4") return fail("build: --structure takes 2, 3 or 4");
         params.graph.structure = static_cast<Structure>(v[0] - '0');
