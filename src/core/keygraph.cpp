@@ -1,5 +1,7 @@
 #include "core/keygraph.h"
 
+#include <algorithm>
+
 namespace kg {
 
 bool is_clockwise_circuit(const Point2f* v, int k) {
@@ -73,6 +75,10 @@ void scene_keygraphs(const Delaunay& dt, const Point2f* points, Structure struct
 
 std::uint64_t count_model_keygraphs(const Point2f* p, int n, const std::uint32_t* offsets,
                                     const std::uint32_t* to, const GraphParams& params) {
+  // Arcs leaving each keypoint are sorted by target.
+  auto has_arc = [&](std::uint32_t from, std::uint32_t target) {
+    return std::binary_search(to + offsets[from], to + offsets[from + 1], target);
+  };
   std::uint64_t count = 0;
   const int k = vertex_count(params.structure);
   for (int a = 0; a < n; ++a) {
@@ -86,13 +92,13 @@ std::uint64_t count_model_keygraphs(const Point2f* p, int n, const std::uint32_t
         const std::uint32_t c = to[j];
         if (c == static_cast<std::uint32_t>(a) || !(orient(p[a], p[b], p[c]) > 0.f)) continue;
         if (k == 3) {
-          if (is_model_arc(p[c], p[a], params)) ++count;
+          if (has_arc(c, static_cast<std::uint32_t>(a))) ++count;
           continue;
         }
         for (std::uint32_t l = offsets[c]; l < offsets[c + 1]; ++l) {
           const std::uint32_t d = to[l];
           if (d == static_cast<std::uint32_t>(a) || d == b) continue;
-          if (!is_model_arc(p[d], p[a], params)) continue;
+          if (!has_arc(d, static_cast<std::uint32_t>(a))) continue;
           const Point2f q[4] = {p[a], p[b], p[c], p[d]};
           if (is_clockwise_circuit(q, 4)) ++count;
         }

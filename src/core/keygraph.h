@@ -59,8 +59,9 @@ struct SceneKeygraph {
 void scene_keygraphs(const Delaunay& dt, const Point2f* points, Structure structure,
                      std::vector<SceneKeygraph>& out);
 
-// Number of model keygraphs of one model (exhaustive count, for reports).
-// Model arcs from keypoint a are to[offsets[a] .. offsets[a + 1]) (local ids).
+// Number of model keygraphs of one model (for reports): circuits whose arcs
+// are all model arcs. Model arcs from keypoint a are to[offsets[a] ..
+// offsets[a + 1]) (local ids), sorted.
 std::uint64_t count_model_keygraphs(const Point2f* points, int n, const std::uint32_t* offsets,
                                     const std::uint32_t* to, const GraphParams& params);
 
