@@ -82,6 +82,9 @@ class ModelIndex {
 
   std::uint32_t keypoint_count() const { return keypoint_count_; }
   const Point2f* keypoints() const { return keypoints_; }
+  // Detector scale (sigma in model pixels, 0 when unknown) per keypoint;
+  // nullptr for format 2.0 indexes, which do not store them.
+  const float* keypoint_scales() const { return keypoint_scales_; }
   // Arcs in search-tree order: arcs()[slot] is the arc whose descriptor is
   // in tree slot `slot`, so a tree query's slots index this array directly.
   std::uint32_t arc_count() const { return arc_count_; }
@@ -143,6 +146,7 @@ class ModelIndex {
   std::uint32_t tree_node_count_ = 0;
   int tree_depth_ = 0;
   const std::uint8_t* vertex_descriptors_ = nullptr;
+  const float* keypoint_scales_ = nullptr;
 };
 
 }  // namespace kg

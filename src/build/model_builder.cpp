@@ -189,6 +189,7 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
   std::vector<std::uint8_t> records(models.size() * kModelRecordSize, 0);
   std::string strings;
   std::vector<Point2f> keypoints;
+  std::vector<float> keypoint_scales;
   std::vector<ModelArc> arcs;
   std::vector<ArcDescriptor> descriptors;
   std::vector<std::uint8_t> vertex_descriptors;
@@ -202,6 +203,8 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
               model.name +
                   ": no vertex descriptors for every keypoint (build the model with "
                   "the parameters of the index)"};
+    if (model.keypoint_scales.size() != model.keypoints.size())
+      return {StatusCode::kInvalidArgument, model.name + ": one scale per keypoint expected"};
     if (model.descriptors.size() != model.arcs.size())
       return {StatusCode::kInvalidArgument, model.name + ": one descriptor per arc expected"};
     std::uint8_t* r = records.data() + m * kModelRecordSize;
@@ -221,6 +224,8 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
     for (int c = 0; c < 8; ++c) store<float>(r + kModOutline + 4 * c, outline[c]);
     strings += model.name;
     keypoints.insert(keypoints.end(), model.keypoints.begin(), model.keypoints.end());
+    keypoint_scales.insert(keypoint_scales.end(), model.keypoint_scales.begin(),
+                           model.keypoint_scales.end());
     for (const ModelArc& a : model.arcs) arcs.push_back({a.from + kp_begin, a.to + kp_begin});
     descriptors.insert(descriptors.end(), model.descriptors.begin(), model.descriptors.end());
     if (with_vertex)
@@ -266,6 +271,8 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
        static_cast<std::uint32_t>(tree_nodes.size() / tree_node_size(encoding))},
       {kSectionVertexDescriptors, 0, vertex_descriptors.data(), vertex_descriptors.size(),
        static_cast<std::uint32_t>(vertex_descriptors.size() / kVertexDescriptorSize)},
+      {kSectionKeypointScales, 0, keypoint_scales.data(), keypoint_scales.size() * sizeof(float),
+       static_cast<std::uint32_t>(keypoint_scales.size())},
   };
   const std::size_t params_offset = kHeaderSize;
   const std::size_t table_offset = params_offset + kParamsSize;

@@ -60,6 +60,7 @@ struct Detector::Impl {
   std::vector<int> selected;
   std::vector<Keypoint> scene_keypoints;
   std::vector<Point2f> scene_points;
+  std::vector<float> scene_scales;
   Delaunay triangulation;
   std::vector<SceneKeygraph> keygraphs;
   Selector selector;
@@ -194,9 +195,11 @@ Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count
   }
   scene_keypoints.clear();
   scene_points.clear();
+  scene_scales.clear();
   for (int i : selected) {
     scene_keypoints.push_back(keypoints[i]);
     scene_points.push_back({keypoints[i].x, keypoints[i].y});
+    scene_scales.push_back(keypoints[i].scale);
   }
   stats.sampled_keypoints = static_cast<int>(scene_points.size());
   if (descriptors != nullptr) {
@@ -226,6 +229,7 @@ Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count
   in.search = &search;
   in.blurred = view_of(blurred);
   in.scene_points = scene_points.data();
+  in.scene_scales = scene_scales.data();
   in.triangulation = &triangulation;
   in.keygraphs = &keygraphs;
   if (descriptors != nullptr) {

@@ -30,6 +30,29 @@ Status bad(const std::string& field, const std::string& why) {
 
 }  // namespace
 
+const char* section_name(std::uint32_t id) {
+  switch (id) {
+    case kSectionModels:
+      return "models";
+    case kSectionStrings:
+      return "strings";
+    case kSectionKeypoints:
+      return "keypoints";
+    case kSectionTreeArcs:
+      return "tree arcs";
+    case kSectionDescriptors:
+      return "descriptors";
+    case kSectionTreeNodes:
+      return "tree nodes";
+    case kSectionVertexDescriptors:
+      return "vertex descriptors";
+    case kSectionKeypointScales:
+      return "keypoint scales";
+    default:
+      return "(unknown)";
+  }
+}
+
 void serialize_params(const Params& params, std::uint8_t* out) {
   std::memset(out, 0, kParamsSize);
   std::size_t at = 0;
@@ -69,6 +92,9 @@ Status validate_params(const Params& p) {
   const int k = static_cast<int>(p.graph.structure);
   if (k < 2 || k > 4) return bad("structure", "must have 2, 3 or 4 vertices");
   if (static_cast<unsigned>(p.graph.scene_sampling) > 1) return bad("scene_sampling", "is unknown");
+  if (!(std::isfinite(p.graph.max_scale_error) && p.graph.max_scale_error >= 0.f &&
+        p.graph.max_scale_error <= 10.f))
+    return bad("max_scale_error", "must be in [0, 10]");
   if (!(std::isfinite(p.keypoints.hessian_threshold) && p.keypoints.hessian_threshold >= 0.f))
     return bad("hessian_threshold", "must be >= 0");
   if (p.keypoints.hessian_octaves < 1 || p.keypoints.hessian_octaves > 8)

@@ -43,27 +43,6 @@ struct Section {
   bool present = false;
 };
 
-const char* section_name(std::uint32_t id) {
-  switch (id) {
-    case kSectionModels:
-      return "models";
-    case kSectionStrings:
-      return "strings";
-    case kSectionKeypoints:
-      return "keypoints";
-    case kSectionTreeArcs:
-      return "tree arcs";
-    case kSectionDescriptors:
-      return "descriptors";
-    case kSectionTreeNodes:
-      return "tree nodes";
-    case kSectionVertexDescriptors:
-      return "vertex descriptors";
-    default:
-      return "unknown";
-  }
-}
-
 bool host_is_little_endian() {
   const std::uint16_t one = 1;
   std::uint8_t first;
@@ -256,7 +235,7 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
     if (crc32(d + sec.offset, static_cast<std::size_t>(sec.size)) != sec.crc)
       return corrupt(std::string(name) + " section: checksum mismatch");
   }
-  for (std::uint32_t id = 1; id <= kSectionCount; ++id) {
+  for (std::uint32_t id = 1; id <= required_sections(minor); ++id) {
     if (!sections[id].present) return corrupt(std::string(section_name(id)) + " section missing");
   }
   auto expect_size = [&](std::uint32_t id, std::uint64_t element) -> Status {
@@ -274,6 +253,7 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   const Section& descriptors = sections[kSectionDescriptors];
   const Section& nodes = sections[kSectionTreeNodes];
   const Section& vertex = sections[kSectionVertexDescriptors];
+  const Section& scales = sections[kSectionKeypointScales];
   // The descriptor and node sections name the encoding the parameters name.
   for (const std::uint32_t id : {kSectionDescriptors, kSectionTreeNodes}) {
     if (sections[id].encoding != static_cast<std::uint32_t>(encoding))
@@ -289,6 +269,12 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   if (!(s = expect_size(kSectionDescriptors, encoded_descriptor_size(encoding)))) return s;
   if (!(s = expect_size(kSectionTreeNodes, tree_node_size(encoding)))) return s;
   if (!(s = expect_size(kSectionVertexDescriptors, kVertexDescriptorSize))) return s;
+  if (scales.present) {
+    if (!(s = expect_size(kSectionKeypointScales, sizeof(float)))) return s;
+    if (scales.count != keypoints.count)
+      return corrupt("keypoint scales section: count " + std::to_string(scales.count) +
+                     ", expected " + std::to_string(keypoints.count) + " (one per keypoint)");
+  }
   if (models.count == 0) return corrupt("models section: no models");
   // One vertex descriptor per keypoint exactly when the parameters ask for them.
   const bool want_vertex = params_.descriptor.vertex_descriptor != VertexDescriptor::kNone;
@@ -343,6 +329,13 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   for (std::uint32_t i = 0; i < keypoints.count; ++i) {
     if (!std::isfinite(kp[i].x) || !std::isfinite(kp[i].y))
       return corrupt("keypoint " + std::to_string(i) + ": not finite");
+  }
+  // Scales: finite and >= 0 (0: unknown, e.g. MSER centroids).
+  const float* kp_scales =
+      scales.present ? reinterpret_cast<const float*>(d + scales.offset) : nullptr;
+  for (std::uint32_t i = 0; kp_scales != nullptr && i < keypoints.count; ++i) {
+    if (!(std::isfinite(kp_scales[i]) && kp_scales[i] >= 0.f && kp_scales[i] < 1e6f))
+      return corrupt("keypoint " + std::to_string(i) + ": scale not finite or negative");
   }
   // These are needed by model_of_keypoint() below.
   models_ = d + models.offset;
@@ -443,6 +436,7 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   tree_node_count_ = nodes.count;
   tree_depth_ = depth;
   vertex_descriptors_ = vertex.count > 0 ? d + vertex.offset : nullptr;
+  keypoint_scales_ = kp_scales;
   return Status::ok();
 }
 

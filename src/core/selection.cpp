@@ -152,11 +152,38 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
   stats.arc_matches += total;
   const std::uint32_t n = std::min(total, cap);
   const ModelArc* arcs = in.index->arcs();
-  for (std::uint32_t i = 0; i < n; ++i)
-    pool_.push_back(key(arcs[found_[i]].from, arcs[found_[i]].to));
+  const float* model_scales = in.index->keypoint_scales();
+  const float max_error = params.graph.max_scale_error;
+  const float scale_a = in.scene_scales != nullptr ? in.scene_scales[tri[e]] : 0.f;
+  const float scale_b = in.scene_scales != nullptr ? in.scene_scales[tri[Delaunay::next(e)]] : 0.f;
+  if (max_error > 0.f && model_scales != nullptr && scale_a > 0.f && scale_b > 0.f) {
+    // Scale change implied by the lengths against the one the keypoints'
+    // scales imply, at each end, compared squared: no square roots or logs.
+    const float lo = std::exp(-2.f * max_error), hi = std::exp(2.f * max_error);
+    const float scene_length2 = (b.x - a.x) * (b.x - a.x) + (b.y - a.y) * (b.y - a.y);
+    const float inv_a2 = 1.f / (scale_a * scale_a), inv_b2 = 1.f / (scale_b * scale_b);
+    const Point2f* model_points = in.index->keypoints();
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const ModelArc& arc = arcs[found_[i]];
+      const float sf = model_scales[arc.from], st = model_scales[arc.to];
+      const Point2f p = model_points[arc.from], q = model_points[arc.to];
+      const float model_length2 = (q.x - p.x) * (q.x - p.x) + (q.y - p.y) * (q.y - p.y);
+      // (scene / model length)^2 / (scene / model sigma)^2 at both ends.
+      const float ra = scene_length2 * sf * sf * inv_a2, rb = scene_length2 * st * st * inv_b2;
+      const float ka = lo * model_length2, kb = hi * model_length2;
+      if (sf > 0.f && !(ra >= ka && ra <= kb)) continue;
+      if (st > 0.f && !(rb >= ka && rb <= kb)) continue;
+      pool_.push_back(key(arc.from, arc.to));
+    }
+  } else {
+    for (std::uint32_t i = 0; i < n; ++i)
+      pool_.push_back(key(arcs[found_[i]].from, arcs[found_[i]].to));
+  }
+  const auto kept = static_cast<std::uint32_t>(pool_.size() - begin_[e]);
+  stats.arc_matches_kept += kept;
   std::sort(pool_.begin() + begin_[e], pool_.end());
-  count_[e] = n;
-  count = n;
+  count_[e] = kept;
+  count = kept;
 }
 
 void Selector::select(const SelectionInput& in, const Limits& limits,

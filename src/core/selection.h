@@ -54,6 +54,9 @@ struct SelectionInput {
   const ArcSearch* search = nullptr;
   ImageView blurred;                      // scene blurred for profiles
   const Point2f* scene_points = nullptr;  // sampled scene keypoints
+  // Their detector scales (sigma, pixels; 0 unknown), for
+  // GraphParams::max_scale_error; nullptr skips that check.
+  const float* scene_scales = nullptr;
   const Delaunay* triangulation = nullptr;
   const std::vector<SceneKeygraph>* keygraphs = nullptr;
   // Vertex descriptors (kVertexDescriptorSize bytes) and their inverse

@@ -959,6 +959,8 @@ TEST(Golden, EveryGoldenLoadsAndDetects) {
     ASSERT_TRUE(s) << s.message();
     ASSERT_EQ(index.model_count(), 1);
     EXPECT_EQ(index.model(0).name, "box_crop");
+    // Keypoint scales arrived in 2.1; 2.0 files load without them.
+    EXPECT_EQ(index.keypoint_scales() != nullptr, index.version_minor() >= 1);
     DesktopDetector detector(index);
     DetectionList found;
     ASSERT_TRUE(detector.detect(box, found));
@@ -1101,13 +1103,20 @@ TEST_F(ModelIndexTest, RejectsHeaderDamage) {
   EXPECT_TRUE(rejected(b, "section table out of bounds"));
 }
 
-const char* const kSectionNames[] = {
-    "",          "models",      "strings",    "keypoints",
-    "tree arcs", "descriptors", "tree nodes", "vertex descriptors"};
+const char* const kSectionNames[] = {"",
+                                     "models",
+                                     "strings",
+                                     "keypoints",
+                                     "tree arcs",
+                                     "descriptors",
+                                     "tree nodes",
+                                     "vertex descriptors",
+                                     "keypoint scales"};
 
 TEST_F(ModelIndexTest, RejectsFlippedByteInEachSection) {
-  // The vertex descriptor section is empty here (SIFT tests cover it).
-  for (std::uint32_t id = 1; id < format::kSectionVertexDescriptors; ++id) {
+  for (std::uint32_t id = 1; id <= format::kSectionCount; ++id) {
+    // The vertex descriptor section is empty here (SIFT tests cover it).
+    if (id == format::kSectionVertexDescriptors) continue;
     const char* name = kSectionNames[id];
     ASSERT_GT(section_size(bytes(), id), 0u) << name;
     for (std::size_t where :
@@ -1177,16 +1186,25 @@ TEST_F(ModelIndexTest, RejectsBadSectionTable) {
 
 TEST_F(ModelIndexTest, UnknownSectionsAreSkipped) {
   // A later minor version may add sections: an extra table entry (id 99,
-  // here describing the strings' bytes) fits in the padding before the
-  // first section and is ignored.
-  Bytes b = bytes();
-  const std::size_t end = table_end(b);
-  ASSERT_LE(end + format::kSectionEntrySize, section_offset(b, format::kSectionModels));
+  // here describing the strings' bytes) is ignored. The table grows by one
+  // entry: every section moves 64 bytes on (alignment), as a writer of that
+  // version would lay them out.
+  const Bytes original = bytes();
+  const std::size_t end = table_end(original);
+  Bytes b(original.begin(), original.begin() + static_cast<std::ptrdiff_t>(end));
+  b.resize(end + format::kAlignment, 0);
+  b.insert(b.end(), original.begin() + static_cast<std::ptrdiff_t>(end), original.end());
+  ASSERT_EQ(section_offset(original, format::kSectionModels) % format::kAlignment, 0u);
+  for (std::size_t i = 0; i < section_count(b); ++i) {
+    const std::size_t e = table_offset(b) + i * format::kSectionEntrySize + format::kEntOffset;
+    store<std::uint64_t>(b.data() + e, load<std::uint64_t>(b.data() + e) + format::kAlignment);
+  }
   std::memcpy(b.data() + end, b.data() + entry(b, format::kSectionStrings),
               format::kSectionEntrySize);
   store<std::uint32_t>(b.data() + end + format::kEntId, 99);
   store<std::uint32_t>(b.data() + format::kOffSectionCount,
                        static_cast<std::uint32_t>(section_count(b) + 1));
+  store<std::uint64_t>(b.data() + format::kOffFileSize, static_cast<std::uint64_t>(b.size()));
   fix_header_crc(b);
   AlignedBytes buffer(b);
   ModelIndex index;
@@ -1198,6 +1216,25 @@ TEST_F(ModelIndexTest, UnknownSectionsAreSkipped) {
 // Offset of tree arc `slot`'s field (0: from, 4: to).
 std::size_t tree_arc(const Bytes& b, std::uint32_t slot, std::size_t field) {
   return section_offset(b, format::kSectionTreeArcs) + 8 * std::size_t{slot} + field;
+}
+
+TEST_F(ModelIndexTest, RejectsBadKeypointScale) {
+  const std::size_t at = section_offset(bytes(), format::kSectionKeypointScales) + 4 * 3;
+  for (float bad :
+       {-1.f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+    Bytes b = bytes();
+    store<float>(b.data() + at, bad);
+    reseal(b);
+    EXPECT_TRUE(rejected(b, "keypoint 3: scale not finite or negative")) << bad;
+  }
+  Bytes b = bytes();
+  const std::size_t e = entry(b, format::kSectionKeypointScales);
+  store<std::uint32_t>(b.data() + e + format::kEntCount,
+                       load<std::uint32_t>(b.data() + e + format::kEntCount) - 1);
+  store<std::uint64_t>(b.data() + e + format::kEntSize,
+                       section_size(b, format::kSectionKeypointScales) - 4);
+  reseal(b);
+  EXPECT_TRUE(rejected(b, "keypoint scales section: count"));
 }
 
 TEST_F(ModelIndexTest, RejectsOutOfRangeArcKeypoint) {
