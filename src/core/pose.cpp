@@ -9,6 +9,43 @@
 
 namespace kg {
 
+namespace {
+
+// Tolerance of the pre-test below: localisation noise plus a fraction of
+// the distance over which a local affine map is extrapolated (perspective
+// bends it), both in scene pixels.
+constexpr float kPretestPixels = 3.f;
+constexpr float kPretestFraction = 0.25f;
+
+// Whether the affine map through the three correspondences (m0, s0)
+// predicts the scene points s1 of the model points m1 (n of them) within
+// the pre-test tolerance. Degenerate triangles fail.
+bool affine_predicts(const Point2f* m0, const Point2f* s0, const Point2f* m1, const Point2f* s1,
+                     int n) {
+  const float m00 = m0[1].x - m0[0].x, m01 = m0[2].x - m0[0].x, m10 = m0[1].y - m0[0].y,
+              m11 = m0[2].y - m0[0].y;
+  const float det = m00 * m11 - m01 * m10;
+  if (!(std::fabs(det) > 1e-3f)) return false;
+  const float inv = 1.f / det;
+  const float s00 = s0[1].x - s0[0].x, s01 = s0[2].x - s0[0].x, s10 = s0[1].y - s0[0].y,
+              s11 = s0[2].y - s0[0].y;
+  // A = S M^-1 maps model offsets from m0[0] to scene offsets from s0[0].
+  const float a = (s00 * m11 - s01 * m10) * inv, b = (-s00 * m01 + s01 * m00) * inv;
+  const float c = (s10 * m11 - s11 * m10) * inv, d = (-s10 * m01 + s11 * m00) * inv;
+  const float cx = (s0[0].x + s0[1].x + s0[2].x) / 3.f, cy = (s0[0].y + s0[1].y + s0[2].y) / 3.f;
+  for (int i = 0; i < n; ++i) {
+    const float dx = m1[i].x - m0[0].x, dy = m1[i].y - m0[0].y;
+    const float px = s0[0].x + a * dx + b * dy, py = s0[0].y + c * dx + d * dy;
+    const float ex = px - s1[i].x, ey = py - s1[i].y;
+    const float fx = s1[i].x - cx, fy = s1[i].y - cy;
+    const float tol = kPretestPixels + kPretestFraction * std::sqrt(fx * fx + fy * fy);
+    if (ex * ex + ey * ey > tol * tol) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 // RANSAC estimator over the active keygraph correspondences.
 struct KeygraphEstimator {
   using Model = Homography;
@@ -23,6 +60,23 @@ struct KeygraphEstimator {
   int sample_size() const { return h; }
 
   bool hypothesis(const int* sample, Homography& out) {
+    // Two circuits: each one's local affine map must predict the other's
+    // points before the homography is fitted and scored. Rejects most
+    // unrelated pairs for a few multiplications.
+    if (h == 2 && k >= 3) {
+      Point2f m[2][kMaxVertices], sc[2][kMaxVertices];
+      for (int i = 0; i < 2; ++i) {
+        const std::uint32_t* pairs =
+            &s.match_pairs_[static_cast<std::size_t>(s.active_[sample[i]]) * k];
+        for (int j = 0; j < k; ++j) {
+          m[i][j] = s.pair_model_[pairs[j]];
+          sc[i][j] = s.pair_scene_[pairs[j]];
+        }
+      }
+      if (!affine_predicts(m[0], sc[0], m[1], sc[1], k) ||
+          !affine_predicts(m[1], sc[1], m[0], sc[0], k))
+        return false;
+    }
     Point2f model[kMaxVertices * 4];
     Point2f scene[kMaxVertices * 4];
     std::uint32_t ids[kMaxVertices * 4];
@@ -180,6 +234,7 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
   RansacOptions options;
   options.confidence = rp.confidence;
   options.max_iterations = rp.max_iterations;
+  options.enumerate_small_pools = true;
   int iterations = 0;
   // Each attempt finds one instance or rules out one false cluster.
   for (int attempt = 0; attempt < rp.max_instances; ++attempt) {

@@ -18,6 +18,7 @@
 // score.cost.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -38,6 +39,10 @@ struct RansacOptions {
   double confidence = 0.99;
   int max_iterations = 2000;
   int min_iterations = 0;
+  // When the pool has at most max_iterations minimal samples (C(n, h)),
+  // try every one of them once, in order, instead of drawing at random:
+  // fewer hypotheses than the cap would draw, and none missed.
+  bool enumerate_small_pools = false;
 };
 
 struct RansacStats {
@@ -78,6 +83,27 @@ inline void draw_distinct(Rng& rng, int n, int k, int* out) {
   }
 }
 
+// C(n, h), or `cap` + 1 when larger than `cap`.
+inline long long combinations_up_to(int n, int h, long long cap) {
+  long long c = 1;
+  for (int i = 0; i < h; ++i) {
+    c = c * (n - i) / (i + 1);  // exact: a product of i + 1 consecutive integers
+    if (c > cap) return cap + 1;
+  }
+  return c;
+}
+
+// Advances `s` (h increasing indices below n) to the next combination in
+// lexicographic order; false after the last.
+inline bool next_combination(int* s, int h, int n) {
+  int i = h - 1;
+  while (i >= 0 && s[i] == n - h + i) --i;
+  if (i < 0) return false;
+  ++s[i];
+  for (int j = i + 1; j < h; ++j) s[j] = s[j - 1] + 1;
+  return true;
+}
+
 // An estimator may draw its own samples (e.g. neighbourhood-guided) by
 // providing `void draw(Rng&, int* sample)`; otherwise samples are uniform.
 template <class E, class = void>
@@ -96,13 +122,24 @@ RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
   stats.required_iterations = options.max_iterations;
   if (n < h || h <= 0 || h > 8) return stats;
   int sample[8];
+  int next_sample[8];  // enumeration: the combination after `sample`
   typename Estimator::Model model;
   bool have_best = false;
-  while (
-      stats.iterations < options.max_iterations &&
-      (stats.iterations < options.min_iterations || stats.iterations < stats.required_iterations)) {
+  const long long all = combinations_up_to(n, h, options.max_iterations);
+  const bool enumerate = options.enumerate_small_pools && all <= options.max_iterations;
+  if (enumerate) {
+    stats.required_iterations = static_cast<int>(all);
+    for (int i = 0; i < h; ++i) next_sample[i] = i;
+  }
+  bool more = true;
+  while (more && stats.iterations < options.max_iterations &&
+         (enumerate || stats.iterations < options.min_iterations ||
+          stats.iterations < stats.required_iterations)) {
     ++stats.iterations;
-    if constexpr (has_custom_draw<Estimator>::value) {
+    if (enumerate) {
+      std::copy(next_sample, next_sample + h, sample);
+      more = next_combination(next_sample, h, n);
+    } else if constexpr (has_custom_draw<Estimator>::value) {
       estimator.draw(rng, sample);
     } else {
       draw_distinct(rng, n, h, sample);
@@ -116,8 +153,9 @@ RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
     have_best = true;
     stats.best = s;
     best_model = model;
-    stats.required_iterations = required_iterations(static_cast<double>(s.sample_inliers) / n, h,
-                                                    options.confidence, options.max_iterations);
+    if (!enumerate)
+      stats.required_iterations = required_iterations(static_cast<double>(s.sample_inliers) / n, h,
+                                                      options.confidence, options.max_iterations);
   }
   return stats;
 }

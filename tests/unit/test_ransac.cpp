@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <set>
 #include <vector>
 
 #include "core/homography.h"
@@ -265,6 +266,44 @@ TEST(Ransac, IterationCapAndMinimum) {
   stats = ransac(tiny, options, rng, best);
   EXPECT_EQ(stats.iterations, 0);
   EXPECT_EQ(tiny.calls, 0);
+}
+
+TEST(Ransac, SmallPoolsAreEnumeratedOnce) {
+  FixedFractionEstimator est;
+  est.samples = 10;
+  est.size = 2;
+  est.sample_inliers = 1;  // would run to the cap if drawn at random
+  RansacOptions options;
+  options.max_iterations = 1000;
+  options.enumerate_small_pools = true;
+  Rng rng(4);
+  const std::uint64_t untouched = Rng(4).next();
+  int best = 0;
+  const RansacStats stats = ransac(est, options, rng, best);
+  EXPECT_EQ(stats.iterations, 45);  // C(10, 2)
+  EXPECT_EQ(stats.required_iterations, 45);
+  ASSERT_EQ(est.drawn.size(), 45u);
+  std::set<std::pair<int, int>> seen;
+  for (const auto& s : est.drawn) {
+    ASSERT_EQ(s.size(), 2u);
+    EXPECT_LT(s[0], s[1]);
+    EXPECT_LT(s[1], 10);
+    seen.insert({s[0], s[1]});
+  }
+  EXPECT_EQ(seen.size(), 45u);       // every pair, each once
+  EXPECT_EQ(rng.next(), untouched);  // no random draws
+
+  // Larger than the cap: random draws as usual.
+  FixedFractionEstimator large;
+  large.samples = 100;
+  large.size = 2;
+  large.sample_inliers = 1;
+  options.max_iterations = 100;  // C(100, 2) = 4950
+  const RansacStats capped = ransac(large, options, rng, best);
+  EXPECT_EQ(capped.iterations, 100);
+  EXPECT_EQ(combinations_up_to(100, 2, 100), 101);
+  EXPECT_EQ(combinations_up_to(100, 2, 10000), 4950);
+  EXPECT_EQ(combinations_up_to(7, 3, 1000), 35);
 }
 
 TEST(Ransac, RequiredIterationsEdgeCases) {
