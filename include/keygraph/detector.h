@@ -49,13 +49,13 @@ struct Detection {
 };
 
 struct DetectStats {
-  int keypoints = 0;               // detected in the frame
-  int sampled_keypoints = 0;       // after Chebyshev sampling
-  int keygraphs = 0;               // scene keygraphs (Delaunay)
-  int arcs_described = 0;          // scene arcs with a valid descriptor
-  long long arc_matches = 0;       // model arcs found similar to them, summed
-  long long arc_matches_kept = 0;  // of those, consistent in scale (GraphParams::max_scale_error)
-  int correspondences = 0;         // keygraph correspondences selected
+  int keypoints = 0;          // detected in the frame
+  int sampled_keypoints = 0;  // after Chebyshev sampling
+  int keygraphs = 0;          // scene keygraphs (Delaunay)
+  int arcs_described = 0;     // scene arcs with a valid descriptor
+  // Model arcs found similar to them (descriptor and scale attributes), summed.
+  long long arc_matches = 0;
+  int correspondences = 0;  // keygraph correspondences selected
   // Keygraph correspondences whose arcs all matched but a vertex pair did
   // not (vertex descriptors only).
   long long vertex_rejections = 0;

@@ -82,27 +82,33 @@ class ModelIndex {
 
   std::uint32_t keypoint_count() const { return keypoint_count_; }
   const Point2f* keypoints() const { return keypoints_; }
-  // Detector scale (sigma in model pixels, 0 when unknown) per keypoint;
-  // nullptr for format 2.0 indexes, which do not store them.
+  // Detector scale (sigma in model pixels, 0 when unknown) per keypoint.
   const float* keypoint_scales() const { return keypoint_scales_; }
-  // Arcs in search-tree order: arcs()[slot] is the arc whose descriptor is
-  // in tree slot `slot`, so a tree query's slots index this array directly.
+  // Arcs in search-tree order: arc(slot) is the arc whose descriptor is in
+  // tree slot `slot` (< arc_count()), so a tree query's slots name arcs
+  // directly.
   std::uint32_t arc_count() const { return arc_count_; }
-  const ModelArc* arcs() const { return arcs_; }
+  ModelArc arc(std::uint32_t slot) const {
+    const std::uint32_t from = arc_from_[slot];
+    return {from,
+            static_cast<std::uint32_t>(static_cast<std::int64_t>(from) + arc_to_offset_[slot])};
+  }
 
   // Vertex descriptors (Params::descriptor.vertex_descriptor), one per
   // keypoint, kVertexDescriptorSize bytes each in keypoint order; nullptr
   // when the index has none (vertex_descriptor == kNone).
   const std::uint8_t* vertex_descriptors() const { return vertex_descriptors_; }
 
-  // Search tree over arc descriptors (core/kdtree.h has the layout), in
-  // the encoding params().descriptor.encoding names: one descriptor per tree
-  // slot from the accessor of that encoding (the others return nullptr), and
-  // the internal nodes (KdNode for float32, KdNodeInt for int16 and int8).
+  // Search tree over the arcs (core/kdtree.h has the layout), in the
+  // encoding params().descriptor.encoding names: per tree slot a point of
+  // kSearchDims components (the arc descriptor, then its scale attributes,
+  // core/arc_attributes.h) from the accessor of that encoding (the others
+  // return nullptr), and the internal nodes (KdNode for float32, KdNodeInt
+  // for int16 and int8).
   DescriptorEncoding descriptor_encoding() const { return params_.descriptor.encoding; }
-  const ArcDescriptor* descriptors_f32() const;
-  const ArcDescriptorI16* descriptors_i16() const;
-  const ArcDescriptorI8* descriptors_i8() const;
+  const ArcSearchPoint* tree_points_f32() const;
+  const ArcSearchPointI16* tree_points_i16() const;
+  const ArcSearchPointI8* tree_points_i8() const;
   const KdNode* tree_nodes_f32() const;
   const KdNodeInt* tree_nodes_int() const;
   std::uint32_t tree_node_count() const { return tree_node_count_; }
@@ -139,7 +145,8 @@ class ModelIndex {
   std::uint32_t strings_size_ = 0;
   const Point2f* keypoints_ = nullptr;
   std::uint32_t keypoint_count_ = 0;
-  const ModelArc* arcs_ = nullptr;
+  const std::uint32_t* arc_from_ = nullptr;
+  const std::int16_t* arc_to_offset_ = nullptr;
   std::uint32_t arc_count_ = 0;
   const std::uint8_t* tree_descriptors_ = nullptr;
   const std::uint8_t* tree_nodes_ = nullptr;

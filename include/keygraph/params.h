@@ -90,6 +90,10 @@ struct GraphParams {
   // against 60.0 % without the check, 75.0 % against 70.0 % within 10 px,
   // no wrong pose (docs/RESULTS.md).
   float max_scale_error = 0.7f;
+  // Not in the paper: model arcs longer than this many detector scales
+  // (sigma) of either end keypoint are not stored (0: no limit). Frames
+  // rarely ask for them: a frame's Delaunay edges join near neighbours.
+  float max_relative_length = 0.f;
 };
 
 // How arc descriptors are stored in the model index and compared at search

@@ -13,6 +13,7 @@
 #include "build/image_io.h"
 #include "build/keypoints.h"
 #include "build/sift_descriptors.h"
+#include "core/arc_attributes.h"
 #include "core/arc_descriptor.h"
 #include "core/blur.h"
 #include "core/crc32.h"
@@ -117,7 +118,9 @@ Status build_model(const cv::Mat& gray, const std::string& name, const Params& p
   for (std::uint32_t a = 0; a < n; ++a) {
     offsets[a] = static_cast<std::uint32_t>(out.arcs.size());
     for (std::uint32_t b = 0; b < n; ++b) {
-      if (a == b || !is_model_arc(out.keypoints[a], out.keypoints[b], params.graph)) continue;
+      if (a == b || !is_model_arc(out.keypoints[a], out.keypoints[b], out.keypoint_scales[a],
+                                  out.keypoint_scales[b], params.graph))
+        continue;
       ArcDescriptor d;
       if (!arc_descriptor(bv, out.keypoints[a], out.keypoints[b], params.descriptor, profile, d))
         continue;
@@ -143,24 +146,27 @@ namespace {
 // The search tree over `descriptors` in the domain of T: quantised (int16,
 // int8) or as computed (float), the arcs permuted into tree order.
 template <class T>
-void encode_tree(const std::vector<ArcDescriptor>& descriptors, std::vector<ModelArc>& arcs,
-                 std::vector<std::uint8_t>& points_bytes, std::vector<std::uint8_t>& node_bytes) {
-  std::vector<KdPoint<T>> source(descriptors.size());
-  for (std::size_t i = 0; i < descriptors.size(); ++i) {
+void encode_tree(const std::vector<ArcSearchPoint>& search_points, double attribute_weight,
+                 std::vector<ModelArc>& arcs, std::vector<std::uint8_t>& points_bytes,
+                 std::vector<std::uint8_t>& node_bytes) {
+  using Point = KdPoint<T, kSearchDims>;
+  std::vector<Point> source(search_points.size());
+  for (std::size_t i = 0; i < search_points.size(); ++i) {
     if constexpr (std::is_same_v<T, float>) {
-      source[i] = descriptors[i];
+      source[i] = search_points[i];
     } else {
-      source[i] = quantise<T>(descriptors[i]);
+      source[i] = quantise<T>(search_points[i]);
     }
   }
-  std::vector<KdPoint<T>> points;
+  std::vector<Point> points;
   std::vector<std::uint32_t> ids;
   std::vector<typename KdTraits<T>::Node> nodes;
-  build_kdtree<T>(source.data(), static_cast<std::uint32_t>(source.size()), points, ids, nodes);
+  build_kdtree<T, kSearchDims>(source.data(), static_cast<std::uint32_t>(source.size()), points,
+                               ids, nodes, attribute_weight);
   std::vector<ModelArc> ordered(arcs.size());
   for (std::size_t slot = 0; slot < ids.size(); ++slot) ordered[slot] = arcs[ids[slot]];
   arcs.swap(ordered);
-  points_bytes.resize(points.size() * sizeof(KdPoint<T>));
+  points_bytes.resize(points.size() * sizeof(Point));
   if (!points.empty()) std::memcpy(points_bytes.data(), points.data(), points_bytes.size());
   // Nodes field by field: no padding bytes of the struct reach the file.
   node_bytes.assign(nodes.size() * format::tree_node_size(encoding_of<T>()), 0);
@@ -234,18 +240,31 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
   }
   if (arcs.size() > 0xFFFFFFFFu || keypoints.size() > 0xFFFFFFFFu)
     return {StatusCode::kInvalidArgument, "more than 2^32 - 1 arcs or keypoints"};
+  // Tree points: each descriptor with its arc's scale attributes.
+  std::vector<ArcSearchPoint> search_points(arcs.size());
+  for (std::size_t i = 0; i < arcs.size(); ++i) {
+    float attributes[kArcAttributes];
+    arc_attributes(keypoints[arcs[i].from], keypoints[arcs[i].to], keypoint_scales[arcs[i].from],
+                   keypoint_scales[arcs[i].to], attributes);  // zero when a scale is unknown
+    search_points[i] = search_point(descriptors[i], attributes);
+  }
+  // Attributes are split as often as descriptor components when their box
+  // is as wide, in the stored domain, as the similarity radius; never when
+  // the box is off.
+  const double box = params.graph.max_scale_error / kAttributeRange;
+  const double attribute_weight = box > 0.0 ? params.descriptor.similarity_threshold / box : 0.0;
   // Search tree in the parameters' encoding; arcs permuted into tree order.
   const DescriptorEncoding encoding = params.descriptor.encoding;
   std::vector<std::uint8_t> tree_points, tree_nodes;
   switch (encoding) {
     case DescriptorEncoding::kFloat32:
-      encode_tree<float>(descriptors, arcs, tree_points, tree_nodes);
+      encode_tree<float>(search_points, attribute_weight, arcs, tree_points, tree_nodes);
       break;
     case DescriptorEncoding::kInt16:
-      encode_tree<std::int16_t>(descriptors, arcs, tree_points, tree_nodes);
+      encode_tree<std::int16_t>(search_points, attribute_weight, arcs, tree_points, tree_nodes);
       break;
     case DescriptorEncoding::kInt8:
-      encode_tree<std::int8_t>(descriptors, arcs, tree_points, tree_nodes);
+      encode_tree<std::int8_t>(search_points, attribute_weight, arcs, tree_points, tree_nodes);
       break;
   }
   const auto encoding_id = static_cast<std::uint32_t>(encoding);
@@ -258,6 +277,18 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
     std::uint32_t count;
   };
   const auto arc_count = static_cast<std::uint32_t>(arcs.size());
+  // Arcs as two aligned arrays: sources, and targets as int16 offsets (a
+  // model's keypoints are at most kMaxModelKeypoints apart in id).
+  std::vector<std::uint32_t> arc_from(arcs.size());
+  std::vector<std::int16_t> arc_to_offset(arcs.size());
+  for (std::size_t i = 0; i < arcs.size(); ++i) {
+    const std::int64_t offset =
+        static_cast<std::int64_t>(arcs[i].to) - static_cast<std::int64_t>(arcs[i].from);
+    if (offset < -32768 || offset > 32767)
+      return {StatusCode::kInvalidArgument, "a model has more than 32768 keypoints"};
+    arc_from[i] = arcs[i].from;
+    arc_to_offset[i] = static_cast<std::int16_t>(offset);
+  }
   const Payload payloads[kLastSectionId] = {
       {kSectionModels, 0, records.data(), records.size(),
        static_cast<std::uint32_t>(models.size())},
@@ -265,7 +296,7 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
        static_cast<std::uint32_t>(strings.size())},
       {kSectionKeypoints, 0, keypoints.data(), keypoints.size() * sizeof(Point2f),
        static_cast<std::uint32_t>(keypoints.size())},
-      {kSectionTreeArcs, 0, arcs.data(), arcs.size() * sizeof(ModelArc), arc_count},
+      {kSectionTreeArcs, 0, arc_from.data(), arc_from.size() * sizeof(std::uint32_t), arc_count},
       {kSectionDescriptors, encoding_id, tree_points.data(), tree_points.size(), arc_count},
       {kSectionTreeNodes, encoding_id, tree_nodes.data(), tree_nodes.size(),
        static_cast<std::uint32_t>(tree_nodes.size() / tree_node_size(encoding))},
@@ -273,6 +304,8 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
        static_cast<std::uint32_t>(vertex_descriptors.size() / kVertexDescriptorSize)},
       {kSectionKeypointScales, 0, keypoint_scales.data(), keypoint_scales.size() * sizeof(float),
        static_cast<std::uint32_t>(keypoint_scales.size())},
+      {kSectionTreeArcTargets, 0, arc_to_offset.data(), arc_to_offset.size() * sizeof(std::int16_t),
+       arc_count},
   };
   const std::size_t params_offset = kHeaderSize;
   const std::size_t table_offset = params_offset + kParamsSize;

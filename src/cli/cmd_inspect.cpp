@@ -114,12 +114,12 @@ void print_index(const ModelIndex& index) {
   });
 
   const DescriptorEncoding encoding = index.descriptor_encoding();
-  const double descriptor_bytes = static_cast<double>(encoded_descriptor_size(encoding));
+  const double descriptor_bytes = static_cast<double>(encoded_point_size(encoding));
   const double node_bytes =
       static_cast<double>(index.tree_node_count()) * static_cast<double>(tree_node_size(encoding));
   const double arcs = index.arc_count();
   const bool sift = index.vertex_descriptors() != nullptr;
-  const double per_keypoint = 8.0 + (sift ? kVertexDescriptorSize : 0);
+  const double per_keypoint = 12.0 + (sift ? kVertexDescriptorSize : 0);  // position, scale
   std::printf(
       "\nmodels (bytes: record, name, keypoints%s, arcs with descriptors, share of the "
       "tree nodes):\n",

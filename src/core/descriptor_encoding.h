@@ -21,11 +21,20 @@ inline constexpr std::int32_t encoding_scale(DescriptorEncoding e) {
   return e == DescriptorEncoding::kInt16 ? 32767 : e == DescriptorEncoding::kInt8 ? 127 : 1;
 }
 
-// Bytes per stored descriptor.
-inline constexpr std::size_t encoded_descriptor_size(DescriptorEncoding e) {
-  return e == DescriptorEncoding::kInt16  ? sizeof(ArcDescriptorI16)
-         : e == DescriptorEncoding::kInt8 ? sizeof(ArcDescriptorI8)
-                                          : sizeof(ArcDescriptor);
+// Bytes per stored tree point (descriptor and attributes).
+inline constexpr std::size_t encoded_point_size(DescriptorEncoding e) {
+  return e == DescriptorEncoding::kInt16  ? sizeof(ArcSearchPointI16)
+         : e == DescriptorEncoding::kInt8 ? sizeof(ArcSearchPointI8)
+                                          : sizeof(ArcSearchPoint);
+}
+
+// The attribute box half-width `half_width` (already over kAttributeRange)
+// in an integer domain: ceil(half_width * scale) + 1, since rounding each
+// value to its step moves their difference by up to one step. Exact (no +1)
+// for float32, whose callers use half_width itself.
+inline std::int64_t scaled_box(float half_width, DescriptorEncoding e) {
+  return static_cast<std::int64_t>(std::ceil(static_cast<double>(half_width) * encoding_scale(e))) +
+         (e == DescriptorEncoding::kFloat32 ? 0 : 1);
 }
 
 inline const char* encoding_name(DescriptorEncoding e) {
@@ -45,13 +54,12 @@ inline T quantise_component(float v) {
   return static_cast<T>(std::lround(x));
 }
 
-template <class T>
-inline std::array<T, kDescriptorSize> quantise(const ArcDescriptor& d) {
-  std::array<T, kDescriptorSize> q{};
-  for (int i = 0; i < kDescriptorSize; ++i) q[i] = quantise_component<T>(d[i]);
+template <class T, std::size_t N>
+inline std::array<T, N> quantise(const std::array<float, N>& d) {
+  std::array<T, N> q{};
+  for (std::size_t i = 0; i < N; ++i) q[i] = quantise_component<T>(d[i]);
   return q;
 }
-
 // The squared similarity radius in the integer domain of `e`:
 // ceil(radius^2 * scale^2) with radius^2 rounded to float as the float path
 // rounds it, so that for an integer squared distance d, d < result exactly

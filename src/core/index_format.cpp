@@ -48,6 +48,8 @@ const char* section_name(std::uint32_t id) {
       return "vertex descriptors";
     case kSectionKeypointScales:
       return "keypoint scales";
+    case kSectionTreeArcTargets:
+      return "tree arc targets";
     default:
       return "(unknown)";
   }
@@ -95,6 +97,8 @@ Status validate_params(const Params& p) {
   if (!(std::isfinite(p.graph.max_scale_error) && p.graph.max_scale_error >= 0.f &&
         p.graph.max_scale_error <= 10.f))
     return bad("max_scale_error", "must be in [0, 10]");
+  if (!(std::isfinite(p.graph.max_relative_length) && p.graph.max_relative_length >= 0.f))
+    return bad("max_relative_length", "must be >= 0");
   if (!(std::isfinite(p.keypoints.hessian_threshold) && p.keypoints.hessian_threshold >= 0.f))
     return bad("hessian_threshold", "must be >= 0");
   if (p.keypoints.hessian_octaves < 1 || p.keypoints.hessian_octaves > 8)
@@ -108,8 +112,8 @@ Status validate_params(const Params& p) {
     return bad("model_scales", "must be in 1..8");
   if (!(std::isfinite(p.keypoints.model_merge_distance) && p.keypoints.model_merge_distance >= 0.f))
     return bad("model_merge_distance", "must be >= 0");
-  if (p.keypoints.max_model_keypoints < 4 || p.keypoints.max_model_keypoints > 1000000)
-    return bad("max_model_keypoints", "must be in 4..10^6");
+  if (p.keypoints.max_model_keypoints < 4 || p.keypoints.max_model_keypoints > kMaxModelKeypoints)
+    return bad("max_model_keypoints", "must be in 4..32768");
   if (!finite_positive(p.graph.min_distance) || !finite_positive(p.graph.max_distance) ||
       p.graph.max_distance < p.graph.min_distance)
     return bad("min/max_distance", "must be positive with min <= max");

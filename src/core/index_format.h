@@ -17,9 +17,10 @@ namespace kg::format {
 // SUB/LF tail catch text-mode conversions and `type` on DOS.
 inline constexpr std::uint8_t kMagic[8] = {0x89, 'K', 'G', 'I', '\r', '\n', 0x1A, '\n'};
 // 2.0: arcs in tree order (no tree-id section), encoded descriptors.
-// 2.1: keypoint scales (section 8) and graph.max_scale_error.
-inline constexpr std::uint16_t kVersionMajor = 2;
-inline constexpr std::uint16_t kVersionMinor = 1;
+// 3.0: keypoint scales (section 8), graph.max_scale_error, and tree points
+// of descriptor plus scale attributes (kSearchDims components).
+inline constexpr std::uint16_t kVersionMajor = 3;
+inline constexpr std::uint16_t kVersionMinor = 0;
 inline constexpr std::size_t kAlignment = 64;
 
 inline constexpr std::size_t kHeaderSize = 64;
@@ -49,20 +50,20 @@ enum SectionId : std::uint32_t {
   kSectionModels = 1,             // ModelRecord per model
   kSectionStrings = 2,            // UTF-8 model names
   kSectionKeypoints = 3,          // float32 x, y per keypoint
-  kSectionTreeArcs = 4,           // uint32 from, to per tree slot (global keypoint ids)
-  kSectionDescriptors = 5,        // per tree slot: kDescriptorSize components, encoded
+  kSectionTreeArcs = 4,           // uint32 `from` per tree slot (global keypoint id)
+  kSectionDescriptors = 5,        // per tree slot: kSearchDims components, encoded
   kSectionTreeNodes = 6,          // split and dimension per internal node, encoded
   kSectionVertexDescriptors = 7,  // kVertexDescriptorSize bytes (SIFT) per keypoint, or empty
-  kSectionKeypointScales = 8,     // float32 detector scale (sigma, model pixels) per keypoint (2.1)
+  kSectionKeypointScales = 8,     // float32 detector scale (sigma, model pixels) per keypoint
+  kSectionTreeArcTargets = 9,     // int16 `to - from` per tree slot
 };
-// Sections 1..required_sections(minor) are in every index of that minor
-// version and required (empty ones included). Ids above kLastSectionId are
-// skipped by the reader: room for later minor versions.
-inline constexpr std::uint32_t kSectionCount = 8;  // written by this version
-inline constexpr std::uint32_t kLastSectionId = 8;
-inline constexpr std::uint32_t required_sections(std::uint16_t minor) {
-  return minor == 0 ? 7 : kSectionCount;
-}
+// Sections 1..kSectionCount are in every index and required (empty ones
+// included). Ids above are skipped by the reader: room for minor versions.
+inline constexpr std::uint32_t kSectionCount = 9;
+inline constexpr std::uint32_t kLastSectionId = 9;
+// A model has at most this many keypoints, so that an arc's `to - from`
+// fits the int16 of section 9.
+inline constexpr int kMaxModelKeypoints = 32768;
 
 // "models", "tree arcs", ... (error messages, keygraph inspect);
 // "(unknown)" for other ids.
@@ -144,7 +145,8 @@ void visit_params(P& p, F&& f) {
   f("descriptor.vertex_descriptor", p.descriptor.vertex_descriptor);
   f("descriptor.vertex_threshold", p.descriptor.vertex_threshold);
   f("descriptor.encoding", p.descriptor.encoding);
-  f("graph.max_scale_error", p.graph.max_scale_error);  // 2.1
+  f("graph.max_scale_error", p.graph.max_scale_error);
+  f("graph.max_relative_length", p.graph.max_relative_length);
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }

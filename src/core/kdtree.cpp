@@ -1,6 +1,7 @@
 #include "core/kdtree.h"
 
 #include <algorithm>
+#include <limits>
 
 namespace kg {
 
@@ -16,23 +17,24 @@ int kdtree_depth(std::uint32_t n) {
 
 namespace {
 
-template <class T>
-void build_node(const std::vector<KdPoint<T>>& points,
+template <class T, std::size_t D>
+void build_node(const std::vector<KdPoint<T, D>>& points,
                 std::vector<typename KdTraits<T>::Node>& nodes, std::vector<std::uint32_t>& order,
-                std::uint32_t node, std::uint32_t begin, std::uint32_t end, int level, int depth) {
-  using Dist = typename KdTraits<T>::Dist;
+                std::uint32_t node, std::uint32_t begin, std::uint32_t end, int level, int depth,
+                double attribute_weight) {
   if (level == depth) return;
-  // Split on the dimension of largest spread.
+  // Split on the dimension of largest (weighted) spread.
   std::uint32_t best_dim = 0;
-  Dist best_spread = -1;
-  for (std::uint32_t d = 0; d < kDescriptorSize; ++d) {
+  double best_spread = -1;
+  for (std::uint32_t d = 0; d < D; ++d) {
     T lo = 0, hi = 0;
     for (std::uint32_t i = begin; i < end; ++i) {
       const T v = points[order[i]][d];
       if (i == begin || v < lo) lo = v;
       if (i == begin || v > hi) hi = v;
     }
-    const Dist spread = static_cast<Dist>(hi) - static_cast<Dist>(lo);
+    double spread = static_cast<double>(hi) - static_cast<double>(lo);
+    if (d >= static_cast<std::uint32_t>(kDescriptorSize)) spread *= attribute_weight;
     if (spread > best_spread) {
       best_spread = spread;
       best_dim = d;
@@ -48,21 +50,24 @@ void build_node(const std::vector<KdPoint<T>>& points,
   }
   nodes[node].dim = static_cast<decltype(nodes[node].dim)>(best_dim);
   nodes[node].split = mid < end ? points[order[mid]][best_dim] : T{0};
-  build_node<T>(points, nodes, order, 2 * node + 1, begin, mid, level + 1, depth);
-  build_node<T>(points, nodes, order, 2 * node + 2, mid, end, level + 1, depth);
+  build_node<T, D>(points, nodes, order, 2 * node + 1, begin, mid, level + 1, depth,
+                   attribute_weight);
+  build_node<T, D>(points, nodes, order, 2 * node + 2, mid, end, level + 1, depth,
+                   attribute_weight);
 }
 
 }  // namespace
 
-template <class T>
-void build_kdtree(const KdPoint<T>* source, std::uint32_t n, std::vector<KdPoint<T>>& points,
-                  std::vector<std::uint32_t>& ids, std::vector<typename KdTraits<T>::Node>& nodes) {
+template <class T, std::size_t D>
+void build_kdtree(const KdPoint<T, D>* source, std::uint32_t n, std::vector<KdPoint<T, D>>& points,
+                  std::vector<std::uint32_t>& ids, std::vector<typename KdTraits<T>::Node>& nodes,
+                  double attribute_weight) {
   const int depth = kdtree_depth(n);
   nodes.assign((static_cast<std::size_t>(1) << depth) - 1, typename KdTraits<T>::Node{});
-  const std::vector<KdPoint<T>> copy(source, source + n);
+  const std::vector<KdPoint<T, D>> copy(source, source + n);
   std::vector<std::uint32_t> order(n);
   for (std::uint32_t i = 0; i < n; ++i) order[i] = i;
-  build_node<T>(copy, nodes, order, 0, 0, n, 0, depth);
+  build_node<T, D>(copy, nodes, order, 0, 0, n, 0, depth, attribute_weight);
   points.resize(n);
   ids.resize(n);
   for (std::uint32_t i = 0; i < n; ++i) {
@@ -71,15 +76,17 @@ void build_kdtree(const KdPoint<T>* source, std::uint32_t n, std::vector<KdPoint
   }
 }
 
-template void build_kdtree<float>(const KdPoint<float>*, std::uint32_t,
-                                  std::vector<KdPoint<float>>&, std::vector<std::uint32_t>&,
-                                  std::vector<KdNode>&);
-template void build_kdtree<std::int16_t>(const KdPoint<std::int16_t>*, std::uint32_t,
-                                         std::vector<KdPoint<std::int16_t>>&,
-                                         std::vector<std::uint32_t>&, std::vector<KdNodeInt>&);
-template void build_kdtree<std::int8_t>(const KdPoint<std::int8_t>*, std::uint32_t,
-                                        std::vector<KdPoint<std::int8_t>>&,
-                                        std::vector<std::uint32_t>&, std::vector<KdNodeInt>&);
+#define KG_INSTANTIATE_BUILD(T, D)                                                           \
+  template void build_kdtree<T, D>(const KdPoint<T, D>*, std::uint32_t,                      \
+                                   std::vector<KdPoint<T, D>>&, std::vector<std::uint32_t>&, \
+                                   std::vector<typename KdTraits<T>::Node>&, double);
+KG_INSTANTIATE_BUILD(float, kDescriptorSize)
+KG_INSTANTIATE_BUILD(std::int16_t, kDescriptorSize)
+KG_INSTANTIATE_BUILD(std::int8_t, kDescriptorSize)
+KG_INSTANTIATE_BUILD(float, kSearchDims)
+KG_INSTANTIATE_BUILD(std::int16_t, kSearchDims)
+KG_INSTANTIATE_BUILD(std::int8_t, kSearchDims)
+#undef KG_INSTANTIATE_BUILD
 
 namespace {
 
@@ -87,6 +94,8 @@ namespace {
 // from the query to the subtree's cell along that axis; `bound` is the sum
 // of their squares, a lower bound of the squared distance to any point in
 // the cell (the incremental bound of Arya & Mount).
+// Attributes are not in the bound: their offsets are only compared with the
+// box when a far child is pushed.
 template <class T>
 struct Frame {
   using Dist = typename KdTraits<T>::Dist;
@@ -99,33 +108,58 @@ struct Frame {
 };
 
 // Pushes the two children of `f`, the far one first so the near one is
-// searched first.
-template <class T>
+// searched first; the far one only when it can hold points within `box` on
+// an attribute split. The node's dimension is below D (validated on load).
+template <class T, std::size_t D>
 inline void push_children(const Frame<T>& f, const typename KdTraits<T>::Node& node,
-                          const KdPoint<T>& q, Frame<T>* stack, int& top) {
+                          const KdPoint<T, D>& q, typename KdTraits<T>::Dist box, Frame<T>* stack,
+                          int& top) {
   using Dist = typename KdTraits<T>::Dist;
   const std::uint32_t mid = f.begin + (f.end - f.begin) / 2;
-  const Dist diff = static_cast<Dist>(q[node.dim]) - static_cast<Dist>(node.split);
-  const Dist old = f.offset[node.dim];
-  Frame<T>& far = stack[top++];
-  far = f;
-  far.level = f.level + 1;
-  far.bound = f.bound - old * old + diff * diff;
-  far.offset[node.dim] = diff;
+  const std::uint32_t dim = node.dim;
+  const Dist diff = static_cast<Dist>(q[dim]) - static_cast<Dist>(node.split);
+  const bool attribute = dim >= static_cast<std::uint32_t>(kDescriptorSize);
+  const bool far_reachable = !attribute || (diff <= 0 ? -diff : diff) <= box;
+  Frame<T>* far = nullptr;
+  if (far_reachable) {
+    far = &stack[top++];
+    *far = f;
+    far->level = f.level + 1;
+    if (!attribute) {
+      const Dist old = f.offset[dim];
+      far->bound = f.bound - old * old + diff * diff;
+      far->offset[dim] = diff;
+    }
+  }
   Frame<T>& near = stack[top++];
   near = f;
   near.level = f.level + 1;
   if (diff <= 0) {  // query on the left: far is the right child
-    far.node = 2 * f.node + 2;
-    far.begin = mid;
+    if (far != nullptr) {
+      far->node = 2 * f.node + 2;
+      far->begin = mid;
+    }
     near.node = 2 * f.node + 1;
     near.end = mid;
   } else {
-    far.node = 2 * f.node + 1;
-    far.end = mid;
+    if (far != nullptr) {
+      far->node = 2 * f.node + 1;
+      far->end = mid;
+    }
     near.node = 2 * f.node + 2;
     near.begin = mid;
   }
+}
+
+template <class T, std::size_t D>
+inline bool within_box(const std::array<T, D>& p, const std::array<T, D>& q,
+                       typename KdTraits<T>::Dist box) {
+  using Dist = typename KdTraits<T>::Dist;
+  for (std::size_t d = kDescriptorSize; d < D; ++d) {
+    const Dist diff = static_cast<Dist>(p[d]) - static_cast<Dist>(q[d]);
+    if ((diff < 0 ? -diff : diff) > box) return false;
+  }
+  return true;
 }
 
 template <class T>
@@ -137,9 +171,16 @@ inline Frame<T> root_frame(std::uint32_t n) {
 
 }  // namespace
 
-template <class T>
-std::uint32_t BasicKdTreeView<T>::radius_search(const Point& q, Dist radius2, std::uint32_t* out,
-                                                std::uint32_t capacity) const {
+template <class T, std::size_t D>
+std::uint32_t BasicKdTreeView<T, D>::radius_search(const Point& q, Dist radius2, std::uint32_t* out,
+                                                   std::uint32_t capacity) const {
+  return radius_search(q, radius2, std::numeric_limits<Dist>::max(), out, capacity);
+}
+
+template <class T, std::size_t D>
+std::uint32_t BasicKdTreeView<T, D>::radius_search(const Point& q, Dist radius2, Dist box,
+                                                   std::uint32_t* out,
+                                                   std::uint32_t capacity) const {
   std::uint32_t found = 0;
   if (n_ == 0) return 0;
   // Depth-first with the far child pushed first: at most one pending
@@ -152,20 +193,21 @@ std::uint32_t BasicKdTreeView<T>::radius_search(const Point& q, Dist radius2, st
     if (f.bound >= radius2) continue;
     if (f.level == depth_) {
       for (std::uint32_t i = f.begin; i < f.end; ++i) {
-        if (kd_distance2<T>(points_[i], q) < radius2) {
+        if (kd_distance2(points_[i], q) < radius2 && within_box(points_[i], q, box)) {
           if (found < capacity) out[found] = id(i);
           ++found;
         }
       }
       continue;
     }
-    push_children<T>(f, nodes_[f.node], q, stack, top);
+    push_children<T, D>(f, nodes_[f.node], q, box, stack, top);
   }
   return found;
 }
 
-template <class T>
-int BasicKdTreeView<T>::knn_search(const Point& q, int k, std::uint32_t* ids, Dist* dist2) const {
+template <class T, std::size_t D>
+int BasicKdTreeView<T, D>::knn_search(const Point& q, int k, std::uint32_t* ids,
+                                      Dist* dist2) const {
   if (k > 64) k = 64;
   if (k <= 0 || n_ == 0) return 0;
   int count = 0;  // ids/dist2 kept sorted ascending
@@ -177,7 +219,7 @@ int BasicKdTreeView<T>::knn_search(const Point& q, int k, std::uint32_t* ids, Di
     if (count == k && f.bound > dist2[count - 1]) continue;
     if (f.level == depth_) {
       for (std::uint32_t i = f.begin; i < f.end; ++i) {
-        const Dist d = kd_distance2<T>(points_[i], q);
+        const Dist d = kd_distance2(points_[i], q);
         const std::uint32_t pid = id(i);
         // Kept when closer than the k-th, or as close with a smaller id.
         if (count == k && (d > dist2[count - 1] || (d == dist2[count - 1] && pid > ids[count - 1])))
@@ -193,7 +235,7 @@ int BasicKdTreeView<T>::knn_search(const Point& q, int k, std::uint32_t* ids, Di
       }
       continue;
     }
-    push_children<T>(f, nodes_[f.node], q, stack, top);
+    push_children<T, D>(f, nodes_[f.node], q, std::numeric_limits<Dist>::max(), stack, top);
   }
   return count;
 }
@@ -201,5 +243,8 @@ int BasicKdTreeView<T>::knn_search(const Point& q, int k, std::uint32_t* ids, Di
 template class BasicKdTreeView<float>;
 template class BasicKdTreeView<std::int16_t>;
 template class BasicKdTreeView<std::int8_t>;
+template class BasicKdTreeView<float, kSearchDims>;
+template class BasicKdTreeView<std::int16_t, kSearchDims>;
+template class BasicKdTreeView<std::int8_t, kSearchDims>;
 
 }  // namespace kg

@@ -1,7 +1,11 @@
 // Flat kd-tree over arc descriptors, laid out so it can live in a file and
 // be used in place (zero copy):
-// - points: N descriptors of kDescriptorSize components of type T (float,
-//   int16_t or int8_t: DescriptorParams::encoding), in tree order;
+// - points: N points of D components of type T (float, int16_t or int8_t:
+//   DescriptorParams::encoding), in tree order. The first kDescriptorSize
+//   components are an arc descriptor, compared by Euclidean distance; the
+//   model index adds kArcAttributes more (D = kSearchDims: the arc's scale
+//   attributes), which a radius query matches by a box instead: each within
+//   `box` of the query's;
 // - ids (optional): for each tree slot, the original index of its point.
 //   The model index stores its arcs in tree order instead, so it has none
 //   and a query returns tree slots;
@@ -12,10 +16,10 @@
 //   and [m, e) to its right child with m = b + (e - b) / 2. L is the smallest
 //   depth whose leaves hold at most kLeafSize points. Left points have
 //   value <= split <= right points.
-// Distances are squared Euclidean in the points' domain: float for float
-// points, int32 for int8 (at most 6 * 254^2), int64 for int16 (6 * 65534^2
-// does not fit in 32 bits). Queries use a fixed-size stack and allocate
-// nothing.
+// Distances are squared Euclidean over the descriptor components, in the
+// points' domain: float for float points, int32 for int8 (at most
+// 6 * 254^2), int64 for int16 (6 * 65534^2 does not fit in 32 bits).
+// Queries use a fixed-size stack and allocate nothing.
 #pragma once
 
 #include <array>
@@ -56,13 +60,15 @@ struct KdTraits<std::int8_t> {
   using Dist = std::int32_t;
 };
 
-template <class T>
-using KdPoint = std::array<T, kDescriptorSize>;
+template <class T, std::size_t D = kDescriptorSize>
+using KdPoint = std::array<T, D>;
 
-// Squared Euclidean distance in the points' domain (for float, the same
-// arithmetic as squared_distance() in core/arc_descriptor.h).
-template <class T>
-inline typename KdTraits<T>::Dist kd_distance2(const KdPoint<T>& p, const KdPoint<T>& q) {
+// Squared Euclidean distance of the descriptor components in the points'
+// domain (for float, the same arithmetic as squared_distance() in
+// core/arc_descriptor.h).
+template <class T, std::size_t D>
+inline typename KdTraits<T>::Dist kd_distance2(const std::array<T, D>& p,
+                                               const std::array<T, D>& q) {
   using Dist = typename KdTraits<T>::Dist;
   Dist s = 0;
   for (int i = 0; i < kDescriptorSize; ++i) {
@@ -79,16 +85,20 @@ inline constexpr int kMaxTreeDepth = 40;
 int kdtree_depth(std::uint32_t n);
 
 // Builds a tree over points[0..n): fills `points` (tree order), `ids` (the
-// source index of each tree slot) and `nodes` (resized). Deterministic: ties
-// are broken by source index.
-template <class T>
-void build_kdtree(const KdPoint<T>* source, std::uint32_t n, std::vector<KdPoint<T>>& points,
-                  std::vector<std::uint32_t>& ids, std::vector<typename KdTraits<T>::Node>& nodes);
+// source index of each tree slot) and `nodes` (resized). Each node splits
+// the dimension of largest spread, the attributes' spreads multiplied by
+// `attribute_weight` (the ratio of the descriptor radius to the box
+// half-width, so that both are cut alike). Deterministic: ties are broken by
+// source index.
+template <class T, std::size_t D = kDescriptorSize>
+void build_kdtree(const KdPoint<T, D>* source, std::uint32_t n, std::vector<KdPoint<T, D>>& points,
+                  std::vector<std::uint32_t>& ids, std::vector<typename KdTraits<T>::Node>& nodes,
+                  double attribute_weight = 1.0);
 
-template <class T>
+template <class T, std::size_t D = kDescriptorSize>
 class BasicKdTreeView {
  public:
-  using Point = KdPoint<T>;
+  using Point = KdPoint<T, D>;
   using Node = typename KdTraits<T>::Node;
   using Dist = typename KdTraits<T>::Dist;
 
@@ -100,14 +110,19 @@ class BasicKdTreeView {
 
   std::uint32_t size() const { return n_; }
 
-  // Ids of all points with squared distance < radius2 from q. Writes at most
-  // `capacity` ids to `out` and returns how many points matched in total
-  // (a return value > capacity means the output was truncated).
+  // Ids of all points with squared distance < radius2 from q and every
+  // attribute within `box` of q's (|p_d - q_d| <= box; no attribute check
+  // without `box`). Writes at most `capacity` ids to `out` and returns how
+  // many points matched in total (a return value > capacity means the
+  // output was truncated).
   std::uint32_t radius_search(const Point& q, Dist radius2, std::uint32_t* out,
                               std::uint32_t capacity) const;
+  std::uint32_t radius_search(const Point& q, Dist radius2, Dist box, std::uint32_t* out,
+                              std::uint32_t capacity) const;
 
-  // The k (<= 64) nearest points, closest first (ties: smaller id first):
-  // ids and squared distances. Returns the number written (min(k, size())).
+  // The k (<= 64) nearest points by descriptor distance (attributes are not
+  // compared), closest first (ties: smaller id first): ids and squared
+  // distances. Returns the number written (min(k, size())).
   int knn_search(const Point& q, int k, std::uint32_t* ids, Dist* dist2) const;
 
  private:
@@ -123,9 +138,16 @@ class BasicKdTreeView {
 using KdTreeView = BasicKdTreeView<float>;
 using KdTreeView16 = BasicKdTreeView<std::int16_t>;
 using KdTreeView8 = BasicKdTreeView<std::int8_t>;
+// The model index's trees: descriptor plus scale attributes.
+using ArcTreeView = BasicKdTreeView<float, kSearchDims>;
+using ArcTreeView16 = BasicKdTreeView<std::int16_t, kSearchDims>;
+using ArcTreeView8 = BasicKdTreeView<std::int8_t, kSearchDims>;
 
 extern template class BasicKdTreeView<float>;
 extern template class BasicKdTreeView<std::int16_t>;
 extern template class BasicKdTreeView<std::int8_t>;
+extern template class BasicKdTreeView<float, kSearchDims>;
+extern template class BasicKdTreeView<std::int16_t, kSearchDims>;
+extern template class BasicKdTreeView<std::int8_t, kSearchDims>;
 
 }  // namespace kg

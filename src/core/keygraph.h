@@ -72,4 +72,14 @@ inline bool is_model_arc(Point2f a, Point2f b, const GraphParams& p) {
   return d >= p.min_distance && d <= p.max_distance;
 }
 
+// The same, also within max_relative_length detector scales of both ends
+// (scales <= 0 are unknown and not checked).
+inline bool is_model_arc(Point2f a, Point2f b, float scale_a, float scale_b, const GraphParams& p) {
+  if (!is_model_arc(a, b, p)) return false;
+  if (p.max_relative_length <= 0.f) return true;
+  const float l2 = (b.x - a.x) * (b.x - a.x) + (b.y - a.y) * (b.y - a.y);
+  const float ra = p.max_relative_length * scale_a, rb = p.max_relative_length * scale_b;
+  return (scale_a <= 0.f || l2 <= ra * ra) && (scale_b <= 0.f || l2 <= rb * rb);
+}
+
 }  // namespace kg

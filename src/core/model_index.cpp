@@ -235,7 +235,7 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
     if (crc32(d + sec.offset, static_cast<std::size_t>(sec.size)) != sec.crc)
       return corrupt(std::string(name) + " section: checksum mismatch");
   }
-  for (std::uint32_t id = 1; id <= required_sections(minor); ++id) {
+  for (std::uint32_t id = 1; id <= kSectionCount; ++id) {
     if (!sections[id].present) return corrupt(std::string(section_name(id)) + " section missing");
   }
   auto expect_size = [&](std::uint32_t id, std::uint64_t element) -> Status {
@@ -250,6 +250,7 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   const Section& strings = sections[kSectionStrings];
   const Section& keypoints = sections[kSectionKeypoints];
   const Section& arcs = sections[kSectionTreeArcs];
+  const Section& targets = sections[kSectionTreeArcTargets];
   const Section& descriptors = sections[kSectionDescriptors];
   const Section& nodes = sections[kSectionTreeNodes];
   const Section& vertex = sections[kSectionVertexDescriptors];
@@ -265,16 +266,18 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   if (!(s = expect_size(kSectionModels, kModelRecordSize))) return s;
   if (!(s = expect_size(kSectionStrings, 1))) return s;
   if (!(s = expect_size(kSectionKeypoints, sizeof(Point2f)))) return s;
-  if (!(s = expect_size(kSectionTreeArcs, sizeof(ModelArc)))) return s;
-  if (!(s = expect_size(kSectionDescriptors, encoded_descriptor_size(encoding)))) return s;
+  if (!(s = expect_size(kSectionTreeArcs, sizeof(std::uint32_t)))) return s;
+  if (!(s = expect_size(kSectionTreeArcTargets, sizeof(std::int16_t)))) return s;
+  if (targets.count != arcs.count)
+    return corrupt("tree arc targets section: " + std::to_string(targets.count) + " targets for " +
+                   std::to_string(arcs.count) + " tree arcs");
+  if (!(s = expect_size(kSectionDescriptors, encoded_point_size(encoding)))) return s;
   if (!(s = expect_size(kSectionTreeNodes, tree_node_size(encoding)))) return s;
   if (!(s = expect_size(kSectionVertexDescriptors, kVertexDescriptorSize))) return s;
-  if (scales.present) {
-    if (!(s = expect_size(kSectionKeypointScales, sizeof(float)))) return s;
-    if (scales.count != keypoints.count)
-      return corrupt("keypoint scales section: count " + std::to_string(scales.count) +
-                     ", expected " + std::to_string(keypoints.count) + " (one per keypoint)");
-  }
+  if (!(s = expect_size(kSectionKeypointScales, sizeof(float)))) return s;
+  if (scales.count != keypoints.count)
+    return corrupt("keypoint scales section: count " + std::to_string(scales.count) +
+                   ", expected " + std::to_string(keypoints.count) + " (one per keypoint)");
   if (models.count == 0) return corrupt("models section: no models");
   // One vertex descriptor per keypoint exactly when the parameters ask for them.
   const bool want_vertex = params_.descriptor.vertex_descriptor != VertexDescriptor::kNone;
@@ -331,9 +334,8 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
       return corrupt("keypoint " + std::to_string(i) + ": not finite");
   }
   // Scales: finite and >= 0 (0: unknown, e.g. MSER centroids).
-  const float* kp_scales =
-      scales.present ? reinterpret_cast<const float*>(d + scales.offset) : nullptr;
-  for (std::uint32_t i = 0; kp_scales != nullptr && i < keypoints.count; ++i) {
+  const auto* kp_scales = reinterpret_cast<const float*>(d + scales.offset);
+  for (std::uint32_t i = 0; i < keypoints.count; ++i) {
     if (!(std::isfinite(kp_scales[i]) && kp_scales[i] >= 0.f && kp_scales[i] < 1e6f))
       return corrupt("keypoint " + std::to_string(i) + ": scale not finite or negative");
   }
@@ -343,18 +345,20 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   // Every arc joins two distinct keypoints of one model, and each model
   // record's arc count is the number of arcs starting in it. Counted in
   // chunks of models with a fixed array: no allocation.
-  const auto* arc = reinterpret_cast<const ModelArc*>(d + arcs.offset);
+  arc_from_ = reinterpret_cast<const std::uint32_t*>(d + arcs.offset);
+  arc_to_offset_ = reinterpret_cast<const std::int16_t*>(d + targets.offset);
   constexpr std::uint32_t kChunk = 256;
   std::uint32_t per_model[kChunk];
   for (std::uint32_t first = 0; first < models.count; first += kChunk) {
     const std::uint32_t last = std::min(models.count, first + kChunk);
     std::fill(per_model, per_model + kChunk, 0U);
     for (std::uint32_t a = 0; a < arcs.count; ++a) {
-      const ModelArc& x = arc[a];
-      if (x.from >= keypoints.count || x.to >= keypoints.count || x.from == x.to)
-        return corrupt("tree arc " + std::to_string(a) + ": keypoint ids " +
-                       std::to_string(x.from) + ", " + std::to_string(x.to) + " invalid (" +
-                       std::to_string(keypoints.count) + " keypoints)");
+      const std::int64_t from = arc_from_[a], to = from + arc_to_offset_[a];
+      if (from >= keypoints.count || to < 0 || to >= keypoints.count || from == to)
+        return corrupt("tree arc " + std::to_string(a) + ": keypoint ids " + std::to_string(from) +
+                       ", " + std::to_string(to) + " invalid (" + std::to_string(keypoints.count) +
+                       " keypoints)");
+      const ModelArc x = arc(a);
       const auto m = static_cast<std::uint32_t>(model_of_keypoint(x.from));
       if (first == 0 && static_cast<std::uint32_t>(model_of_keypoint(x.to)) != m)
         return corrupt("tree arc " + std::to_string(a) + ": keypoint ids outside model " +
@@ -381,7 +385,7 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   };
   switch (encoding) {
     case DescriptorEncoding::kFloat32: {
-      const auto* p = reinterpret_cast<const ArcDescriptor*>(desc);
+      const auto* p = reinterpret_cast<const ArcSearchPoint*>(desc);
       for (std::uint32_t i = 0; i < descriptors.count; ++i) {
         for (float v : p[i]) {
           if (!std::isfinite(v)) return bad_descriptor(i);
@@ -389,13 +393,13 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
       }
       const auto* n = reinterpret_cast<const KdNode*>(node);
       for (std::uint32_t i = 0; i < nodes.count; ++i) {
-        if (n[i].dim >= static_cast<std::uint32_t>(kDescriptorSize) || !std::isfinite(n[i].split))
+        if (n[i].dim >= static_cast<std::uint32_t>(kSearchDims) || !std::isfinite(n[i].split))
           return bad_node(i);
       }
       break;
     }
     case DescriptorEncoding::kInt16: {
-      const auto* p = reinterpret_cast<const ArcDescriptorI16*>(desc);
+      const auto* p = reinterpret_cast<const ArcSearchPointI16*>(desc);
       for (std::uint32_t i = 0; i < descriptors.count; ++i) {
         for (std::int16_t v : p[i]) {
           if (v < -scale) return bad_descriptor(i);  // -32768
@@ -404,7 +408,7 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
       break;
     }
     case DescriptorEncoding::kInt8: {
-      const auto* p = reinterpret_cast<const ArcDescriptorI8*>(desc);
+      const auto* p = reinterpret_cast<const ArcSearchPointI8*>(desc);
       for (std::uint32_t i = 0; i < descriptors.count; ++i) {
         for (std::int8_t v : p[i]) {
           if (v < -scale) return bad_descriptor(i);  // -128
@@ -416,8 +420,7 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   if (encoding != DescriptorEncoding::kFloat32) {
     const auto* n = reinterpret_cast<const KdNodeInt*>(node);
     for (std::uint32_t i = 0; i < nodes.count; ++i) {
-      if (n[i].dim >= kDescriptorSize || n[i].split < -scale || n[i].split > scale)
-        return bad_node(i);
+      if (n[i].dim >= kSearchDims || n[i].split < -scale || n[i].split > scale) return bad_node(i);
     }
   }
 
@@ -429,7 +432,6 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   strings_size_ = strings.count;
   keypoints_ = kp;
   keypoint_count_ = keypoints.count;
-  arcs_ = arc;
   arc_count_ = arcs.count;
   tree_descriptors_ = desc;
   tree_nodes_ = node;
@@ -475,19 +477,19 @@ int ModelIndex::model_of_keypoint(std::uint32_t keypoint) const {
   return lo;
 }
 
-const ArcDescriptor* ModelIndex::descriptors_f32() const {
+const ArcSearchPoint* ModelIndex::tree_points_f32() const {
   return descriptor_encoding() == DescriptorEncoding::kFloat32
-             ? reinterpret_cast<const ArcDescriptor*>(tree_descriptors_)
+             ? reinterpret_cast<const ArcSearchPoint*>(tree_descriptors_)
              : nullptr;
 }
-const ArcDescriptorI16* ModelIndex::descriptors_i16() const {
+const ArcSearchPointI16* ModelIndex::tree_points_i16() const {
   return descriptor_encoding() == DescriptorEncoding::kInt16
-             ? reinterpret_cast<const ArcDescriptorI16*>(tree_descriptors_)
+             ? reinterpret_cast<const ArcSearchPointI16*>(tree_descriptors_)
              : nullptr;
 }
-const ArcDescriptorI8* ModelIndex::descriptors_i8() const {
+const ArcSearchPointI8* ModelIndex::tree_points_i8() const {
   return descriptor_encoding() == DescriptorEncoding::kInt8
-             ? reinterpret_cast<const ArcDescriptorI8*>(tree_descriptors_)
+             ? reinterpret_cast<const ArcSearchPointI8*>(tree_descriptors_)
              : nullptr;
 }
 const KdNode* ModelIndex::tree_nodes_f32() const {

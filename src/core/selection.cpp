@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/arc_attributes.h"
 #include "core/arc_descriptor.h"
 #include "core/descriptor_encoding.h"
 #include "core/sampling.h"
@@ -71,40 +72,55 @@ bool plausible_local_map(const Point2f* m, const Point2f* s, int k, const Params
 }  // namespace
 
 ArcSearch::ArcSearch(const ModelIndex& index) {
-  encoding_ = index.params().descriptor.encoding;
-  const float radius = index.params().descriptor.similarity_threshold;
+  const Params& params = index.params();
+  encoding_ = params.descriptor.encoding;
+  const float radius = params.descriptor.similarity_threshold;
   radius2_ = radius * radius;
+  use_box_ = params.graph.max_scale_error > 0.f;
+  box_ = params.graph.max_scale_error / kAttributeRange;
+  box_scaled_ = scaled_box(box_, encoding_);
   const std::uint32_t n = index.arc_count();
   const int depth = index.tree_depth();
   switch (encoding_) {
     case DescriptorEncoding::kFloat32:
-      f32_ = KdTreeView(index.descriptors_f32(), nullptr, n, index.tree_nodes_f32(), depth);
+      f32_ = ArcTreeView(index.tree_points_f32(), nullptr, n, index.tree_nodes_f32(), depth);
       break;
     case DescriptorEncoding::kInt16:
-      i16_ = KdTreeView16(index.descriptors_i16(), nullptr, n, index.tree_nodes_int(), depth);
-      if (!scaled_radius2(radius, encoding_, std::numeric_limits<KdTreeView16::Dist>::max(),
+      i16_ = ArcTreeView16(index.tree_points_i16(), nullptr, n, index.tree_nodes_int(), depth);
+      if (!scaled_radius2(radius, encoding_, std::numeric_limits<ArcTreeView16::Dist>::max(),
                           radius2_scaled_))
         radius2_scaled_ = 0;  // unreachable: validate_params checked the scaled radius
       break;
     case DescriptorEncoding::kInt8:
-      i8_ = KdTreeView8(index.descriptors_i8(), nullptr, n, index.tree_nodes_int(), depth);
-      if (!scaled_radius2(radius, encoding_, std::numeric_limits<KdTreeView8::Dist>::max(),
+      i8_ = ArcTreeView8(index.tree_points_i8(), nullptr, n, index.tree_nodes_int(), depth);
+      if (!scaled_radius2(radius, encoding_, std::numeric_limits<ArcTreeView8::Dist>::max(),
                           radius2_scaled_))
         radius2_scaled_ = 0;
       break;
   }
 }
 
-std::uint32_t ArcSearch::radius_search(const ArcDescriptor& q, std::uint32_t* out,
-                                       std::uint32_t capacity) const {
+std::uint32_t ArcSearch::radius_search(const ArcDescriptor& q, const float* attributes,
+                                       std::uint32_t* out, std::uint32_t capacity) const {
+  const float none[kArcAttributes] = {0.f, 0.f};
+  const ArcSearchPoint p = search_point(q, attributes != nullptr ? attributes : none);
+  const bool box = use_box_ && attributes != nullptr;
   switch (encoding_) {
     case DescriptorEncoding::kFloat32:
-      return f32_.radius_search(q, radius2_, out, capacity);
-    case DescriptorEncoding::kInt16:
-      return i16_.radius_search(quantise<std::int16_t>(q), radius2_scaled_, out, capacity);
-    case DescriptorEncoding::kInt8:
-      return i8_.radius_search(quantise<std::int8_t>(q),
-                               static_cast<KdTreeView8::Dist>(radius2_scaled_), out, capacity);
+      return box ? f32_.radius_search(p, radius2_, box_, out, capacity)
+                 : f32_.radius_search(p, radius2_, out, capacity);
+    case DescriptorEncoding::kInt16: {
+      const ArcSearchPointI16 p16 = quantise<std::int16_t>(p);
+      return box ? i16_.radius_search(p16, radius2_scaled_, box_scaled_, out, capacity)
+                 : i16_.radius_search(p16, radius2_scaled_, out, capacity);
+    }
+    case DescriptorEncoding::kInt8: {
+      const ArcSearchPointI8 p8 = quantise<std::int8_t>(p);
+      const auto r2 = static_cast<ArcTreeView8::Dist>(radius2_scaled_);
+      return box ? i8_.radius_search(p8, r2, static_cast<ArcTreeView8::Dist>(box_scaled_), out,
+                                     capacity)
+                 : i8_.radius_search(p8, r2, out, capacity);
+    }
   }
   return 0;
 }
@@ -147,43 +163,22 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
   ++stats.arcs_described;
   const auto cap = static_cast<std::uint32_t>(limits.max_arc_matches);
   found_.resize(cap);
-  const std::uint32_t total = in.search->radius_search(d, found_.data(), cap);
+  float attributes[kArcAttributes];
+  const bool scaled = in.scene_scales != nullptr &&
+                      arc_attributes(a, b, in.scene_scales[tri[e]],
+                                     in.scene_scales[tri[Delaunay::next(e)]], attributes);
+  const std::uint32_t total =
+      in.search->radius_search(d, scaled ? attributes : nullptr, found_.data(), cap);
   if (total > cap) stats.truncated_arc_matches = true;
   stats.arc_matches += total;
   const std::uint32_t n = std::min(total, cap);
-  const ModelArc* arcs = in.index->arcs();
-  const float* model_scales = in.index->keypoint_scales();
-  const float max_error = params.graph.max_scale_error;
-  const float scale_a = in.scene_scales != nullptr ? in.scene_scales[tri[e]] : 0.f;
-  const float scale_b = in.scene_scales != nullptr ? in.scene_scales[tri[Delaunay::next(e)]] : 0.f;
-  if (max_error > 0.f && model_scales != nullptr && scale_a > 0.f && scale_b > 0.f) {
-    // Scale change implied by the lengths against the one the keypoints'
-    // scales imply, at each end, compared squared: no square roots or logs.
-    const float lo = std::exp(-2.f * max_error), hi = std::exp(2.f * max_error);
-    const float scene_length2 = (b.x - a.x) * (b.x - a.x) + (b.y - a.y) * (b.y - a.y);
-    const float inv_a2 = 1.f / (scale_a * scale_a), inv_b2 = 1.f / (scale_b * scale_b);
-    const Point2f* model_points = in.index->keypoints();
-    for (std::uint32_t i = 0; i < n; ++i) {
-      const ModelArc& arc = arcs[found_[i]];
-      const float sf = model_scales[arc.from], st = model_scales[arc.to];
-      const Point2f p = model_points[arc.from], q = model_points[arc.to];
-      const float model_length2 = (q.x - p.x) * (q.x - p.x) + (q.y - p.y) * (q.y - p.y);
-      // (scene / model length)^2 / (scene / model sigma)^2 at both ends.
-      const float ra = scene_length2 * sf * sf * inv_a2, rb = scene_length2 * st * st * inv_b2;
-      const float ka = lo * model_length2, kb = hi * model_length2;
-      if (sf > 0.f && !(ra >= ka && ra <= kb)) continue;
-      if (st > 0.f && !(rb >= ka && rb <= kb)) continue;
-      pool_.push_back(key(arc.from, arc.to));
-    }
-  } else {
-    for (std::uint32_t i = 0; i < n; ++i)
-      pool_.push_back(key(arcs[found_[i]].from, arcs[found_[i]].to));
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const ModelArc arc = in.index->arc(found_[i]);
+    pool_.push_back(key(arc.from, arc.to));
   }
-  const auto kept = static_cast<std::uint32_t>(pool_.size() - begin_[e]);
-  stats.arc_matches_kept += kept;
   std::sort(pool_.begin() + begin_[e], pool_.end());
-  count_[e] = kept;
-  count = kept;
+  count_[e] = n;
+  count = n;
 }
 
 void Selector::select(const SelectionInput& in, const Limits& limits,

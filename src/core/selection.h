@@ -35,18 +35,23 @@ class ArcSearch {
 
   DescriptorEncoding encoding() const { return encoding_; }
   // Slots of the model arcs whose descriptor is within
-  // params.descriptor.similarity_threshold of q (see KdTreeView::radius_search
-  // for `capacity` and the return value).
-  std::uint32_t radius_search(const ArcDescriptor& q, std::uint32_t* out,
+  // params.descriptor.similarity_threshold of q and, when `attributes` is
+  // not null (core/arc_attributes.h) and params.graph.max_scale_error > 0,
+  // whose scale attributes are each within max_scale_error of them (see
+  // BasicKdTreeView::radius_search for `capacity` and the return value).
+  std::uint32_t radius_search(const ArcDescriptor& q, const float* attributes, std::uint32_t* out,
                               std::uint32_t capacity) const;
 
  private:
   DescriptorEncoding encoding_ = DescriptorEncoding::kFloat32;
-  KdTreeView f32_;
-  KdTreeView16 i16_;
-  KdTreeView8 i8_;
+  ArcTreeView f32_;
+  ArcTreeView16 i16_;
+  ArcTreeView8 i8_;
   float radius2_ = 0.f;              // float32
   std::int64_t radius2_scaled_ = 0;  // int16, int8
+  bool use_box_ = false;             // max_scale_error > 0
+  float box_ = 0.f;                  // float32: half-width in the stored domain
+  std::int64_t box_scaled_ = 0;      // int16, int8
 };
 
 struct SelectionInput {

@@ -119,9 +119,9 @@ void exercise(const kg::ModelIndex& index) {
     require(std::uint64_t{m.keypoint_begin} + m.keypoint_count <= keypoints,
             "model keypoint range out of bounds");
   }
-  const kg::ModelArc* arcs = index.arcs();
   for (std::uint32_t i = 0; i < index.arc_count(); ++i) {
-    require(arcs[i].from < keypoints && arcs[i].to < keypoints, "arc keypoint id out of bounds");
+    const kg::ModelArc arc = index.arc(i);
+    require(arc.from < keypoints && arc.to < keypoints, "arc keypoint id out of bounds");
   }
   counts.name_bytes += name_bytes;
 

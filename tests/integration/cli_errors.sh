@@ -181,10 +181,10 @@ if "$KG" inspect "$INDEX" >"$LOG/stdout" 2>"$LOG/stderr"; then
   grep -Eq '^ +[0-9]+ +box +[0-9]+ +[0-9]+ ' "$LOG/stdout" ||
     bad "inspect: no model line for 'box' in: $(cat "$LOG/stdout")"
   # Seven sections, every checksum verified.
-  [ "$(grep -Ec '^ +[0-9]+ .* crc ok$' "$LOG/stdout")" -eq 8 ] ||
-    bad "inspect: expected 8 'crc ok' sections in: $(cat "$LOG/stdout")"
+  [ "$(grep -Ec '^ +[0-9]+ .* crc ok$' "$LOG/stdout")" -eq 9 ] ||
+    bad "inspect: expected 9 'crc ok' sections in: $(cat "$LOG/stdout")"
   grep -q 'crc BAD' "$LOG/stdout" && bad "inspect: a good index shows 'crc BAD'"
-  grep -Eq '^format 2\.[0-9]+, ' "$LOG/stdout" || bad "inspect: no format line"
+  grep -Eq '^format 3\.[0-9]+, ' "$LOG/stdout" || bad "inspect: no format line"
   grep -Eq '^  descriptor\.encoding +(float32|int16|int8)$' "$LOG/stdout" ||
     bad "inspect: parameter descriptor.encoding not shown"
   grep -Eq '^bytes per arc: [0-9.]+ ' "$LOG/stdout" || bad "inspect: no bytes-per-arc line"

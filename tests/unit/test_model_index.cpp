@@ -28,6 +28,7 @@
 #include "alloc_counter.h"
 #include "build/desktop_detect.h"
 #include "build/model_builder.h"
+#include "core/arc_attributes.h"
 #include "core/crc32.h"
 #include "core/descriptor_encoding.h"
 #include "core/index_format.h"
@@ -241,16 +242,28 @@ void expect_same_params(const Params& got, const Params& want) {
   EXPECT_EQ(got.ransac.seed, want.ransac.seed);
 }
 
-// The descriptor in tree slot `slot`, decoded to float (integer encodings:
-// divided by the scale) and encoded as the index stores it.
-bool slot_holds(const ModelIndex& index, std::uint32_t slot, const ArcDescriptor& d) {
+// The descriptor components of a tree point.
+template <class T, std::size_t N>
+std::array<T, kDescriptorSize> descriptor_part(const std::array<T, N>& p) {
+  std::array<T, kDescriptorSize> d{};
+  std::copy(p.begin(), p.begin() + kDescriptorSize, d.begin());
+  return d;
+}
+
+// Whether tree slot `slot` holds descriptor d with the attributes of the
+// arc from keypoint a to b (scales sa, sb), encoded as the index stores them.
+bool slot_holds(const ModelIndex& index, std::uint32_t slot, const ArcDescriptor& d, Point2f a,
+                Point2f b, float sa, float sb) {
+  float attributes[kArcAttributes];
+  arc_attributes(a, b, sa, sb, attributes);
+  const ArcSearchPoint p = search_point(d, attributes);
   switch (index.descriptor_encoding()) {
     case DescriptorEncoding::kFloat32:
-      return index.descriptors_f32()[slot] == d;
+      return index.tree_points_f32()[slot] == p;
     case DescriptorEncoding::kInt16:
-      return index.descriptors_i16()[slot] == quantise<std::int16_t>(d);
+      return index.tree_points_i16()[slot] == quantise<std::int16_t>(p);
     case DescriptorEncoding::kInt8:
-      return index.descriptors_i8()[slot] == quantise<std::int8_t>(d);
+      return index.tree_points_i8()[slot] == quantise<std::int8_t>(p);
   }
   return false;
 }
@@ -285,6 +298,7 @@ void expect_matches(const ModelIndex& index, const std::vector<BuiltModel>& mode
     for (std::size_t i = 0; i < bm.keypoints.size(); ++i) {
       const Point2f& p = index.keypoints()[kp_begin + i];
       ASSERT_TRUE(p.x == bm.keypoints[i].x && p.y == bm.keypoints[i].y) << "keypoint " << i;
+      ASSERT_EQ(index.keypoint_scales()[kp_begin + i], bm.keypoint_scales[i]) << "keypoint " << i;
     }
     for (std::size_t i = 0; i < bm.arcs.size(); ++i)
       built[{bm.arcs[i].from + kp_begin, bm.arcs[i].to + kp_begin}] = bm.descriptors[i];
@@ -308,11 +322,14 @@ void expect_matches(const ModelIndex& index, const std::vector<BuiltModel>& mode
   std::map<std::pair<std::uint32_t, std::uint32_t>, int> seen;
   std::vector<std::uint32_t> per_model(models.size(), 0);
   for (std::uint32_t slot = 0; slot < index.arc_count(); ++slot) {
-    const ModelArc& a = index.arcs()[slot];
+    const ModelArc a = index.arc(slot);
     const auto it = built.find({a.from, a.to});
     ASSERT_TRUE(it != built.end()) << "slot " << slot << " holds an unknown arc";
     ASSERT_EQ(++seen[it->first], 1) << "slot " << slot << " repeats an arc";
-    ASSERT_TRUE(slot_holds(index, slot, it->second)) << "slot " << slot;
+    ASSERT_TRUE(slot_holds(index, slot, it->second, index.keypoints()[a.from],
+                           index.keypoints()[a.to], index.keypoint_scales()[a.from],
+                           index.keypoint_scales()[a.to]))
+        << "slot " << slot;
     const int m = index.model_of_keypoint(a.from);
     ASSERT_EQ(index.model_of_keypoint(a.to), m);
     ++per_model[static_cast<std::size_t>(m)];
@@ -323,16 +340,16 @@ void expect_matches(const ModelIndex& index, const std::vector<BuiltModel>& mode
   const std::uint32_t nodes = (1u << index.tree_depth()) - 1;
   ASSERT_EQ(index.tree_node_count(), nodes);
   const DescriptorEncoding e = index.descriptor_encoding();
-  EXPECT_EQ(index.descriptors_f32() != nullptr, e == DescriptorEncoding::kFloat32);
-  EXPECT_EQ(index.descriptors_i16() != nullptr, e == DescriptorEncoding::kInt16);
-  EXPECT_EQ(index.descriptors_i8() != nullptr, e == DescriptorEncoding::kInt8);
+  EXPECT_EQ(index.tree_points_f32() != nullptr, e == DescriptorEncoding::kFloat32);
+  EXPECT_EQ(index.tree_points_i16() != nullptr, e == DescriptorEncoding::kInt16);
+  EXPECT_EQ(index.tree_points_i8() != nullptr, e == DescriptorEncoding::kInt8);
   EXPECT_EQ(index.tree_nodes_f32() != nullptr, e == DescriptorEncoding::kFloat32);
   EXPECT_EQ(index.tree_nodes_int() != nullptr, e != DescriptorEncoding::kFloat32);
   for (std::uint32_t n = 0; n < nodes; ++n) {
     if (e == DescriptorEncoding::kFloat32) {
-      ASSERT_LT(index.tree_nodes_f32()[n].dim, static_cast<std::uint32_t>(kDescriptorSize));
+      ASSERT_LT(index.tree_nodes_f32()[n].dim, static_cast<std::uint32_t>(kSearchDims));
     } else {
-      ASSERT_LT(index.tree_nodes_int()[n].dim, static_cast<std::uint32_t>(kDescriptorSize));
+      ASSERT_LT(index.tree_nodes_int()[n].dim, static_cast<std::uint32_t>(kSearchDims));
     }
   }
 }
@@ -363,18 +380,20 @@ TEST_F(ModelIndexTest, RoundTripInEachEncoding) {
     EXPECT_EQ(index.descriptor_encoding(), e);
     expect_matches(index, models());
     expect_same_params(index.params(), with_encoding(e));
-    // Section sizes follow the encoding: 24, 12 or 6 bytes per descriptor,
-    // 8 or 4 per tree node; the arcs are 8 bytes in every encoding.
+    // Section sizes follow the encoding: 32, 16 or 8 bytes per tree point
+    // (descriptor and attributes), 8 or 4 per tree node; the arcs are 4 + 2
+    // bytes in every encoding.
     EXPECT_EQ(section_size(b, format::kSectionDescriptors),
-              std::size_t{index.arc_count()} * encoded_descriptor_size(e));
+              std::size_t{index.arc_count()} * encoded_point_size(e));
     EXPECT_EQ(section_size(b, format::kSectionTreeNodes),
               std::size_t{index.tree_node_count()} * format::tree_node_size(e));
-    EXPECT_EQ(section_size(b, format::kSectionTreeArcs), std::size_t{index.arc_count()} * 8);
+    EXPECT_EQ(section_size(b, format::kSectionTreeArcs), std::size_t{index.arc_count()} * 4);
+    EXPECT_EQ(section_size(b, format::kSectionTreeArcTargets), std::size_t{index.arc_count()} * 2);
     for (std::uint32_t id : {format::kSectionDescriptors, format::kSectionTreeNodes})
       EXPECT_EQ(load<std::uint32_t>(b.data() + entry(b, id) + format::kEntEncoding),
                 static_cast<std::uint32_t>(e));
   }
-  // Smaller encodings make smaller files (int8: about 14 bytes per arc).
+  // Smaller encodings make smaller files (int8: about 14.3 bytes per arc).
   EXPECT_LT(encoded(DescriptorEncoding::kInt16).size(),
             encoded(DescriptorEncoding::kFloat32).size());
   EXPECT_LT(encoded(DescriptorEncoding::kInt8).size(), encoded(DescriptorEncoding::kInt16).size());
@@ -382,9 +401,10 @@ TEST_F(ModelIndexTest, RoundTripInEachEncoding) {
   EXPECT_LE(static_cast<double>(encoded(DescriptorEncoding::kInt8).size()) / arcs, 16.0);
 }
 
-// The search through the index (ArcSearch: quantised query, scaled radius)
-// finds exactly the slots a brute-force scan of the stored descriptors finds
-// in the same domain, in each encoding.
+// The search through the index (ArcSearch: quantised query, scaled radius
+// and attribute box) finds exactly the slots a brute-force scan of the
+// stored points finds in the same domain, in each encoding, with and
+// without the scale attributes.
 TEST_F(ModelIndexTest, ArcSearchEqualsBruteForceOnStoredDescriptors) {
   for (DescriptorEncoding e : kEncodings) {
     SCOPED_TRACE(encoding_name(e));
@@ -398,38 +418,63 @@ TEST_F(ModelIndexTest, ArcSearchEqualsBruteForceOnStoredDescriptors) {
     if (e != DescriptorEncoding::kFloat32) {
       ASSERT_TRUE(scaled_radius2(r, e, std::numeric_limits<std::int64_t>::max(), r2));
     }
+    const float box = index.params().graph.max_scale_error / kAttributeRange;
+    ASSERT_GT(box, 0.f);
+    const std::int64_t box_scaled = scaled_box(box, e);
     std::vector<std::uint32_t> out(n);
-    std::size_t matches = 0;
-    // Queries: builder descriptors of every 499th arc of box, slightly moved.
-    const BuiltModel& box = models()[0];
-    for (std::size_t q = 0; q < box.descriptors.size(); q += 499) {
-      ArcDescriptor query = box.descriptors[q];
+    std::size_t matches = 0, unboxed_matches = 0;
+    // Queries: builder descriptors of every 499th arc of box, slightly
+    // moved, with their arc's attributes slightly moved.
+    const BuiltModel& m = models()[0];
+    for (std::size_t q = 0; q < m.descriptors.size(); q += 499) {
+      ArcDescriptor query = m.descriptors[q];
       query[q % kDescriptorSize] += 0.05f;
-      std::vector<std::uint32_t> expected;
-      for (std::uint32_t slot = 0; slot < n; ++slot) {
-        bool near = false;
-        switch (e) {
-          case DescriptorEncoding::kFloat32:
-            near = kd_distance2<float>(index.descriptors_f32()[slot], query) < r * r;
-            break;
-          case DescriptorEncoding::kInt16:
-            near = kd_distance2<std::int16_t>(index.descriptors_i16()[slot],
-                                              quantise<std::int16_t>(query)) < r2;
-            break;
-          case DescriptorEncoding::kInt8:
-            near = kd_distance2<std::int8_t>(index.descriptors_i8()[slot],
-                                             quantise<std::int8_t>(query)) < r2;
-            break;
+      const ModelArc arc = m.arcs[q];
+      float attributes[kArcAttributes];
+      ASSERT_TRUE(arc_attributes(m.keypoints[arc.from], m.keypoints[arc.to],
+                                 m.keypoint_scales[arc.from], m.keypoint_scales[arc.to],
+                                 attributes));
+      attributes[0] += 0.3f * box;
+      attributes[1] -= 0.6f * box;
+      const ArcSearchPoint p = search_point(query, attributes);
+      for (const bool with_box : {true, false}) {
+        std::vector<std::uint32_t> expected;
+        for (std::uint32_t slot = 0; slot < n; ++slot) {
+          bool near = false, inside = true;
+          auto in_box = [&](auto stored, auto wanted, auto half_width) {
+            for (int i = kDescriptorSize; i < kSearchDims; ++i) {
+              const double diff = static_cast<double>(stored[i]) - static_cast<double>(wanted[i]);
+              if (std::fabs(diff) > static_cast<double>(half_width)) return false;
+            }
+            return true;
+          };
+          switch (e) {
+            case DescriptorEncoding::kFloat32:
+              near = kd_distance2(index.tree_points_f32()[slot], p) < r * r;
+              inside = in_box(index.tree_points_f32()[slot], p, box);
+              break;
+            case DescriptorEncoding::kInt16:
+              near = kd_distance2(index.tree_points_i16()[slot], quantise<std::int16_t>(p)) < r2;
+              inside = in_box(index.tree_points_i16()[slot], quantise<std::int16_t>(p), box_scaled);
+              break;
+            case DescriptorEncoding::kInt8:
+              near = kd_distance2(index.tree_points_i8()[slot], quantise<std::int8_t>(p)) < r2;
+              inside = in_box(index.tree_points_i8()[slot], quantise<std::int8_t>(p), box_scaled);
+              break;
+          }
+          if (near && (inside || !with_box)) expected.push_back(slot);
         }
-        if (near) expected.push_back(slot);
+        const std::uint32_t found =
+            search.radius_search(query, with_box ? attributes : nullptr, out.data(), n);
+        std::vector<std::uint32_t> got(out.begin(), out.begin() + found);
+        std::sort(got.begin(), got.end());
+        ASSERT_EQ(got, expected) << "query " << q << (with_box ? " with" : " without") << " box";
+        (with_box ? matches : unboxed_matches) += found;
       }
-      const std::uint32_t found = search.radius_search(query, out.data(), n);
-      std::vector<std::uint32_t> got(out.begin(), out.begin() + found);
-      std::sort(got.begin(), got.end());
-      ASSERT_EQ(got, expected) << "query " << q;
-      matches += found;
     }
     EXPECT_GT(matches, 0u);
+    // The box cuts: fewer matches with it than without.
+    EXPECT_LT(matches, unboxed_matches);
   }
 }
 
@@ -856,7 +901,7 @@ TEST_F(ModelIndexTest, ViewAllocatesNothing) {
     const ArcSearch search(index);
     std::uint32_t out[256];
     test::AllocationCounter counter;
-    const std::uint32_t found = search.radius_search(models()[0].descriptors[0], out, 256);
+    const std::uint32_t found = search.radius_search(models()[0].descriptors[0], nullptr, out, 256);
     EXPECT_EQ(counter.count(), 0);
     (void)found;
   }
@@ -959,8 +1004,6 @@ TEST(Golden, EveryGoldenLoadsAndDetects) {
     ASSERT_TRUE(s) << s.message();
     ASSERT_EQ(index.model_count(), 1);
     EXPECT_EQ(index.model(0).name, "box_crop");
-    // Keypoint scales arrived in 2.1; 2.0 files load without them.
-    EXPECT_EQ(index.keypoint_scales() != nullptr, index.version_minor() >= 1);
     DesktopDetector detector(index);
     DetectionList found;
     ASSERT_TRUE(detector.detect(box, found));
@@ -1039,8 +1082,8 @@ TEST_F(ModelIndexTest, RejectsTruncation) {
 }
 
 TEST_F(ModelIndexTest, RejectsOtherMajorVersion) {
-  for (std::uint16_t major :
-       {std::uint16_t{0}, std::uint16_t{1}, std::uint16_t{3}, std::uint16_t{0xFFFF}}) {
+  for (std::uint16_t major : {std::uint16_t{0}, std::uint16_t{1}, std::uint16_t{2},
+                              std::uint16_t{4}, std::uint16_t{0xFFFF}}) {
     Bytes b = bytes();
     store<std::uint16_t>(b.data() + format::kOffMajor, major);
     fix_header_crc(b);
@@ -1050,13 +1093,14 @@ TEST_F(ModelIndexTest, RejectsOtherMajorVersion) {
     EXPECT_TRUE(rejected(b, major < format::kVersionMajor ? "rebuild the index" : "newer keygraph",
                          StatusCode::kUnsupportedVersion));
   }
-  // A real 1.1 header (as keygraph 1.1 wrote it) says which version it is.
+  // A 2.0 header (as keygraph 2.0 wrote it: its tree has no scale
+  // attributes) says which version it is.
   Bytes old = bytes();
-  store<std::uint16_t>(old.data() + format::kOffMajor, 1);
-  store<std::uint16_t>(old.data() + format::kOffMinor, 1);
+  store<std::uint16_t>(old.data() + format::kOffMajor, 2);
+  store<std::uint16_t>(old.data() + format::kOffMinor, 0);
   fix_header_crc(old);
   EXPECT_TRUE(rejected(old,
-                       "index format version 1.1 is not supported (this reader reads 2.x): "
+                       "index format version 2.0 is not supported (this reader reads 3.x): "
                        "rebuild the index",
                        StatusCode::kUnsupportedVersion));
   // A newer minor version of the same major is readable (new sections and
@@ -1103,6 +1147,7 @@ TEST_F(ModelIndexTest, RejectsHeaderDamage) {
   EXPECT_TRUE(rejected(b, "section table out of bounds"));
 }
 
+// Index i: the name of section id i.
 const char* const kSectionNames[] = {"",
                                      "models",
                                      "strings",
@@ -1111,7 +1156,8 @@ const char* const kSectionNames[] = {"",
                                      "descriptors",
                                      "tree nodes",
                                      "vertex descriptors",
-                                     "keypoint scales"};
+                                     "keypoint scales",
+                                     "tree arc targets"};
 
 TEST_F(ModelIndexTest, RejectsFlippedByteInEachSection) {
   for (std::uint32_t id = 1; id <= format::kSectionCount; ++id) {
@@ -1213,9 +1259,18 @@ TEST_F(ModelIndexTest, UnknownSectionsAreSkipped) {
   expect_matches(index, models());
 }
 
-// Offset of tree arc `slot`'s field (0: from, 4: to).
-std::size_t tree_arc(const Bytes& b, std::uint32_t slot, std::size_t field) {
-  return section_offset(b, format::kSectionTreeArcs) + 8 * std::size_t{slot} + field;
+// Tree arc `slot`'s start, and its end written through the int16 offset.
+std::size_t arc_from_at(const Bytes& b, std::uint32_t slot) {
+  return section_offset(b, format::kSectionTreeArcs) + 4 * std::size_t{slot};
+}
+std::uint32_t arc_from(const Bytes& b, std::uint32_t slot) {
+  return load<std::uint32_t>(b.data() + arc_from_at(b, slot));
+}
+void set_arc_to(Bytes& b, std::uint32_t slot, std::uint32_t to) {
+  const std::int64_t offset = std::int64_t{to} - arc_from(b, slot);
+  ASSERT_TRUE(offset >= -32768 && offset <= 32767);
+  store<std::int16_t>(b.data() + section_offset(b, format::kSectionTreeArcTargets) + 2 * slot,
+                      static_cast<std::int16_t>(offset));
 }
 
 TEST_F(ModelIndexTest, RejectsBadKeypointScale) {
@@ -1243,25 +1298,24 @@ TEST_F(ModelIndexTest, RejectsOutOfRangeArcKeypoint) {
   const auto first_of_1 = static_cast<std::uint32_t>(models()[0].keypoints.size());
   // Past every keypoint.
   Bytes b = bytes();
-  store<std::uint32_t>(b.data() + tree_arc(b, 0, 4), total);
+  set_arc_to(b, 0, total);
   reseal(b);
   EXPECT_TRUE(rejected(b, "tree arc 0: keypoint ids"));
   EXPECT_TRUE(rejected(b, "invalid (" + std::to_string(total) + " keypoints)"));
   b = bytes();
-  store<std::uint32_t>(b.data() + tree_arc(b, 7, 0), 0xFFFFFFFFu);
+  store<std::uint32_t>(b.data() + arc_from_at(b, 7), 0xFFFFFFFFu);
   reseal(b);
   EXPECT_TRUE(rejected(b, "tree arc 7: keypoint ids 4294967295"));
   // A valid keypoint, but of the other model than the arc's start.
   b = bytes();
-  const std::uint32_t from = load<std::uint32_t>(b.data() + tree_arc(b, 3, 0));
+  const std::uint32_t from = arc_from(b, 3);
   const std::uint32_t owner = from < first_of_1 ? 0 : 1;
-  store<std::uint32_t>(b.data() + tree_arc(b, 3, 4), owner == 0 ? first_of_1 : 0);
+  set_arc_to(b, 3, owner == 0 ? first_of_1 : 0);
   reseal(b);
   EXPECT_TRUE(rejected(b, "tree arc 3: keypoint ids outside model " + std::to_string(owner)));
   // A loop.
   b = bytes();
-  store<std::uint32_t>(b.data() + tree_arc(b, 0, 4),
-                       load<std::uint32_t>(b.data() + tree_arc(b, 0, 0)));
+  set_arc_to(b, 0, arc_from(b, 0));
   reseal(b);
   EXPECT_TRUE(rejected(b, "tree arc 0:"));
 }
@@ -1271,7 +1325,7 @@ TEST_F(ModelIndexTest, RejectsBadTreeNodesAndDescriptors) {
   const Bytes& f32 = encoded(DescriptorEncoding::kFloat32);
   std::size_t nodes = section_offset(f32, format::kSectionTreeNodes);
   Bytes b = f32;
-  store<std::uint32_t>(b.data() + nodes + 4, static_cast<std::uint32_t>(kDescriptorSize));
+  store<std::uint32_t>(b.data() + nodes + 4, static_cast<std::uint32_t>(kSearchDims));
   reseal(b);
   EXPECT_TRUE(rejected(b, "tree nodes: node 0 has a bad split"));
   b = f32;
@@ -1279,8 +1333,9 @@ TEST_F(ModelIndexTest, RejectsBadTreeNodesAndDescriptors) {
   reseal(b);
   EXPECT_TRUE(rejected(b, "tree nodes: node 2 has a bad split"));
   b = f32;
-  store<float>(b.data() + section_offset(b, format::kSectionDescriptors) + 24 * 9 + 4,
-               std::nanf(""));
+  store<float>(
+      b.data() + section_offset(b, format::kSectionDescriptors) + sizeof(ArcSearchPoint) * 9 + 4,
+      std::nanf(""));
   reseal(b);
   EXPECT_TRUE(rejected(b, "descriptor 9: not finite"));
 
@@ -1293,7 +1348,7 @@ TEST_F(ModelIndexTest, RejectsBadTreeNodesAndDescriptors) {
     const std::size_t desc = section_offset(good, format::kSectionDescriptors);
     const auto scale = static_cast<std::int16_t>(encoding_scale(e));
     b = good;
-    store<std::uint16_t>(b.data() + nodes + 4 * 1 + 2, static_cast<std::uint16_t>(kDescriptorSize));
+    store<std::uint16_t>(b.data() + nodes + 4 * 1 + 2, static_cast<std::uint16_t>(kSearchDims));
     reseal(b);
     EXPECT_TRUE(rejected(b, "tree nodes: node 1 has a bad split"));
     for (std::int16_t bad :
@@ -1306,18 +1361,18 @@ TEST_F(ModelIndexTest, RejectsBadTreeNodesAndDescriptors) {
     }
     b = good;
     if (e == DescriptorEncoding::kInt16) {
-      store<std::int16_t>(b.data() + desc + 12 * 5 + 2, -32768);
+      store<std::int16_t>(b.data() + desc + sizeof(ArcSearchPointI16) * 5 + 2, -32768);
     } else {
-      b[desc + 6 * 5 + 1] = 0x80;  // -128
+      b[desc + sizeof(ArcSearchPointI8) * 5 + 1] = 0x80;  // -128
     }
     reseal(b);
     EXPECT_TRUE(rejected(b, "descriptor 5: not finite or out of range"));
     // The extremes themselves are valid.
     b = good;
     if (e == DescriptorEncoding::kInt16) {
-      store<std::int16_t>(b.data() + desc + 12 * 5 + 2, -32767);
+      store<std::int16_t>(b.data() + desc + sizeof(ArcSearchPointI16) * 5 + 2, -32767);
     } else {
-      b[desc + 6 * 5 + 1] = 0x81;  // -127
+      b[desc + sizeof(ArcSearchPointI8) * 5 + 1] = 0x81;  // -127
     }
     reseal(b);
     EXPECT_TRUE(try_view(b));
@@ -1543,7 +1598,8 @@ TEST_F(ModelIndexTest, ResealedMutationsAreRejectedOrHarmless) {
       const ArcSearch search(index);
       std::uint32_t out[512];
       for (std::size_t q = 0; q < models()[0].descriptors.size(); q += 997) {
-        const std::uint32_t found = search.radius_search(models()[0].descriptors[q], out, 512);
+        const std::uint32_t found =
+            search.radius_search(models()[0].descriptors[q], nullptr, out, 512);
         for (std::uint32_t i = 0; i < std::min<std::uint32_t>(found, 512); ++i)
           ASSERT_LT(out[i], index.arc_count());
       }
