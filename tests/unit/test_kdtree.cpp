@@ -185,6 +185,65 @@ TYPED_TEST(KdTreeTyped, RadiusSearchEqualsBruteForce) {
   }
 }
 
+// Trees over descriptors plus two attributes (the model index's points):
+// radius plus box equals brute force, with attributes clustered so the box
+// cuts, and the tree splitting on them.
+TYPED_TEST(KdTreeTyped, RadiusAndBoxSearchEqualsBruteForce) {
+  using T = TypeParam;
+  using Dist = typename KdTraits<T>::Dist;
+  using Point = KdPoint<T, kSearchDims>;
+  Rng rng(5);
+  auto attributed = [&](const ArcDescriptor& d) {
+    ArcSearchPoint p{};
+    for (int i = 0; i < kDescriptorSize; ++i) p[i] = d[i];
+    p[kDescriptorSize] = static_cast<float>(rng.uniform01() * 0.5 - 0.1);
+    p[kDescriptorSize + 1] = static_cast<float>(rng.uniform01() * 0.5 - 0.1);
+    if constexpr (std::is_same_v<T, float>) {
+      return p;
+    } else {
+      return quantise<T>(p);
+    }
+  };
+  for (std::uint32_t n : {1u, 70u, 5000u, 20000u}) {
+    std::vector<Point> data;
+    for (const ArcDescriptor& d : random_descriptors(rng, n)) data.push_back(attributed(d));
+    std::vector<Point> points;
+    std::vector<std::uint32_t> ids;
+    std::vector<typename KdTraits<T>::Node> nodes;
+    build_kdtree<T, kSearchDims>(data.data(), n, points, ids, nodes, 4.0);
+    bool attribute_split = false;
+    for (const auto& node : nodes) attribute_split |= node.dim >= kDescriptorSize;
+    if (n >= 5000) EXPECT_TRUE(attribute_split) << n;
+    const BasicKdTreeView<T, kSearchDims> view(points.data(), ids.data(), n, nodes.data(),
+                                               kdtree_depth(n));
+    std::vector<std::uint32_t> out(n + 1);
+    std::size_t boxed = 0, unboxed = 0;
+    for (int q = 0; q < 60; ++q) {
+      const Point query = attributed(random_descriptors(rng, 1)[0]);
+      const auto r2 = radius2_of<T>(0.4f);
+      const auto box = static_cast<Dist>(
+          std::is_same_v<T, float> ? 0.05 : 0.05 * encoding_scale(encoding_of<T>()));
+      std::vector<std::uint32_t> expected;
+      for (std::uint32_t i = 0; i < n; ++i) {
+        bool inside = kd_distance2(data[i], query) < r2;
+        for (int d = kDescriptorSize; d < kSearchDims; ++d) {
+          const Dist diff = static_cast<Dist>(data[i][d]) - static_cast<Dist>(query[d]);
+          inside = inside && (diff < 0 ? -diff : diff) <= box;
+        }
+        if (inside) expected.push_back(i);
+      }
+      std::uint32_t found =
+          view.radius_search(query, r2, box, out.data(), static_cast<std::uint32_t>(out.size()));
+      std::vector<std::uint32_t> got(out.begin(), out.begin() + found);
+      std::sort(got.begin(), got.end());
+      ASSERT_EQ(got, expected) << "n " << n << " query " << q;
+      boxed += found;
+      unboxed += view.radius_search(query, r2, out.data(), static_cast<std::uint32_t>(out.size()));
+    }
+    if (n >= 5000) EXPECT_LT(boxed * 2, unboxed) << "the box should cut most matches";
+  }
+}
+
 TYPED_TEST(KdTreeTyped, KnnEqualsBruteForce) {
   using T = TypeParam;
   using Dist = typename KdTraits<T>::Dist;
