@@ -31,8 +31,14 @@ void usage(std::FILE* out) {
       "  demo [--out DIR]                  build box.png from opencv-doc and find it\n"
       "                                    in box_in_scene.png\n"
       "  eval --dataset DIR [--subsets a,b] [--crops N] [--size S] [--centre]\n"
-      "       [--seed N] [--set NAME=VALUE]... [--csv FILE]\n"
-      "                                    crops of img1 found in img2..6 (Oxford layout)\n");
+      "       [--seed N] [--set NAME=VALUE]... [--methods M,...|all] [--negatives]\n"
+      "       [--curves] [--out DIR] [--csv FILE]\n"
+      "                                    crops of img1 found in img2..6 (Oxford layout);\n"
+      "                                    --curves: precision-recall and RANSAC iterations\n"
+      "  eval --synth DIR [--sizes 1,10,50] [--methods M,...|all] [--set ...] [--out DIR]\n"
+      "                                    the sign benchmark of keygraph synth\n"
+      "  synth -o DIR [--seed N] [--signs N] [--frames N] [--sign-free F]\n"
+      "                                    generate a labelled indoor-sign benchmark\n");
 #else
   std::fprintf(out,
                "  detect --index I.kgi [--json] [--draw OUT.pgm] SCENE.pgm...\n"
@@ -62,9 +68,10 @@ int run(int argc, char** argv) {
   if (command == "detect") return kg::cli::cmd_detect(args);
   if (command == "demo") return kg::cli::cmd_demo(args);
   if (command == "eval") return kg::cli::cmd_eval(args);
+  if (command == "synth") return kg::cli::cmd_synth(args);
 #else
   if (command == "detect") return kg::cli::cmd_detect_files(args);
-  if (command == "build" || command == "demo" || command == "eval") {
+  if (command == "build" || command == "demo" || command == "eval" || command == "synth") {
     return kg::cli::fail(command +
                          ": not in this build of keygraph (a device build, without "
                          "OpenCV); use the desktop keygraph");
