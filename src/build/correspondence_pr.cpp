@@ -16,6 +16,7 @@ namespace kg {
 void CorrespondenceTruth::build(const std::vector<Point2f>& model, const Keypoint* scene,
                                 int scene_count, const Homography& truth, double tolerance) {
   by_model_.assign(model.size(), {});
+  scene_repeated_.assign(static_cast<std::size_t>(std::max(0, scene_count)), false);
   count_ = 0;
   // Scene keypoints bucketed on a grid of cells `tolerance` wide.
   const double cell = std::max(tolerance, 1.0);
@@ -36,8 +37,10 @@ void CorrespondenceTruth::build(const std::vector<Point2f>& model, const Keypoin
         const auto it = grid.find(key(cx + dx, cy + dy));
         if (it == grid.end()) continue;
         for (const std::int32_t s : it->second) {
-          if (std::hypot(double{scene[s].x} - p.x, double{scene[s].y} - p.y) < tolerance)
+          if (std::hypot(double{scene[s].x} - p.x, double{scene[s].y} - p.y) < tolerance) {
             by_model_[m].push_back({s, count_++});
+            scene_repeated_[static_cast<std::size_t>(s)] = true;
+          }
         }
       }
     }
@@ -55,6 +58,11 @@ long long CorrespondenceTruth::id(std::uint32_t m, std::int32_t s) const {
 const std::vector<CorrespondenceTruth::Entry>& CorrespondenceTruth::of(std::uint32_t m) const {
   static const std::vector<Entry> none;
   return m < by_model_.size() ? by_model_[m] : none;
+}
+
+bool CorrespondenceTruth::scene_repeated(std::int32_t s) const {
+  return s >= 0 && static_cast<std::size_t>(s) < scene_repeated_.size() &&
+         scene_repeated_[static_cast<std::size_t>(s)];
 }
 
 cv::Mat blur_for_descriptors(const cv::Mat& gray, float sigma) {

@@ -34,9 +34,12 @@ class CorrespondenceTruth {
     long long id = 0;
   };
   const std::vector<Entry>& of(std::uint32_t m) const;
+  // Scene keypoints that are part of a correct pair.
+  bool scene_repeated(std::int32_t s) const;
 
  private:
   std::vector<std::vector<Entry>> by_model_;
+  std::vector<bool> scene_repeated_;
   long long count_ = 0;
 };
 

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <memory>
 
+#include <opencv2/imgproc.hpp>
+
 #include "build/baselines.h"
 #include "build/correspondence_pr.h"
 #include "build/desktop_detect.h"
@@ -87,6 +89,30 @@ Status measure_curves(KeygraphRun& run, const cv::Mat& scene, const Homography& 
   r.has_curves = true;
   r.model_keypoints = static_cast<int>(run.model.keypoints.size());
   r.scene_keypoints = count;
+  // Repeatability, both ways, within the part of each image the other shows.
+  for (std::size_t m = 0; m < run.model.keypoints.size(); ++m) {
+    const Point2f p = kg::apply(truth, run.model.keypoints[m]);
+    if (!(p.x >= 0 && p.y >= 0 && double{p.x} <= scene.cols - 1 && double{p.y} <= scene.rows - 1))
+      continue;
+    ++r.model_inside;
+    r.model_repeated += !truths.of(static_cast<std::uint32_t>(m)).empty();
+  }
+  const float w = static_cast<float>(run.model.width - 1),
+              h = static_cast<float>(run.model.height - 1);
+  std::vector<cv::Point2f> outline;
+  for (const Point2f& c : {Point2f{0, 0}, Point2f{w, 0}, Point2f{w, h}, Point2f{0, h}}) {
+    const Point2f p = kg::apply(truth, c);
+    outline.emplace_back(p.x, p.y);
+  }
+  for (int i = 0; i < count; ++i) {
+    if (cv::pointPolygonTest(outline,
+                             cv::Point2f(keypoints[static_cast<std::size_t>(i)].x,
+                                         keypoints[static_cast<std::size_t>(i)].y),
+                             false) < 0)
+      continue;
+    ++r.scene_inside;
+    r.scene_repeated += truths.scene_repeated(i);
+  }
   return Status::ok();
 }
 

@@ -69,7 +69,12 @@ struct OxfordCase {
   // With OxfordEvalOptions::curves, keygraph methods, positive scenes:
   bool has_curves = false;
   int model_keypoints = 0, scene_keypoints = 0;  // scene: after sampling
-  bool curve_truncated = false;                  // the curve selection hit a Limits capacity
+  // Repeatability: model keypoints that project inside the scene, and of
+  // those the ones with a scene keypoint within curve_tolerance; scene
+  // keypoints inside the crop's outline in the scene, and of those the ones
+  // with a model keypoint within the tolerance.
+  int model_inside = 0, model_repeated = 0, scene_inside = 0, scene_repeated = 0;
+  bool curve_truncated = false;  // the curve selection hit a Limits capacity
   CaseCurve keygraph_curve, sift_distance_curve, sift_ratio_curve;
 };
 

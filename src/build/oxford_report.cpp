@@ -273,8 +273,62 @@ std::vector<OxfordIterationRow> oxford_iterations(const std::vector<OxfordCase>&
   return rows;
 }
 
+std::vector<OxfordLimitRow> oxford_limits(const std::vector<OxfordCase>& cases,
+                                          const OxfordEvalOptions& options) {
+  const OxfordCurveGrids grids = oxford_curve_grids();
+  const std::size_t at = nearest(grids.arc, options.params.descriptor.similarity_threshold);
+  const long long need = options.params.ransac.min_inlier_keygraphs;
+  std::vector<OxfordLimitRow> rows;
+  for (const std::string& method : methods_of(cases)) {
+    if (!has_curves(cases, method)) continue;
+    for (const std::string& group : groups_of(cases)) {
+      OxfordLimitRow row;
+      row.method = method;
+      row.group = group;
+      int model_n = 0, scene_n = 0;
+      std::vector<double> correct_found, correct_missed;
+      for (const OxfordCase& c : cases) {
+        if (c.method != method || !c.has_curves || c.negative || !in_group(c, group)) continue;
+        ++row.cases;
+        const bool found = c.detected && c.corner_error <= 10.0;
+        const long long at_op = c.keygraph_curve.correct[at],
+                        at_max = c.keygraph_curve.correct.back();
+        (found ? correct_found : correct_missed).push_back(static_cast<double>(at_op));
+        if (found) {
+          ++row.found;
+        } else if (at_max < need) {
+          ++row.too_few_at_max;
+        } else if (at_op < need) {
+          ++row.threshold_limited;
+        } else {
+          ++row.pose_limited;
+        }
+        if (c.model_inside > 0) {
+          row.model_repeatability += static_cast<double>(c.model_repeated) / c.model_inside;
+          ++model_n;
+        }
+        if (c.scene_inside > 0) {
+          const double r = static_cast<double>(c.scene_repeated) / c.scene_inside;
+          row.scene_repeatability += r;
+          row.scene_repeatability_cubed += r * r * r;
+          ++scene_n;
+        }
+      }
+      if (row.cases == 0) continue;
+      row.model_repeatability = model_n > 0 ? row.model_repeatability / model_n : kNan;
+      row.scene_repeatability = scene_n > 0 ? row.scene_repeatability / scene_n : kNan;
+      row.scene_repeatability_cubed = scene_n > 0 ? row.scene_repeatability_cubed / scene_n : kNan;
+      row.correct_found_median = median(correct_found);
+      row.correct_missed_median = median(correct_missed);
+      rows.push_back(row);
+    }
+  }
+  return rows;
+}
+
 std::string oxford_text(const std::vector<OxfordRow>& rows,
-                        const std::vector<OxfordIterationRow>& iterations) {
+                        const std::vector<OxfordIterationRow>& iterations,
+                        const std::vector<OxfordLimitRow>& limits) {
   std::string out;
   char line[256];
   std::snprintf(line, sizeof(line), "%-13s %-8s %6s %8s %8s %6s %9s %10s\n", "method", "", "cases",
@@ -313,6 +367,24 @@ std::string oxford_text(const std::vector<OxfordRow>& rows,
         r.truncated > 0 ? " (some curves truncated)" : "");
     out += line;
   }
+  if (limits.empty()) return out;
+  out +=
+      "\nWhere keygraphs lose the cases not found within 10 px (correct keygraph "
+      "correspondences, <3 = fewer than RANSAC needs)\n";
+  std::snprintf(line, sizeof(line), "%-13s %-8s %5s %5s | %8s %9s %6s | %7s %7s %7s | %8s %8s\n",
+                "method", "", "cases", "found", "<3 @max", "<3 @index", "pose", "rep.m", "rep.s",
+                "rep.s^3", "corr.fnd", "corr.mis");
+  out += line;
+  for (const OxfordLimitRow& r : limits) {
+    std::snprintf(line, sizeof(line), "%-13s %-8s %5d %5d | %8d %9d %6d | %7s %7s %7s | %8s %8s\n",
+                  r.method.c_str(), r.group.c_str(), r.cases, r.found, r.too_few_at_max,
+                  r.threshold_limited, r.pose_limited, fmt(r.model_repeatability, "%.3f").c_str(),
+                  fmt(r.scene_repeatability, "%.3f").c_str(),
+                  fmt(r.scene_repeatability_cubed, "%.3f").c_str(),
+                  fmt(r.correct_found_median, "%.0f").c_str(),
+                  fmt(r.correct_missed_median, "%.0f").c_str());
+    out += line;
+  }
   return out;
 }
 
@@ -328,17 +400,29 @@ Status write_oxford_report(const std::string& dir, const OxfordEvalOptions& opti
   const double confidence = options.params.ransac.confidence;
 
   // Cases.
+  const std::size_t op = nearest(grids.arc, options.params.descriptor.similarity_threshold);
   std::ostringstream csv;
   csv << "method,subset,scene_subset,negative,crop,crop_x,crop_y,degree,detected,corner_error,"
          "inliers,correspondences,ransac_iterations,first_ransac_iterations,time_ms,"
-         "model_keypoints,scene_keypoints,true_correspondences\n";
+         "model_keypoints,scene_keypoints,true_correspondences,model_inside,model_repeated,"
+         "scene_inside,scene_repeated,keygraph_selected_at_index_threshold,"
+         "keygraph_correct_at_index_threshold,keygraph_correct_at_max_threshold,"
+         "keygraph_recalled_at_index_threshold\n";
   for (const OxfordCase& c : cases) {
     csv << c.method << ',' << c.subset << ',' << c.scene_subset << ',' << c.negative << ','
         << c.crop << ',' << c.crop_x << ',' << c.crop_y << ',' << c.degree << ',' << c.detected
         << ',' << c.corner_error << ',' << c.inliers << ',' << c.correspondences << ','
         << c.ransac_iterations << ',' << c.first_ransac_iterations << ',' << c.time_ms << ','
         << c.model_keypoints << ',' << c.scene_keypoints << ','
-        << (c.has_curves ? c.keygraph_curve.truth : -1) << '\n';
+        << (c.has_curves ? c.keygraph_curve.truth : -1) << ',' << c.model_inside << ','
+        << c.model_repeated << ',' << c.scene_inside << ',' << c.scene_repeated << ',';
+    if (c.has_curves) {
+      const CaseCurve& k = c.keygraph_curve;
+      csv << k.selected[op] << ',' << k.correct[op] << ',' << k.correct.back() << ','
+          << k.recalled[op] << '\n';
+    } else {
+      csv << ",,,\n";
+    }
   }
   if (s = write_text_file(dir + "/cases.csv", csv.str()); !s) return s;
 
@@ -433,6 +517,22 @@ Status write_oxford_report(const std::string& dir, const OxfordEvalOptions& opti
       << ", \"run_first_detection_median\": " << json_value(r.actual_first_median)
       << ", \"truncated_cases\": " << r.truncated << "}"
       << (i + 1 < iterations.size() ? ",\n" : "\n");
+  }
+  const std::vector<OxfordLimitRow> limits = oxford_limits(cases, options);
+  j << "  ],\n  \"limits\": [\n";
+  for (std::size_t i = 0; i < limits.size(); ++i) {
+    const OxfordLimitRow& r = limits[i];
+    j << "    {\"method\": " << json_quote(r.method) << ", \"group\": " << json_quote(r.group)
+      << ", \"cases\": " << r.cases << ", \"found_10px\": " << r.found
+      << ", \"too_few_correct_at_max_threshold\": " << r.too_few_at_max
+      << ", \"too_few_correct_at_index_threshold\": " << r.threshold_limited
+      << ", \"no_pose_despite_correct\": " << r.pose_limited
+      << ", \"model_repeatability\": " << json_value(r.model_repeatability)
+      << ", \"scene_repeatability\": " << json_value(r.scene_repeatability)
+      << ", \"scene_repeatability_cubed\": " << json_value(r.scene_repeatability_cubed)
+      << ", \"correct_at_index_threshold_found_median\": " << json_value(r.correct_found_median)
+      << ", \"correct_at_index_threshold_missed_median\": " << json_value(r.correct_missed_median)
+      << "}" << (i + 1 < limits.size() ? ",\n" : "\n");
   }
   j << "  ],\n  \"curves\": [\n" << curve_json << (curve_json.empty() ? "" : "\n") << "  ]\n}\n";
   return write_text_file(dir + "/summary.json", j.str());

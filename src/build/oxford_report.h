@@ -56,6 +56,25 @@ struct OxfordIterationRow {
 std::vector<OxfordIterationRow> oxford_iterations(const std::vector<OxfordCase>& cases,
                                                   const OxfordEvalOptions& options);
 
+// What stops keygraphs, per group of a keygraph method with curves: the
+// positive cases not found within 10 px split by where the pipeline lost
+// them (min_inlier_keygraphs correct keygraph correspondences are needed):
+// too few correct ones even at the grid's largest arc threshold (keypoints
+// not repeated, or their arcs too unlike), enough there but not at the
+// index's threshold (the descriptor threshold), or enough at the index's
+// threshold and still no pose (RANSAC, refinement, verification). With the
+// mean keypoint repeatability both ways and its cube for the scene side
+// (the chance that a scene triangle has three repeated corners).
+struct OxfordLimitRow {
+  std::string method, group;
+  int cases = 0, found = 0;
+  int too_few_at_max = 0, threshold_limited = 0, pose_limited = 0;
+  double model_repeatability = 0, scene_repeatability = 0, scene_repeatability_cubed = 0;
+  double correct_found_median = 0, correct_missed_median = 0;  // correct at the index's threshold
+};
+std::vector<OxfordLimitRow> oxford_limits(const std::vector<OxfordCase>& cases,
+                                          const OxfordEvalOptions& options);
+
 // The mean curves of one method and group (empty when it has no curves).
 struct OxfordCurves {
   MeanCurve keygraph, sift_distance, sift_ratio;
@@ -65,7 +84,8 @@ OxfordCurves oxford_mean_curves(const std::vector<OxfordCase>& cases, const std:
 
 // The tables as printed by `keygraph eval`.
 std::string oxford_text(const std::vector<OxfordRow>& rows,
-                        const std::vector<OxfordIterationRow>& iterations);
+                        const std::vector<OxfordIterationRow>& iterations,
+                        const std::vector<OxfordLimitRow>& limits = {});
 
 Status write_oxford_report(const std::string& dir, const OxfordEvalOptions& options,
                            const std::vector<OxfordCase>& cases);

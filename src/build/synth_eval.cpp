@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -22,6 +23,18 @@ double median(std::vector<double> v) {
   if (v.empty()) return std::nan("");
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
+}
+
+double scale_of(const SynthFrameInfo& info, const SynthSign* sign) {
+  if (sign == nullptr || info.sign < 0) return 0;
+  double area = 0;
+  for (int i = 0; i < 4; ++i) {
+    const Point2f& a = info.corners[i];
+    const Point2f& b = info.corners[(i + 1) % 4];
+    area += double{a.x} * b.y - double{b.x} * a.y;
+  }
+  return std::sqrt(std::abs(area) / 2 /
+                   (static_cast<double>(sign->width - 1) * (sign->height - 1)));
 }
 
 struct KeygraphMethod {
@@ -151,6 +164,11 @@ Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& c
           c.group = g;
           c.frame = f;
           c.sign = entry.info.sign;
+          c.scale = scale_of(entry.info, sign);
+          c.occluded = entry.info.occluded;
+          c.blur_sigma = entry.info.blur_sigma;
+          c.motion_blur = entry.info.motion_blur;
+          c.noise_sigma = entry.info.noise_sigma;
           std::vector<SynthDetection> found;
           const auto start = Clock::now();
           if (m < keygraphs.size()) {
@@ -221,7 +239,35 @@ std::vector<SynthRow> synth_tallies(const std::vector<SynthCase>& cases,
   return rows;
 }
 
-std::string synth_text(const std::vector<SynthRow>& rows) {
+const std::vector<double>& synth_scale_buckets() {
+  static const std::vector<double> b = {0.25, 0.35, 0.5, 0.7,
+                                        std::numeric_limits<double>::infinity()};
+  return b;
+}
+
+std::vector<SynthScaleRow> synth_by_scale(const std::vector<SynthCase>& cases,
+                                          const SynthEvalOptions& options) {
+  std::vector<SynthScaleRow> rows;
+  if (cases.empty()) return rows;
+  int smallest = cases[0].index_size;
+  for (const SynthCase& c : cases) smallest = std::min(smallest, c.index_size);
+  const std::vector<double>& b = synth_scale_buckets();
+  for (const std::string& method : options.methods) {
+    SynthScaleRow r{method, smallest, std::vector<int>(b.size(), 0), std::vector<int>(b.size(), 0)};
+    for (const SynthCase& c : cases) {
+      if (c.method != method || c.index_size != smallest || c.sign < 0) continue;
+      const auto k =
+          static_cast<std::size_t>(std::lower_bound(b.begin(), b.end(), c.scale) - b.begin());
+      ++r.frames[std::min(k, b.size() - 1)];
+      r.found[std::min(k, b.size() - 1)] += c.found;
+    }
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+std::string synth_text(const std::vector<SynthRow>& rows,
+                       const std::vector<SynthScaleRow>& by_scale) {
   std::string out;
   char line[256];
   std::snprintf(line, sizeof(line), "%-13s %5s %6s %8s %8s %9s %10s %11s %10s\n", "method", "index",
@@ -236,6 +282,29 @@ std::string synth_text(const std::vector<SynthRow>& rows) {
                   r.sign_free_frames, r.median_ms);
     out += line;
   }
+  if (by_scale.empty()) return out;
+  const std::vector<double>& b = synth_scale_buckets();
+  std::snprintf(line, sizeof(line),
+                "\nFound within 10 px by sign scale in the frame (index of %d)\n%-13s",
+                by_scale[0].index_size, "scale");
+  out += line;
+  double lo = 0;
+  for (const double hi : b) {
+    std::snprintf(line, sizeof(line), std::isinf(hi) ? " %6.2f+      " : " %4.2f-%-4.2f  ", lo, hi);
+    out += line;
+    lo = hi;
+  }
+  out += "\n";
+  for (const SynthScaleRow& r : by_scale) {
+    std::snprintf(line, sizeof(line), "%-13s", r.method.c_str());
+    out += line;
+    for (std::size_t k = 0; k < b.size(); ++k) {
+      std::snprintf(line, sizeof(line), " %3d/%-3d %3.0f%%", r.found[k], r.frames[k],
+                    r.frames[k] > 0 ? 100.0 * r.found[k] / r.frames[k] : 0.0);
+      out += line;
+    }
+    out += "\n";
+  }
   return out;
 }
 
@@ -249,7 +318,8 @@ Status write_synth_report(const std::string& dir, const SynthEvalOptions& option
   for (const SynthCase& c : cases) {
     csv << c.method << ',' << c.index_size << ',' << c.group << ',' << c.frame << ',' << c.sign
         << ',' << c.found << ',' << c.corner_error << ',' << c.detections << ','
-        << c.false_detections << ',' << c.time_ms << '\n';
+        << c.false_detections << ',' << c.time_ms << ',' << c.scale << ',' << c.occluded << ','
+        << c.blur_sigma << ',' << c.motion_blur << ',' << c.noise_sigma << '\n';
   }
   if (s = write_text_file(dir + "/synth-cases.csv", csv.str()); !s) return s;
   const std::vector<SynthRow> rows = synth_tallies(cases, options);

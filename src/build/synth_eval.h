@@ -40,6 +40,10 @@ struct SynthCase {
   int detections = 0;
   int false_detections = 0;
   double time_ms = 0;  // scene side, the frame already in memory as gray
+  // The frame's conditions (manifest): sign scale in the frame (square root
+  // of its outline's area over the sign image's), hidden fraction, blur, noise.
+  double scale = 0, occluded = 0, blur_sigma = 0, noise_sigma = 0;
+  int motion_blur = 0;
 };
 
 // A detection of model `model` (an id within the searched index).
@@ -71,7 +75,19 @@ struct SynthRow {
 std::vector<SynthRow> synth_tallies(const std::vector<SynthCase>& cases,
                                     const SynthEvalOptions& options);
 
-std::string synth_text(const std::vector<SynthRow>& rows);
+// Found within 10 px per bucket of sign scale in the frame, per method, at
+// one index size: the buckets' upper bounds and per method the counts.
+struct SynthScaleRow {
+  std::string method;
+  int index_size = 0;
+  std::vector<int> frames, found;  // per bucket
+};
+const std::vector<double>& synth_scale_buckets();  // upper bounds, last is infinity
+std::vector<SynthScaleRow> synth_by_scale(const std::vector<SynthCase>& cases,
+                                          const SynthEvalOptions& options);
+
+std::string synth_text(const std::vector<SynthRow>& rows,
+                       const std::vector<SynthScaleRow>& by_scale = {});
 
 // summary.json and cases.csv in `dir`.
 Status write_synth_report(const std::string& dir, const SynthEvalOptions& options,

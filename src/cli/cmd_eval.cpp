@@ -134,7 +134,7 @@ int cmd_eval(const Args& args) {
     clear_progress();
     if (!s) return fail(s.message());
     const std::vector<SynthRow> rows = synth_tallies(cases, synth);
-    std::fputs(synth_text(rows).c_str(), stdout);
+    std::fputs(synth_text(rows, synth_by_scale(cases, synth)).c_str(), stdout);
     if (!out_dir.empty()) {
       if (s = write_synth_report(out_dir, synth, cases); !s) return fail("eval: " + s.message());
     }
@@ -149,7 +149,9 @@ int cmd_eval(const Args& args) {
   clear_progress();
   if (!s) return fail(s.message());
   const std::vector<OxfordRow> rows = oxford_tallies(cases, options.methods);
-  std::fputs(oxford_text(rows, oxford_iterations(cases, options)).c_str(), stdout);
+  std::fputs(
+      oxford_text(rows, oxford_iterations(cases, options), oxford_limits(cases, options)).c_str(),
+      stdout);
   if (!out_dir.empty()) {
     if (s = write_oxford_report(out_dir, options, cases); !s) return fail("eval: " + s.message());
   }

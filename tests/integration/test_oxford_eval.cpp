@@ -112,6 +112,19 @@ TEST(OxfordEval, CurvesOfKeygraphsAndKeypointsOnGraf) {
   EXPECT_EQ(iterations.back().group, "all");
   EXPECT_EQ(iterations.back().h_keygraph, 2);
   EXPECT_EQ(iterations.back().h_keypoint, 4);
+  // Every case is found or lost at exactly one stage; repeatability is a fraction.
+  for (const OxfordLimitRow& r : oxford_limits(cases, options)) {
+    EXPECT_EQ(r.found + r.too_few_at_max + r.threshold_limited + r.pose_limited, r.cases)
+        << r.group;
+    EXPECT_GT(r.scene_repeatability, 0.2) << r.group;
+    EXPECT_LE(r.scene_repeatability, 1.0) << r.group;
+    EXPECT_NEAR(r.scene_repeatability_cubed, std::pow(r.scene_repeatability, 3), 0.1) << r.group;
+  }
+  for (const OxfordCase& c : cases) {
+    EXPECT_LE(c.model_repeated, c.model_inside);
+    EXPECT_LE(c.scene_repeated, c.scene_inside);
+    EXPECT_GT(c.scene_inside, 0);
+  }
 }
 
 TEST(OxfordEval, MissingDatasetIsAnError) {

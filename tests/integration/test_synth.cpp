@@ -260,6 +260,9 @@ TEST(SynthEval, KeygraphFindsTheSignsOfASmallGeneratedSet) {
     }
     ++sign_frames;
     found += c.found;
+    // 300..360 px longer side for signs of 400..600: scale about 0.5 to 0.9.
+    EXPECT_GT(c.scale, 0.35);
+    EXPECT_LT(c.scale, 1.0);
     if (c.found) {
       EXPECT_LE(c.corner_error, 10.0);
     }
