@@ -109,7 +109,7 @@ std::string csv_of(const MeanCurve& m, int h, double confidence) {
 
 struct CurveSet {
   const MeanCurve* curve;
-  std::string name, label;
+  std::string name, label, short_label;  // short: in the small panels
   int h;
   int marker;
   bool dashed;
@@ -120,10 +120,11 @@ std::vector<CurveSet> curve_sets(const OxfordCurves& c, const OxfordEvalOptions&
   const int h = keygraph_sample_size(options.params.graph.structure);
   const std::string vertices = std::to_string(static_cast<int>(options.params.graph.structure));
   return {
-      {&c.keygraph, "keygraph", "keygraphs (" + vertices + "-vertex, arc Fourier)", h,
+      {&c.keygraph, "keygraph", "keygraphs (" + vertices + "-vertex, arc Fourier)", "keygraphs", h,
        static_cast<int>(nearest(grids.arc, options.params.descriptor.similarity_threshold)), false},
-      {&c.sift_distance, "sift-distance", "keypoints (SIFT, distance)", 4, -1, true},
-      {&c.sift_ratio, "sift-ratio", "keypoints (SIFT, ratio test)", 4,
+      {&c.sift_distance, "sift-distance", "keypoints (SIFT, distance)", "SIFT distance", 4, -1,
+       true},
+      {&c.sift_ratio, "sift-ratio", "keypoints (SIFT, ratio test)", "SIFT ratio", 4,
        static_cast<int>(nearest(grids.sift_ratio, BaselineOptions{}.ratio)), false},
   };
 }
@@ -133,11 +134,12 @@ cv::Mat pr_plot(const std::vector<CurveSet>& sets, const std::string& title, int
   spec.title = title;
   spec.x_label = "recall";
   spec.y_label = "precision";
+  spec.legend = LegendCorner::kTopRight;
   spec.width = w;
   spec.height = h;
   for (std::size_t i = 0; i < sets.size(); ++i) {
     PlotSeries s;
-    s.label = sets[i].label;
+    s.label = w < 600 ? sets[i].short_label : sets[i].label;
     s.x = sets[i].curve->recall;
     s.y = sets[i].curve->precision;
     s.colour = plot_colour(static_cast<int>(i));
@@ -162,7 +164,8 @@ cv::Mat iterations_plot(const std::vector<CurveSet>& sets, double confidence,
   spec.height = h;
   for (std::size_t i = 0; i < sets.size(); ++i) {
     PlotSeries s;
-    s.label = sets[i].label + ", h = " + std::to_string(sets[i].h);
+    s.label =
+        (w < 600 ? sets[i].short_label : sets[i].label) + ", h = " + std::to_string(sets[i].h);
     s.x = sets[i].curve->recall;
     for (const double p : sets[i].curve->precision)
       s.y.push_back(std::isnan(p) ? kNan : expected_iterations(p, sets[i].h, confidence));

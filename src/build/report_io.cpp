@@ -61,7 +61,7 @@ Status write_png_file(const std::string& path, const cv::Mat& image) {
   std::vector<std::uint8_t> bytes;
   bool ok = false;
   try {
-    ok = !image.empty() && cv::imencode(".png", image, bytes);
+    ok = !image.empty() && cv::imencode(".png", image, bytes, {cv::IMWRITE_PNG_COMPRESSION, 9});
   } catch (const cv::Exception&) {
     ok = false;
   }
