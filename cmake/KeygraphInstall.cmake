@@ -1,11 +1,36 @@
 # install(): static libraries, public headers, the CLI, an exported CMake
-# package (find_package(keygraph) -> keygraph::core, keygraph::build) and a
-# pkg-config file for the core.
+# package (find_package(keygraph) -> keygraph::core, keygraph::build, the
+# frame sources) and a pkg-config file for the core.
 include(CMakePackageConfigHelpers)
 
 set(_kg_targets keygraph_core)
 if(KG_BUILD_TOOLS)
-  list(APPEND _kg_targets keygraph_build keygraph)
+  list(APPEND _kg_targets keygraph_build)
+endif()
+if(TARGET keygraph)  # desktop or device build of the CLI
+  list(APPEND _kg_targets keygraph)
+endif()
+# Frame sources (platform/): keygraph::platform, ::files, ::v4l2, ::libcamera.
+# Their headers go to <includedir>/keygraph/platform/ and are included as
+# "platform/..." (platform/CMakeLists.txt puts <includedir>/keygraph on their
+# include path).
+set(KG_INSTALLED_PLATFORM "")
+foreach(_kg_lib IN ITEMS platform platform_files platform_v4l2 platform_libcamera)
+  if(TARGET keygraph_${_kg_lib})
+    list(APPEND _kg_targets keygraph_${_kg_lib})
+    string(REPLACE "platform_" "" _kg_export ${_kg_lib})
+    list(APPEND KG_INSTALLED_PLATFORM ${_kg_export})
+  endif()
+endforeach()
+if(KG_INSTALLED_PLATFORM)
+  set(_kg_skip "")  # headers of the sources this build does not have
+  foreach(_kg_source IN ITEMS files v4l2 libcamera)
+    if(NOT TARGET keygraph_platform_${_kg_source})
+      list(APPEND _kg_skip PATTERN ${_kg_source} EXCLUDE)
+    endif()
+  endforeach()
+  install(DIRECTORY ${PROJECT_SOURCE_DIR}/platform/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/keygraph/platform
+          FILES_MATCHING PATTERN "*.h" ${_kg_skip})
 endif()
 
 install(TARGETS ${_kg_targets}

@@ -24,8 +24,11 @@ endif()
 # of the project's CMakeLists.txt. -Wno-psabi silences GCC's notes that the
 # ABI for passing some types changed in GCC 7.1 (armhf) and 10.1 (aarch64):
 # everything in a build comes from the same GCC 12.
-set(CMAKE_C_FLAGS_INIT "${KG_CROSS_ARCH_FLAGS} -Wno-psabi")
-set(CMAKE_CXX_FLAGS_INIT "${KG_CROSS_ARCH_FLAGS} -Wno-psabi")
+# KG_CROSS_TUNE (-D on the first cmake run) comes after the architecture
+# flags, so it can refine them for one board: -mcpu=cortex-a72, or
+# -mfpu=neon for a Cortex-A8/A9 (NEON without VFPv4).
+set(CMAKE_C_FLAGS_INIT "${KG_CROSS_ARCH_FLAGS} ${KG_CROSS_TUNE} -Wno-psabi")
+set(CMAKE_CXX_FLAGS_INIT "${KG_CROSS_ARCH_FLAGS} ${KG_CROSS_TUNE} -Wno-psabi")
 
 # Search the target root first; "/" comes second so that multiarch target
 # libraries (/usr/lib/<triple>, found through CMAKE_LIBRARY_ARCHITECTURE) and

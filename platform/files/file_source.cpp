@@ -7,6 +7,8 @@
 #include <system_error>
 #include <utility>
 
+#include "platform/convert.h"
+
 #if KG_PLATFORM_FILES_OPENCV
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -36,6 +38,29 @@ std::uint64_t monotonic_ns() {
                                         .count());
 }
 
+#if KG_PLATFORM_FILES_OPENCV
+Status decode_with_opencv(std::vector<std::uint8_t>& bytes, const std::string& path,
+                          cv::Mat& gray) {
+  // imdecode reports most problems with an empty result; some throw.
+  try {
+    const cv::Mat raw(1, static_cast<int>(bytes.size()), CV_8U, bytes.data());
+    gray = cv::imdecode(raw, cv::IMREAD_GRAYSCALE);
+  } catch (const cv::Exception&) {
+    gray.release();
+  }
+  if (gray.empty() || gray.type() != CV_8UC1) {
+    return {kBadFrameCode, "files: " + path + ": not an image OpenCV can decode"};
+  }
+  return Status::ok();
+}
+#else
+Status not_decodable(const std::string& path) {
+  return {kBadFrameCode, "files: " + path +
+                             ": not a binary PGM (P5); this build has no OpenCV imgcodecs, so it "
+                             "reads PGM files only"};
+}
+#endif
+
 }  // namespace
 
 struct FileSource::Decoded {
@@ -46,6 +71,31 @@ struct FileSource::Decoded {
 
 bool file_source_uses_opencv() {
   return KG_PLATFORM_FILES_OPENCV != 0;
+}
+
+Status read_image(const std::string& path, GrayImage& out) {
+  std::vector<std::uint8_t> bytes;
+  if (Status s = read_file(path, bytes); !s) return {s.code(), "files: " + s.message()};
+  if (is_pgm(bytes.data(), bytes.size())) {
+    if (Status s = decode_pgm(bytes.data(), bytes.size(), path, out); !s) {
+      return {StatusCode::kCorruptData, "files: " + s.message()};
+    }
+    return Status::ok();
+  }
+#if KG_PLATFORM_FILES_OPENCV
+  cv::Mat gray;
+  if (Status s = decode_with_opencv(bytes, path, gray); !s) {
+    return {StatusCode::kCorruptData, s.message()};
+  }
+  out.width = gray.cols;
+  out.height = gray.rows;
+  out.pixels.resize(static_cast<std::size_t>(gray.cols) * static_cast<std::size_t>(gray.rows));
+  copy_gray(ImageView(gray.data, gray.cols, gray.rows, static_cast<std::ptrdiff_t>(gray.step)),
+            out.pixels.data(), gray.cols);
+  return Status::ok();
+#else
+  return {StatusCode::kCorruptData, not_decodable(path).message()};
+#endif
 }
 
 Status list_image_files(const std::string& dir, std::vector<std::string>& out) {
@@ -119,23 +169,12 @@ Status FileSource::decode(const std::string& path, Frame& out) {
     return Status::ok();
   }
 #if KG_PLATFORM_FILES_OPENCV
-  // imdecode reports most problems with an empty result; some throw.
-  try {
-    const cv::Mat raw(1, static_cast<int>(bytes_.size()), CV_8U, bytes_.data());
-    decoded_->gray = cv::imdecode(raw, cv::IMREAD_GRAYSCALE);
-  } catch (const cv::Exception&) {
-    decoded_->gray.release();
-  }
-  if (decoded_->gray.empty() || decoded_->gray.type() != CV_8UC1) {
-    return {kBadFrameCode, "files: " + path + ": not an image OpenCV can decode"};
-  }
+  if (Status s = decode_with_opencv(bytes_, path, decoded_->gray); !s) return s;
   const cv::Mat& g = decoded_->gray;
   out.image = ImageView(g.data, g.cols, g.rows, static_cast<std::ptrdiff_t>(g.step));
   return Status::ok();
 #else
-  return {kBadFrameCode, "files: " + path +
-                             ": not a binary PGM (P5); this build has no OpenCV imgcodecs, so it "
-                             "reads PGM files only"};
+  return not_decodable(path);
 #endif
 }
 
@@ -148,8 +187,8 @@ Status FileSource::next(Frame& out, int /*timeout_ms*/) {
     }
     position_ = 0;
   }
-  const std::string& path = files_[position_++];
-  if (Status s = decode(path, out); !s) return s;
+  last_path_ = files_[position_++];
+  if (Status s = decode(last_path_, out); !s) return s;
   out.timestamp_ns = monotonic_ns();
   out.sequence = sequence_++;
   return Status::ok();
@@ -159,6 +198,7 @@ void FileSource::stop() {
   started_ = false;
   files_.clear();
   position_ = 0;
+  last_path_.clear();
   bytes_ = {};
   gray_ = {};
 #if KG_PLATFORM_FILES_OPENCV

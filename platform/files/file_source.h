@@ -35,6 +35,12 @@ struct FileSourceOptions {
 // True when this build decodes non-PGM images with OpenCV imgcodecs.
 bool file_source_uses_opencv();
 
+// Reads one image file into `out` with the decoders described above (its
+// capacity is reused). Errors: missing file (kNotFound), unreadable
+// (kIoError), not an image this build decodes (kCorruptData); each message
+// names the file.
+Status read_image(const std::string& path, GrayImage& out);
+
 // The image files of `dir` as described above, sorted. Errors: missing
 // directory (kNotFound), not a directory or unreadable (kIoError).
 Status list_image_files(const std::string& dir, std::vector<std::string>& out);
@@ -56,6 +62,9 @@ class FileSource final : public FrameSource {
 
   // The files in reading order (after start()).
   const std::vector<std::string>& files() const { return files_; }
+  // The file the last next() read, also when it was a bad frame; empty
+  // before the first next() and after stop().
+  const std::string& last_path() const { return last_path_; }
 
  private:
   struct Decoded;  // OpenCV image, when built with OpenCV
@@ -66,6 +75,7 @@ class FileSource final : public FrameSource {
   FileSourceOptions options_;
   std::vector<std::string> files_;
   std::size_t position_ = 0;
+  std::string last_path_;
   std::uint64_t sequence_ = 0;
   bool started_ = false;
   std::vector<std::uint8_t> bytes_;   // the current file's contents, reused

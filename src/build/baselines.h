@@ -1,10 +1,16 @@
 // The pipelines users would pick instead of keygraphs, for side-by-side
 // evaluation: OpenCV SIFT, ORB (2000 features) or AKAZE keypoints and
 // descriptors, brute-force matching with Lowe's ratio test, and
-// findHomography with RANSAC or USAC_MAGSAC. One thread each.
+// findHomography with RANSAC or USAC_MAGSAC.
+//
+// Several models at once, as a user of ORB + RANSAC would find an index of
+// N signs: the scene's features are computed once per frame, then every
+// model's descriptors are matched against them (2 nearest neighbours, ratio
+// test) and, with enough matches, its homography estimated. Callers that
+// measure time call cv::setNumThreads(1) first (the evaluations do), so
+// every method runs on one thread.
 #pragma once
 
-#include <memory>
 #include <string>
 #include <vector>
 
@@ -32,21 +38,63 @@ bool parse_baseline(const std::string& name, BaselineOptions& out);
 std::string baseline_name(const BaselineOptions& options);
 std::vector<std::string> baseline_names();
 
+// One model found in a frame.
+struct BaselineDetection {
+  int model_id = -1;        // index into the models given to set_models()
+  Homography homography{};  // model pixels -> scene pixels
+  Point2f corners[4];       // model outline (pixel centres, clockwise from top-left) mapped
+  int matches = 0;          // ratio-test survivors for this model
+  int inliers = 0;          // of those, findHomography's inliers
+};
+
+// What the last detect() did, for benchmarks and reports.
+struct BaselineStats {
+  int scene_keypoints = 0;
+  long long matches = 0;     // ratio-test survivors, summed over models
+  int homographies = 0;      // findHomography calls
+  double ms_features = 0;    // scene keypoints and descriptors
+  double ms_match = 0;       // matching and ratio test, all models
+  double ms_homography = 0;  // findHomography, all models
+};
+
 class BaselineDetector {
  public:
   explicit BaselineDetector(const BaselineOptions& options);
-  // Describes the model once.
-  void set_model(const cv::Mat& gray);
-  // Scene-side work: features, matching, homography. `found` is false when
-  // fewer than min_inliers survive.
+  const BaselineOptions& options() const { return options_; }
+
+  // Describes the models once (8-bit gray), replacing any earlier ones;
+  // model i gets id i. A model without features is kept and never found.
+  void set_models(const std::vector<cv::Mat>& grays);
+  void set_model(const cv::Mat& gray) { set_models({gray}); }
+  int model_count() const { return static_cast<int>(models_.size()); }
+  int model_keypoints(int model_id) const;
+
+  // Scene-side work for every model. Clears and fills `out` with the
+  // models that reach min_inliers (at most one instance each), in model
+  // order.
+  void detect(const cv::Mat& scene, std::vector<BaselineDetection>& out);
+  // The first model only: `found` is false when it is not detected.
   void detect(const cv::Mat& scene, bool& found, Homography& h, int& inliers);
 
+  const BaselineStats& stats() const { return stats_; }
+
  private:
+  struct Model {
+    int width = 0, height = 0;
+    std::vector<cv::KeyPoint> keypoints;
+    cv::Mat descriptors;
+  };
   BaselineOptions options_;
   cv::Ptr<cv::Feature2D> features_;
   cv::Ptr<cv::DescriptorMatcher> matcher_;
-  std::vector<cv::KeyPoint> model_keypoints_;
-  cv::Mat model_descriptors_;
+  std::vector<Model> models_;
+  BaselineStats stats_;
+  // Per-frame storage, reused.
+  std::vector<cv::KeyPoint> scene_keypoints_;
+  cv::Mat scene_descriptors_;
+  std::vector<std::vector<cv::DMatch>> knn_;
+  std::vector<cv::Point2f> model_points_, scene_points_;
+  std::vector<BaselineDetection> found_;
 };
 
 }  // namespace kg

@@ -8,8 +8,12 @@
 #include <fstream>
 #include <memory>
 
+#include <opencv2/imgproc.hpp>
+
 #include "build/baselines.h"
+#include "build/correspondence_pr.h"
 #include "build/desktop_detect.h"
+#include "build/eval_index.h"
 #include "build/image_io.h"
 #include "build/model_builder.h"
 #include "core/rng.h"
@@ -35,26 +39,92 @@ Homography compose_with_offset(const Homography& h, double dx, double dy) {
   return g;
 }
 
-// An in-memory index viewed from 64-byte-aligned storage.
-struct OwnedIndex {
-  std::unique_ptr<std::uint8_t[]> storage;
-  ModelIndex index;
-  Status build(const cv::Mat& model, const Params& params) {
-    std::vector<BuiltModel> models(1);
-    Status s = build_model(model, "crop", params, models[0]);
-    if (!s) return s;
-    std::vector<std::uint8_t> bytes;
-    s = serialize_index(models, params, bytes);
-    if (!s) return s;
-    storage.reset(new std::uint8_t[bytes.size() + 64]);
-    const auto misalign = reinterpret_cast<std::uintptr_t>(storage.get()) % 64;
-    std::uint8_t* aligned = storage.get() + (64 - misalign) % 64;
-    std::memcpy(aligned, bytes.data(), bytes.size());
-    return ModelIndex::view(aligned, bytes.size(), index);
-  }
+// A keygraph method for one crop: the timed detector and, for curves, the
+// selection at the grid's largest threshold.
+struct KeygraphRun {
+  std::string name;
+  Params params;
+  BuiltModel model;
+  EvalIndex index, curve_index;
+  std::unique_ptr<DesktopDetector> detector, curve_detector;
+  cv::Mat model_sift;
 };
 
+constexpr Limits curve_limits() {
+  Limits l;
+  l.max_arc_matches = 1 << 16;
+  l.max_correspondences = 1 << 21;
+  return l;
+}
+
+// Selection only (one RANSAC iteration, one attempt), float32 descriptors,
+// every correspondence up to the largest arc threshold.
+Params curve_params(Params p, double max_threshold) {
+  p.descriptor.similarity_threshold = static_cast<float>(max_threshold);
+  p.descriptor.encoding = DescriptorEncoding::kFloat32;
+  p.ransac.max_iterations = 1;
+  p.ransac.max_instances = 1;
+  return p;
+}
+
+// The curves of one positive case (see OxfordEvalOptions::curves).
+Status measure_curves(KeygraphRun& run, const cv::Mat& scene, const Homography& truth,
+                      double tolerance, const OxfordCurveGrids& grids, OxfordCase& r) {
+  DetectionList ignored;
+  Status s = run.curve_detector->detect(scene, ignored);
+  if (!s) return s;
+  const Detector& core = run.curve_detector->core();
+  const DetectStats& stats = core.stats();
+  r.curve_truncated = stats.truncated_arc_matches || stats.truncated_correspondences;
+  const std::vector<Keypoint>& keypoints = core.last_keypoints();
+  const int count = static_cast<int>(keypoints.size());
+  CorrespondenceTruth truths;
+  truths.build(run.model.keypoints, keypoints.data(), count, truth, tolerance);
+  const cv::Mat blurred = blur_for_descriptors(scene, run.params.descriptor.blur_sigma);
+  r.keygraph_curve = keygraph_curve(run.model, core.index().model(0).keypoint_begin, blurred,
+                                    keypoints.data(), count, core.last_matches(), 0,
+                                    run.curve_index.index().params(), truths, grids.arc);
+  keypoint_curves(run.model_sift, unit_sift(scene, keypoints), truths, grids.sift_distance,
+                  grids.sift_ratio, r.sift_distance_curve, r.sift_ratio_curve);
+  r.has_curves = true;
+  r.model_keypoints = static_cast<int>(run.model.keypoints.size());
+  r.scene_keypoints = count;
+  // Repeatability, both ways, within the part of each image the other shows.
+  for (std::size_t m = 0; m < run.model.keypoints.size(); ++m) {
+    const Point2f p = kg::apply(truth, run.model.keypoints[m]);
+    if (!(p.x >= 0 && p.y >= 0 && double{p.x} <= scene.cols - 1 && double{p.y} <= scene.rows - 1))
+      continue;
+    ++r.model_inside;
+    r.model_repeated += !truths.of(static_cast<std::uint32_t>(m)).empty();
+  }
+  const float w = static_cast<float>(run.model.width - 1),
+              h = static_cast<float>(run.model.height - 1);
+  std::vector<cv::Point2f> outline;
+  for (const Point2f& c : {Point2f{0, 0}, Point2f{w, 0}, Point2f{w, h}, Point2f{0, h}}) {
+    const Point2f p = kg::apply(truth, c);
+    outline.emplace_back(p.x, p.y);
+  }
+  for (int i = 0; i < count; ++i) {
+    if (cv::pointPolygonTest(outline,
+                             cv::Point2f(keypoints[static_cast<std::size_t>(i)].x,
+                                         keypoints[static_cast<std::size_t>(i)].y),
+                             false) < 0)
+      continue;
+    ++r.scene_inside;
+    r.scene_repeated += truths.scene_repeated(i);
+  }
+  return Status::ok();
+}
+
 }  // namespace
+
+OxfordCurveGrids oxford_curve_grids() {
+  OxfordCurveGrids g;
+  g.arc = threshold_grid(0.0, 0.5, 0.01);
+  g.sift_distance = threshold_grid(0.0, 1.42, 0.02);
+  g.sift_ratio = threshold_grid(0.0, 1.0, 0.02);
+  return g;
+}
 
 Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>& cases,
                        void (*progress)(const OxfordCase&)) {
@@ -75,11 +145,15 @@ Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>
   cv::setNumThreads(1);  // every method on one thread
   std::vector<BaselineDetector> baselines;
   std::vector<std::string> baseline_methods;
-  bool run_keygraph = false;
+  std::vector<KeygraphRun> keygraphs;
   for (const std::string& m : options.methods) {
     BaselineOptions b;
-    if (m == "keygraph") {
-      run_keygraph = true;
+    if (m == "keygraph" || m == "keygraph-mser") {
+      KeygraphRun run;
+      run.name = m;
+      run.params = options.params;
+      if (m == "keygraph-mser") run.params.keypoints.detector = KeypointDetector::kMser;
+      keygraphs.push_back(std::move(run));
     } else if (parse_baseline(m, b)) {
       baselines.emplace_back(b);
       baseline_methods.push_back(m);
@@ -87,6 +161,7 @@ Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>
       return {StatusCode::kInvalidArgument, "unknown method '" + m + "'"};
     }
   }
+  const OxfordCurveGrids grids = oxford_curve_grids();
   // Scenes and ground truth of every subset (negatives use the next one's).
   struct Subset {
     cv::Mat img1;
@@ -120,12 +195,24 @@ Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>
         y = static_cast<int>(rng.uniform(static_cast<std::uint32_t>(img1.rows - size + 1)));
       }
       const cv::Mat crop = img1(cv::Rect(x, y, size, size)).clone();
-      OwnedIndex owned;
-      std::unique_ptr<DesktopDetector> detector;
-      if (run_keygraph) {
-        Status s = owned.build(crop, options.params);
-        if (!s) return {s.code(), subsets[si] + " crop " + std::to_string(c) + ": " + s.message()};
-        detector = std::make_unique<DesktopDetector>(owned.index);
+      for (KeygraphRun& run : keygraphs) {
+        const std::string where = subsets[si] + " crop " + std::to_string(c) + ": ";
+        Status s = build_model(crop, "crop", run.params, run.model);
+        if (s) s = run.index.build({run.model}, run.params);
+        if (!s) return {s.code(), where + s.message()};
+        run.detector = std::make_unique<DesktopDetector>(run.index.index());
+        if (options.curves) {
+          s = run.curve_index.build({run.model}, curve_params(run.params, grids.arc.back()));
+          if (!s) return {s.code(), where + s.message()};
+          run.curve_detector =
+              std::make_unique<DesktopDetector>(run.curve_index.index(), curve_limits());
+          std::vector<Keypoint> keypoints;
+          for (std::size_t k = 0; k < run.model.keypoints.size(); ++k) {
+            keypoints.push_back({run.model.keypoints[k].x, run.model.keypoints[k].y,
+                                 run.model.keypoint_scales[k], 0.f});
+          }
+          run.model_sift = unit_sift(crop, keypoints);
+        }
       }
       for (BaselineDetector& b : baselines) b.set_model(crop);
       const Point2f outline[4] = {{0.f, 0.f},
@@ -138,7 +225,7 @@ Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>
         for (int n = 2; n <= 6; ++n) {
           const cv::Mat& scene = data[ti].scenes[n];
           const Homography truth = compose_with_offset(data[ti].truths[n], x, y);
-          for (std::size_t m = 0; m < baselines.size() + (run_keygraph ? 1 : 0); ++m) {
+          for (std::size_t m = 0; m < baselines.size() + keygraphs.size(); ++m) {
             OxfordCase r;
             r.subset = subsets[si];
             r.scene_subset = subsets[ti];
@@ -149,18 +236,24 @@ Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>
             r.degree = n;
             Homography found_h{};
             const auto start = Clock::now();
-            if (run_keygraph && m == baselines.size()) {
-              r.method = "keygraph";
+            if (m >= baselines.size()) {
+              KeygraphRun& run = keygraphs[m - baselines.size()];
+              r.method = run.name;
               DetectionList found;
-              Status s = detector->detect(scene, found);
+              Status s = run.detector->detect(scene, found);
               r.time_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
               if (!s) return s;
-              r.ransac_iterations = detector->stats().ransac_iterations;
-              r.correspondences = detector->stats().correspondences;
+              r.ransac_iterations = run.detector->stats().ransac_iterations;
+              r.correspondences = run.detector->stats().correspondences;
               r.detected = !found.empty();
               if (r.detected) {
                 r.inliers = found[0].inliers;
+                r.first_ransac_iterations = found[0].ransac_iterations;
                 found_h = found[0].homography;
+              }
+              if (options.curves && !r.negative) {
+                s = measure_curves(run, scene, truth, options.curve_tolerance, grids, r);
+                if (!s) return s;
               }
             } else {
               r.method = baseline_methods[m];
@@ -176,8 +269,8 @@ Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>
                     std::max(r.corner_error, std::hypot(double{g.x} - d.x, double{g.y} - d.y));
               }
             }
-            cases.push_back(r);
-            if (progress != nullptr) progress(r);
+            cases.push_back(std::move(r));
+            if (progress != nullptr) progress(cases.back());
           }
         }
       }

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "build/pr_curves.h"
 #include "keygraph/params.h"
 #include "keygraph/status.h"
 #include "keygraph/types.h"
@@ -25,12 +26,30 @@ struct OxfordEvalOptions {
   bool centre_crop = false;  // one crop, centred, instead of random ones
   std::uint64_t seed = 1;
   Params params;
-  // "keygraph" and/or baseline names (build/baselines.h: "sift-ransac", ...).
+  // "keygraph" (the index's keypoint detector, Hessian by default),
+  // "keygraph-mser" (the same with MSER keypoints) and/or baseline names
+  // (build/baselines.h: "sift-ransac", ...).
   std::vector<std::string> methods = {"keygraph"};
   // Also run each crop against the scenes of the next subset (no instance
   // there): every detection on those is a false detection.
   bool negatives = false;
+  // Precision-recall of correspondences for the keygraph methods (paper,
+  // section 8): after the timed detection, the same scene runs through a
+  // selection at the largest arc threshold of the grid (float32
+  // descriptors, no pose search) and every keygraph correspondence is
+  // scored; individual keypoints are the same model and scene keypoints
+  // described by SIFT.
+  bool curves = false;
+  double curve_tolerance = 3.0;  // a keypoint correspondence is correct within this, px
 };
+
+// The thresholds that trace each curve.
+struct OxfordCurveGrids {
+  std::vector<double> arc;  // largest arc-descriptor distance of a keygraph correspondence
+  std::vector<double> sift_distance;  // SIFT distance (unit descriptors)
+  std::vector<double> sift_ratio;     // nearest / second-nearest SIFT distance
+};
+OxfordCurveGrids oxford_curve_grids();
 
 struct OxfordCase {
   std::string method;
@@ -45,7 +64,18 @@ struct OxfordCase {
   int inliers = 0;
   int ransac_iterations = 0;
   int correspondences = 0;
+  int first_ransac_iterations = 0;  // of the first detection's RANSAC attempt
   double time_ms = 0;
+  // With OxfordEvalOptions::curves, keygraph methods, positive scenes:
+  bool has_curves = false;
+  int model_keypoints = 0, scene_keypoints = 0;  // scene: after sampling
+  // Repeatability: model keypoints that project inside the scene, and of
+  // those the ones with a scene keypoint within curve_tolerance; scene
+  // keypoints inside the crop's outline in the scene, and of those the ones
+  // with a model keypoint within the tolerance.
+  int model_inside = 0, model_repeated = 0, scene_inside = 0, scene_repeated = 0;
+  bool curve_truncated = false;  // the curve selection hit a Limits capacity
+  CaseCurve keygraph_curve, sift_distance_curve, sift_ratio_curve;
 };
 
 // Runs the evaluation; cases in subset, crop, degree order. `progress`

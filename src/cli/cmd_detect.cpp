@@ -6,7 +6,7 @@
 #include "build/desktop_detect.h"
 #include "build/image_io.h"
 #include "cli/commands.h"
-#include "cli/json.h"
+#include "cli/device/json.h"
 
 namespace kg::cli {
 

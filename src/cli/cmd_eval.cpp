@@ -1,18 +1,22 @@
 // keygraph eval --dataset DIR [--subsets a,b] [--crops N] [--size S] [--centre]
-//               [--seed N] [--set NAME=VALUE]... [--methods m1,m2] [--negatives]
-//               [--csv FILE]
-// The paper's second experiment on the Oxford layout: crops of img1 as
-// models, img2..img6 as scenes; a detection succeeds when all four crop
-// corners are within 3 (or 10) px of the ground truth.
-#include <algorithm>
+//               [--seed N] [--set NAME=VALUE]... [--methods m1,m2|all] [--negatives]
+//               [--curves] [--out DIR] [--csv FILE]
+// keygraph eval --synth DIR [--sizes 1,10,50] [--methods ...] [--set ...] [--out DIR]
+//
+// --dataset: the paper's second experiment on the Oxford layout: crops of
+// img1 as models, img2..img6 as scenes; a detection succeeds when all four
+// crop corners are within 3 (or 10) px of the ground truth. --curves adds
+// the precision-recall of correspondences and the RANSAC iterations.
+// --synth: the sign benchmark written by `keygraph synth`.
 #include <cstdio>
-#include <fstream>
-#include <map>
 #include <sstream>
 
 #include "build/baselines.h"
 #include "build/oxford.h"
+#include "build/oxford_report.h"
 #include "build/param_overrides.h"
+#include "build/report_io.h"
+#include "build/synth_eval.h"
 #include "cli/commands.h"
 #include "core/index_format.h"
 
@@ -20,44 +24,59 @@ namespace kg::cli {
 
 namespace {
 
-struct Tally {
-  int cases = 0, within3 = 0, within10 = 0, wrong = 0;
-  int negatives = 0, false_detections = 0;
-  std::vector<double> times;
-  void add(const OxfordCase& c) {
-    times.push_back(c.time_ms);
-    if (c.negative) {
-      ++negatives;
-      false_detections += c.detected;
-      return;
-    }
-    ++cases;
-    within3 += c.detected && c.corner_error <= 3.0;
-    within10 += c.detected && c.corner_error <= 10.0;
-    wrong += c.detected && c.corner_error > 10.0;
-  }
-  double median_ms() {
-    if (times.empty()) return 0;
-    std::sort(times.begin(), times.end());
-    return times[times.size() / 2];
-  }
-};
+bool progress_shown = false;
 
-void print_progress(const OxfordCase& c) {
-  std::fprintf(stderr, "\r%-12s %-8s crop %2d img%d", c.method.c_str(), c.subset.c_str(), c.crop,
-               c.degree);
+// Clears the progress line, if any, before results or an error.
+void clear_progress() {
+  if (progress_shown) std::fprintf(stderr, "\r%60s\r", "");
+  progress_shown = false;
+}
+
+void print_oxford_progress(const OxfordCase& c) {
+  progress_shown = true;
+  std::fprintf(stderr, "\r%-13s %-8s crop %2d img%d %s", c.method.c_str(), c.subset.c_str(), c.crop,
+               c.degree, c.negative ? "(negative)" : "          ");
+}
+
+void print_synth_progress(const SynthCase& c) {
+  progress_shown = true;
+  std::fprintf(stderr, "\r%-13s index of %2d  frame %4d", c.method.c_str(), c.index_size, c.frame);
+}
+
+std::vector<std::string> split(const std::string& v) {
+  std::vector<std::string> out;
+  std::stringstream in(v);
+  for (std::string s; std::getline(in, s, ',');) out.push_back(s);
+  return out;
+}
+
+// "all": keygraph and every baseline.
+std::vector<std::string> expand_methods(const std::vector<std::string>& names) {
+  std::vector<std::string> out;
+  for (const std::string& m : names) {
+    if (m != "all") {
+      out.push_back(m);
+      continue;
+    }
+    out.push_back("keygraph");
+    for (const std::string& b : baseline_names()) out.push_back(b);
+  }
+  return out;
 }
 
 }  // namespace
 
 int cmd_eval(const Args& args) {
   OxfordEvalOptions options;
-  std::string csv;
+  SynthEvalOptions synth;
+  std::string csv, out_dir;
   std::vector<std::string> methods;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
-    if (a == "--centre" || a == "--negatives") {
-      (a == "--centre" ? options.centre_crop : options.negatives) = true;
+    if (a == "--centre" || a == "--negatives" || a == "--curves") {
+      (a == "--centre"      ? options.centre_crop
+       : a == "--negatives" ? options.negatives
+                            : options.curves) = true;
       continue;
     }
     if (i + 1 >= args.size()) return fail("eval: " + a + " needs a value (or is unknown)");
@@ -65,23 +84,30 @@ int cmd_eval(const Args& args) {
     try {
       if (a == "--dataset") {
         options.dataset = v;
+      } else if (a == "--synth") {
+        synth.directory = v;
       } else if (a == "--subsets") {
-        std::stringstream in(v);
-        for (std::string s; std::getline(in, s, ',');) options.subsets.push_back(s);
+        options.subsets = split(v);
       } else if (a == "--crops") {
         options.crops_per_subset = std::stoi(v);
       } else if (a == "--size") {
         options.crop_size = std::stoi(v);
       } else if (a == "--seed") {
         options.seed = std::stoull(v);
+      } else if (a == "--sizes") {
+        synth.index_sizes.clear();
+        for (const std::string& n : split(v)) synth.index_sizes.push_back(std::stoi(n));
+      } else if (a == "--frames") {
+        synth.max_frames = std::stoi(v);
       } else if (a == "--set") {
         Status s = apply_param_override(v, options.params);
         if (!s) return fail("eval: " + s.message());
       } else if (a == "--methods") {
-        std::stringstream in(v);
-        for (std::string m; std::getline(in, m, ',');) methods.push_back(m == "all" ? "" : m);
+        methods = expand_methods(split(v));
       } else if (a == "--csv") {
         csv = v;
+      } else if (a == "--out") {
+        out_dir = v;
       } else {
         return fail("eval: unknown option " + a);
       }
@@ -89,71 +115,57 @@ int cmd_eval(const Args& args) {
       return fail("eval: bad number '" + v + "' for " + a);
     }
   }
-  if (options.dataset.empty()) return fail("eval: no dataset given (--dataset DIR)");
-  if (!methods.empty()) {
-    options.methods.clear();
-    for (const std::string& m : methods) {
-      if (!m.empty()) {
-        options.methods.push_back(m);
-        continue;
-      }
-      options.methods.push_back("keygraph");  // "all": keygraph and every baseline
-      for (const std::string& b : baseline_names()) options.methods.push_back(b);
-    }
+  if (options.dataset.empty() == synth.directory.empty())
+    return fail("eval: give one of --dataset DIR (Oxford layout) or --synth DIR (keygraph synth)");
+  if (Status s = format::validate_params(options.params); !s) return fail("eval: " + s.message());
+  // The output directory before the (long) run, so that a bad one fails at once.
+  if (!out_dir.empty()) {
+    if (Status s = ensure_directory(out_dir); !s) return fail("eval: " + s.message());
   }
+
+  if (!synth.directory.empty()) {
+    synth.params = options.params;
+    if (!methods.empty()) synth.methods = methods;
+    for (const int n : synth.index_sizes) {
+      if (n < 1) return fail("eval: bad --sizes");
+    }
+    std::vector<SynthCase> cases;
+    Status s = evaluate_synth(synth, cases, print_synth_progress);
+    clear_progress();
+    if (!s) return fail(s.message());
+    const std::vector<SynthRow> rows = synth_tallies(cases, synth);
+    std::fputs(synth_text(rows, synth_by_scale(cases, synth)).c_str(), stdout);
+    if (!out_dir.empty()) {
+      if (s = write_synth_report(out_dir, synth, cases); !s) return fail("eval: " + s.message());
+    }
+    return 0;
+  }
+
+  if (!methods.empty()) options.methods = methods;
   if (options.crops_per_subset < 1 || options.crop_size < 32)
     return fail("eval: bad --crops or --size");
-  if (Status s = format::validate_params(options.params); !s) return fail("eval: " + s.message());
-
   std::vector<OxfordCase> cases;
-  Status s = evaluate_oxford(options, cases, print_progress);
-  std::fprintf(stderr, "\r%40s\r", "");
+  Status s = evaluate_oxford(options, cases, print_oxford_progress);
+  clear_progress();
   if (!s) return fail(s.message());
-
-  std::printf("%-13s %-8s %6s %8s %8s %6s %9s %10s\n", "method", "", "cases", "<=3px", "<=10px",
-              "wrong", "false/neg", "median ms");
-  auto row = [](const std::string& method, const std::string& name, Tally& t) {
-    const double n = t.cases > 0 ? t.cases : 1;
-    std::printf("%-13s %-8s %6d %7.1f%% %7.1f%% %6d %4d/%-4d %10.1f\n", method.c_str(),
-                name.c_str(), t.cases, 100.0 * t.within3 / n, 100.0 * t.within10 / n, t.wrong,
-                t.false_detections, t.negatives, t.median_ms());
-  };
-  for (const std::string& method : options.methods) {
-    std::map<std::string, Tally> by_subset;
-    std::map<int, Tally> by_degree;
-    Tally all;
-    for (const OxfordCase& c : cases) {
-      if (c.method != method) continue;
-      by_subset[c.subset].add(c);
-      if (!c.negative) by_degree[c.degree].add(c);
-      all.add(c);
-    }
-    for (auto& [name, t] : by_subset) row(method, name, t);
-    for (auto& [degree, t] : by_degree) row(method, "img" + std::to_string(degree), t);
-    row(method, "all", all);
+  const std::vector<OxfordRow> rows = oxford_tallies(cases, options.methods);
+  std::fputs(
+      oxford_text(rows, oxford_iterations(cases, options), oxford_limits(cases, options)).c_str(),
+      stdout);
+  if (!out_dir.empty()) {
+    if (s = write_oxford_report(out_dir, options, cases); !s) return fail("eval: " + s.message());
   }
-
   if (!csv.empty()) {
-    const std::string tmp = csv + ".tmp";
-    {
-      std::ofstream out(tmp);
-      out << "method,subset,scene_subset,negative,crop,crop_x,crop_y,degree,detected,corner_error,"
-             "inliers,correspondences,ransac_iterations,time_ms\n";
-      for (const OxfordCase& c : cases) {
-        out << c.method << ',' << c.subset << ',' << c.scene_subset << ',' << c.negative << ','
-            << c.crop << ',' << c.crop_x << ',' << c.crop_y << ',' << c.degree << ',' << c.detected
-            << ',' << c.corner_error << ',' << c.inliers << ',' << c.correspondences << ','
-            << c.ransac_iterations << ',' << c.time_ms << '\n';
-      }
-      if (!out) {
-        std::remove(tmp.c_str());
-        return fail("eval: cannot write " + csv);
-      }
+    std::ostringstream out;
+    out << "method,subset,scene_subset,negative,crop,crop_x,crop_y,degree,detected,corner_error,"
+           "inliers,correspondences,ransac_iterations,time_ms\n";
+    for (const OxfordCase& c : cases) {
+      out << c.method << ',' << c.subset << ',' << c.scene_subset << ',' << c.negative << ','
+          << c.crop << ',' << c.crop_x << ',' << c.crop_y << ',' << c.degree << ',' << c.detected
+          << ',' << c.corner_error << ',' << c.inliers << ',' << c.correspondences << ','
+          << c.ransac_iterations << ',' << c.time_ms << '\n';
     }
-    if (std::rename(tmp.c_str(), csv.c_str()) != 0) {
-      std::remove(tmp.c_str());
-      return fail("eval: cannot write " + csv);
-    }
+    if (s = write_text_file(csv, out.str()); !s) return fail("eval: " + s.message());
   }
   return 0;
 }

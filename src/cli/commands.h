@@ -1,5 +1,7 @@
-// The keygraph subcommands. Each returns the process exit code and reports
-// any failure as one line on stderr.
+// The desktop keygraph subcommands (OpenCV, the model builder) and their
+// image helpers. The commands that need no OpenCV are in
+// cli/device/device_commands.h. Each returns the process exit code and
+// reports any failure as one line on stderr.
 #pragma once
 
 #include <string>
@@ -7,20 +9,17 @@
 
 #include <opencv2/core.hpp>
 
+#include "cli/device/command_line.h"
 #include "keygraph/status.h"
 
 namespace kg::cli {
-
-using Args = std::vector<std::string>;
 
 int cmd_build(const Args& args);
 int cmd_detect(const Args& args);
 int cmd_demo(const Args& args);
 int cmd_eval(const Args& args);
-int cmd_inspect(const Args& args);
+int cmd_synth(const Args& args);
 
-// "keygraph: <message>" on stderr; returns 1.
-int fail(const std::string& message);
 // load_gray() with image decoders' own stderr output held back when the
 // load fails, so the failure is reported as one line.
 Status load_image(const std::string& path, cv::Mat& gray);

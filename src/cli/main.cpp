@@ -1,97 +1,27 @@
 // keygraph: build model indexes and detect models in images.
+//
+// One main for both builds of the tool (src/cli/CMakeLists.txt): the
+// desktop keygraph (KG_CLI_DESKTOP, with OpenCV) has every command; the
+// device keygraph has the commands of cli/device/ only.
 #include <cstdio>
 #include <exception>
-#include <filesystem>
-#include <iostream>
 #include <string>
-#include <system_error>
 
-#include <opencv2/imgcodecs.hpp>
-
-#if defined(__unix__) || defined(__APPLE__)
-#include <unistd.h>
-#endif
-
-#include "build/image_io.h"
+#include "cli/device/device_commands.h"
+#if KG_CLI_DESKTOP
 #include "cli/commands.h"
-
-namespace kg::cli {
-
-int fail(const std::string& message) {
-  std::fprintf(stderr, "keygraph: %s\n", message.c_str());
-  return 1;
-}
-
-Status load_image(const std::string& path, cv::Mat& gray) {
-#if defined(__unix__) || defined(__APPLE__)
-  // Decoders (libpng, libjpeg) print their own complaints on stderr. Hold
-  // them in a temporary file: on failure our one line replaces them, on
-  // success they are passed on (e.g. libpng's sRGB profile warnings).
-  std::FILE* held = std::tmpfile();
-  std::fflush(stderr);
-  const int saved = held != nullptr ? ::dup(2) : -1;
-  if (saved < 0 || ::dup2(::fileno(held), 2) < 0) {
-    if (saved >= 0) ::close(saved);
-    if (held != nullptr) std::fclose(held);
-    return load_gray(path, gray);
-  }
-  Status s = load_gray(path, gray);
-  std::fflush(stderr);
-  ::dup2(saved, 2);
-  ::close(saved);
-  if (s) {
-    std::rewind(held);
-    char buf[4096];
-    for (std::size_t n; (n = std::fread(buf, 1, sizeof(buf), held)) > 0;)
-      std::fwrite(buf, 1, n, stderr);
-  }
-  std::fclose(held);
-  return s;
-#else
-  return load_gray(path, gray);
 #endif
-}
-
-bool write_image_atomically(const std::string& path, const cv::Mat& image, std::string& error) {
-  const std::filesystem::path target(path);
-  std::string ext = target.extension().string();
-  if (ext.empty()) {
-    error = path + ": output image needs an extension such as .png";
-    return false;
-  }
-  // Temporary name keeps the extension so the encoder is chosen from it.
-  const std::string tmp = (target.parent_path() / (".tmp-" + target.filename().string())).string();
-  bool ok = false;
-  try {
-    ok = cv::imwrite(tmp, image);
-  } catch (const cv::Exception&) {
-    ok = false;
-  }
-  std::error_code ec;
-  if (!ok) {
-    std::filesystem::remove(tmp, ec);
-    error = "cannot write image " + path;
-    return false;
-  }
-  std::filesystem::rename(tmp, target, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    error = "cannot write image " + path;
-    return false;
-  }
-  return true;
-}
-
-}  // namespace kg::cli
 
 namespace {
 
 void usage(std::FILE* out) {
+  std::fprintf(out,
+               "usage: keygraph <command> [options]\n"
+               "\n"
+               "commands:\n");
+#if KG_CLI_DESKTOP
   std::fprintf(
       out,
-      "usage: keygraph <command> [options]\n"
-      "\n"
-      "commands:\n"
       "  build [--name NAME]... [--roi X,Y,W,H] [--detector hessian|mser]\n"
       "        [--structure 2|3|4] [--vertex-descriptor none|sift]\n"
       "        [--encoding float32|int16|int8]\n"
@@ -101,11 +31,29 @@ void usage(std::FILE* out) {
       "  demo [--out DIR]                  build box.png from opencv-doc and find it\n"
       "                                    in box_in_scene.png\n"
       "  eval --dataset DIR [--subsets a,b] [--crops N] [--size S] [--centre]\n"
-      "       [--seed N] [--set NAME=VALUE]... [--csv FILE]\n"
-      "                                    crops of img1 found in img2..6 (Oxford layout)\n"
-      "  inspect I.kgi                     header, parameters, sections (checksums\n"
-      "                                    verified), models and bytes per arc\n"
-      "  help                              this text\n");
+      "       [--seed N] [--set NAME=VALUE]... [--methods M,...|all] [--negatives]\n"
+      "       [--curves] [--out DIR] [--csv FILE]\n"
+      "                                    crops of img1 found in img2..6 (Oxford layout);\n"
+      "                                    --curves: precision-recall and RANSAC iterations\n"
+      "  eval --synth DIR [--sizes 1,10,50] [--methods M,...|all] [--set ...] [--out DIR]\n"
+      "                                    the sign benchmark of keygraph synth\n"
+      "  synth -o DIR [--seed N] [--signs N] [--frames N] [--sign-free F]\n"
+      "                                    generate a labelled indoor-sign benchmark\n");
+#else
+  std::fprintf(out,
+               "  detect --index I.kgi [--json] [--draw OUT.pgm] SCENE.pgm...\n"
+               "                                    find the index's models in PGM images\n");
+#endif
+  std::fprintf(out,
+               "  live --index I.kgi (--v4l2 /dev/videoN | --libcamera [ID] | --images PATH)\n"
+               "       [--size WxH] [--loop] [--json] [--draw DIR] [--frames N]\n"
+               "                                    detect on every camera frame or image file;\n"
+               "                                    frames per second on stderr; Ctrl-C stops\n"
+               "  bench --index I.kgi [--repeat N] [--json] FRAME...\n"
+               "                                    time detect() per stage on frames in memory\n"
+               "  inspect I.kgi                     header, parameters, sections (checksums\n"
+               "                                    verified), models and bytes per arc\n"
+               "  help                              this text\n");
 }
 
 int run(int argc, char** argv) {
@@ -115,10 +63,22 @@ int run(int argc, char** argv) {
   }
   const std::string command = argv[1];
   kg::cli::Args args(argv + 2, argv + argc);
+#if KG_CLI_DESKTOP
   if (command == "build") return kg::cli::cmd_build(args);
   if (command == "detect") return kg::cli::cmd_detect(args);
   if (command == "demo") return kg::cli::cmd_demo(args);
   if (command == "eval") return kg::cli::cmd_eval(args);
+  if (command == "synth") return kg::cli::cmd_synth(args);
+#else
+  if (command == "detect") return kg::cli::cmd_detect_files(args);
+  if (command == "build" || command == "demo" || command == "eval" || command == "synth") {
+    return kg::cli::fail(command +
+                         ": not in this build of keygraph (a device build, without "
+                         "OpenCV); use the desktop keygraph");
+  }
+#endif
+  if (command == "live") return kg::cli::cmd_live(args);
+  if (command == "bench") return kg::cli::cmd_bench(args);
   if (command == "inspect") return kg::cli::cmd_inspect(args);
   if (command == "help" || command == "--help" || command == "-h") {
     usage(stdout);

@@ -5,7 +5,13 @@
 #include <string>
 #include <vector>
 
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
 #include "build/oxford.h"
+#include "build/oxford_report.h"
 #include "build/param_overrides.h"
 #include "core/index_format.h"
 
@@ -32,6 +38,92 @@ TEST(OxfordEval, CentreCropsOfGrafAndBoatFoundInTheMildScenes) {
     if (c.detected) {
       EXPECT_LT(c.corner_error, 10.0) << c.subset << " img" << c.degree;
     }
+  }
+}
+
+// The paper's precision-recall measurement on graf's centre crop.
+TEST(OxfordEval, CurvesOfKeygraphsAndKeypointsOnGraf) {
+  OxfordEvalOptions options;
+  options.dataset = std::string(KG_SHARED_DATA_DIR) + "/oxford";
+  options.subsets = {"graf"};
+  options.centre_crop = true;
+  options.curves = true;
+  // float32, as the curve selection: the curve at the index's threshold is
+  // then exactly the detector's own selection.
+  options.params.descriptor.encoding = DescriptorEncoding::kFloat32;
+  std::vector<OxfordCase> cases;
+  const Status s = evaluate_oxford(options, cases);
+  ASSERT_TRUE(s.is_ok()) << s.message();
+  ASSERT_EQ(cases.size(), 5u);
+  const OxfordCurveGrids grids = oxford_curve_grids();
+  std::size_t at = 0;
+  while (at < grids.arc.size() && grids.arc[at] < 0.3 - 1e-9) ++at;
+  ASSERT_LT(at, grids.arc.size());
+  for (const OxfordCase& c : cases) {
+    ASSERT_TRUE(c.has_curves);
+    EXPECT_FALSE(c.curve_truncated);
+    const CaseCurve& k = c.keygraph_curve;
+    EXPECT_EQ(k.truth, c.sift_distance_curve.truth);
+    EXPECT_GT(c.model_keypoints, 300);
+    // Selecting by threshold is exactly what the detector's selection did.
+    EXPECT_EQ(k.selected[at], c.correspondences) << "img" << c.degree;
+    for (std::size_t i = 1; i < k.selected.size(); ++i) {
+      EXPECT_GE(k.selected[i], k.selected[i - 1]);
+      EXPECT_GE(k.recalled[i], k.recalled[i - 1]);
+      EXPECT_LE(k.correct[i], k.selected[i]);
+    }
+    // Every selected pair at the largest SIFT distance: recall 1.
+    EXPECT_EQ(c.sift_distance_curve.recalled.back(), c.sift_distance_curve.truth);
+  }
+  // img2 (mild viewpoint change) against img6 (strong): more true keypoint
+  // correspondences, and keygraph correspondences far more precise.
+  const OxfordCase& mild = cases[0];
+  const OxfordCase& strong = cases[4];
+  ASSERT_EQ(mild.degree, 2);
+  ASSERT_EQ(strong.degree, 6);
+  EXPECT_GT(mild.keygraph_curve.truth, 2 * strong.keygraph_curve.truth);
+  EXPECT_GT(case_precision(mild.keygraph_curve, at), 0.05);
+  EXPECT_GT(case_recall(mild.keygraph_curve, at), 0.5);
+  EXPECT_GT(case_precision(mild.keygraph_curve, at), 3 * case_precision(strong.keygraph_curve, at));
+
+  // The report: JSON summary, one CSV per curve, PNG plots.
+  const std::string dir = std::string(KG_TEST_OUTPUT_DIR) + "/oxford_report";
+  std::filesystem::remove_all(dir);
+  ASSERT_TRUE(write_oxford_report(dir, options, cases).is_ok());
+  for (const char* f : {"summary.json", "cases.csv", "pr-keygraph.png", "iterations-keygraph.png",
+                        "pr-keygraph-degrees.png", "curves/keygraph-all-keygraph.csv",
+                        "curves/keygraph-img2-sift-ratio.csv"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir + "/" + f)) << f;
+  }
+  std::ifstream in(dir + "/curves/keygraph-img2-keygraph.csv");
+  std::string header, line;
+  std::getline(in, header);
+  EXPECT_EQ(header, "threshold,recall,precision,expected_iterations,recall_cases,precision_cases");
+  for (std::size_t i = 0; i <= at; ++i) std::getline(in, line);
+  std::stringstream row(line);
+  double threshold = 0, recall = 0, precision = 0;
+  char comma = 0;
+  row >> threshold >> comma >> recall >> comma >> precision;
+  EXPECT_NEAR(threshold, 0.3, 1e-9);
+  EXPECT_NEAR(recall, case_recall(mild.keygraph_curve, at), 1e-9);
+  EXPECT_NEAR(precision, case_precision(mild.keygraph_curve, at), 1e-9);
+  const std::vector<OxfordIterationRow> iterations = oxford_iterations(cases, options);
+  ASSERT_FALSE(iterations.empty());
+  EXPECT_EQ(iterations.back().group, "all");
+  EXPECT_EQ(iterations.back().h_keygraph, 2);
+  EXPECT_EQ(iterations.back().h_keypoint, 4);
+  // Every case is found or lost at exactly one stage; repeatability is a fraction.
+  for (const OxfordLimitRow& r : oxford_limits(cases, options)) {
+    EXPECT_EQ(r.found + r.too_few_at_max + r.threshold_limited + r.pose_limited, r.cases)
+        << r.group;
+    EXPECT_GT(r.scene_repeatability, 0.2) << r.group;
+    EXPECT_LE(r.scene_repeatability, 1.0) << r.group;
+    EXPECT_NEAR(r.scene_repeatability_cubed, std::pow(r.scene_repeatability, 3), 0.1) << r.group;
+  }
+  for (const OxfordCase& c : cases) {
+    EXPECT_LE(c.model_repeated, c.model_inside);
+    EXPECT_LE(c.scene_repeated, c.scene_inside);
+    EXPECT_GT(c.scene_inside, 0);
   }
 }
 

@@ -229,6 +229,47 @@ TEST(FileSource, CorruptFileIsABadFrameAndReadingGoesOn) {
   EXPECT_TRUE(is_end_of_stream(src.next(f, 0)));
 }
 
+// last_path() names the file behind each frame, bad ones included, so a
+// caller can label frames even when sequence numbers skip bad files.
+TEST(FileSource, LastPathNamesEveryFileRead) {
+  TempDir dir;
+  make_pgm_dir(dir);
+  write_bytes(dir.file("frame_001.pgm"), "P5\n4 4\n255\nxy");  // truncated
+  FileSource src({dir.path().string()});
+  EXPECT_EQ(src.last_path(), "");
+  ASSERT_TRUE(src.start());
+  EXPECT_EQ(src.last_path(), "");
+  Frame f;
+  std::vector<std::string> names;
+  for (Status s = src.next(f, 0); !is_end_of_stream(s); s = src.next(f, 0)) {
+    names.push_back(fs::path(src.last_path()).filename().string() + (s ? "" : " bad"));
+  }
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"frame_000.pgm", "frame_001.pgm bad", "frame_002.pgm"}));
+  src.stop();
+  EXPECT_EQ(src.last_path(), "");
+}
+
+TEST(FileSource, ReadImageDecodesOneFileWithOneClearError) {
+  TempDir dir;
+  ASSERT_TRUE(write_pgm(dir.file("a.pgm"), pattern(9, 5, 2).view()));
+  GrayImage g;
+  ASSERT_TRUE(read_image(dir.file("a.pgm"), g));
+  expect_same(g.view(), pattern(9, 5, 2).view());
+
+  Status s = read_image(dir.file("missing.pgm"), g);
+  EXPECT_EQ(s.code(), StatusCode::kNotFound);
+  EXPECT_NE(s.message().find("missing.pgm"), std::string::npos) << s.message();
+  write_bytes(dir.file("truncated.pgm"), "P5\n4 4\n255\nxy");
+  s = read_image(dir.file("truncated.pgm"), g);
+  EXPECT_EQ(s.code(), StatusCode::kCorruptData);
+  EXPECT_NE(s.message().find("truncated.pgm: truncated PGM"), std::string::npos) << s.message();
+  write_bytes(dir.file("text.png"), "not an image");
+  s = read_image(dir.file("text.png"), g);
+  EXPECT_EQ(s.code(), StatusCode::kCorruptData);
+  EXPECT_NE(s.message().find("text.png: not a"), std::string::npos) << s.message();
+}
+
 TEST(FileSource, FileRemovedAfterStartIsABadFrame) {
   TempDir dir;
   make_pgm_dir(dir);
@@ -313,6 +354,11 @@ TEST(FileSource, PngAndPgmMixedThroughOpenCv) {
   ASSERT_TRUE(src.next(f, 0));
   expect_same(f.image, p.view());
   EXPECT_TRUE(is_end_of_stream(src.next(f, 0)));
+
+  GrayImage g;
+  ASSERT_TRUE(read_image(box, g));
+  expect_same(g.view(),
+              ImageView(ref.data, ref.cols, ref.rows, static_cast<std::ptrdiff_t>(ref.step)));
 }
 
 TEST(FileSource, UndecodableImageIsABadFrame) {

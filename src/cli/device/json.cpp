@@ -1,4 +1,4 @@
-#include "cli/json.h"
+#include "cli/device/json.h"
 
 #include <cmath>
 #include <cstdio>

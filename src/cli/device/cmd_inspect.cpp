@@ -14,7 +14,7 @@
 #include <type_traits>
 #include <vector>
 
-#include "cli/commands.h"
+#include "cli/device/device_commands.h"
 #include "core/crc32.h"
 #include "core/descriptor_encoding.h"
 #include "core/index_format.h"

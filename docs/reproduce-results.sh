@@ -1,0 +1,36 @@
+#!/bin/sh
+# Reproduces every table and figure of the Oxford and sign-benchmark
+# sections of docs/RESULTS.md, in one run (about 2 hours on 2 cores):
+#
+#   docs/reproduce-results.sh [KEYGRAPH_BINARY] [OUT_DIR] [OXFORD_DIR]
+#
+# defaults: build/release/src/cli/keygraph, build/results, ../shared/data/oxford.
+# Writes OUT_DIR/<run>/ (summary JSON, CSV per case and per curve, PNG plots)
+# and OUT_DIR/<run>.txt (the printed tables) for the runs:
+#   oxford          10 seeded random crops per subset, every method, negatives, curves
+#   oxford-centre   one centred crop per subset, every method, negatives
+#   signs           the generated sign set (keygraph synth --seed 1, 300 frames)
+#   synth           the sign benchmark, indexes of 1, 10 and 50 signs, every method
+# Copy OUT_DIR/oxford/*.png to docs/figures/ to refresh the committed plots.
+set -eu
+KG=${1:-build/release/src/cli/keygraph}
+OUT=${2:-build/results}
+OXFORD=${3:-../shared/data/oxford}
+[ -x "$KG" ] || { echo "no keygraph binary at $KG (cmake --preset release && cmake --build --preset release)" >&2; exit 1; }
+mkdir -p "$OUT"
+run() {  # run NAME ARGS...: tables to OUT/NAME.txt, timing to OUT/NAME.time
+  name=$1
+  shift
+  echo "== $name: keygraph $*" >&2
+  start=$(date +%s)
+  "$KG" "$@" >"$OUT/$name.txt.tmp"
+  mv "$OUT/$name.txt.tmp" "$OUT/$name.txt"
+  echo "$(($(date +%s) - start)) s" >"$OUT/$name.time"
+  cat "$OUT/$name.txt"
+}
+run oxford eval --dataset "$OXFORD" --crops 10 --seed 1 --methods all,keygraph-mser --negatives \
+  --curves --out "$OUT/oxford"
+run oxford-centre eval --dataset "$OXFORD" --centre --methods all --negatives --out "$OUT/oxford-centre"
+rm -rf "$OUT/signs"
+run signs synth -o "$OUT/signs" --seed 1 --signs 50 --frames 300
+run synth eval --synth "$OUT/signs" --sizes 1,10,50 --methods all,keygraph-mser --out "$OUT/synth"

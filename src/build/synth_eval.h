@@ -1,0 +1,96 @@
+// Scoring detectors on the synthetic sign benchmark (build/synth_set.h)
+// with indexes of several sizes.
+//
+// For an index of N signs the catalogue is cut into groups of N
+// consecutive signs; each frame is searched with the index of its sign's
+// group (a sign-free frame with the groups in turn), so every frame counts
+// once per index size. A frame's sign is found when a detection of that
+// model has all four corners within 10 px (3 px for the stricter column) of
+// the ground truth; every other detection is a false detection.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "build/synth_frame.h"
+#include "keygraph/params.h"
+#include "keygraph/status.h"
+
+namespace kg {
+
+struct SynthEvalOptions {
+  std::string directory;                       // written by `keygraph synth`
+  std::vector<int> index_sizes = {1, 10, 50};  // capped at the set's sign count
+  // "keygraph", "keygraph-mser" and/or baseline names (build/baselines.h).
+  std::vector<std::string> methods = {"keygraph"};
+  Params params;
+  int max_frames = 0;  // 0: every frame
+};
+
+struct SynthCase {
+  std::string method;
+  int index_size = 0;
+  int group = 0;  // index of the group of signs searched
+  int frame = 0;
+  int sign = -1;             // the frame's sign, -1 for a sign-free frame
+  bool found = false;        // within 10 px
+  double corner_error = -1;  // max over the corners of the matching detection, px
+  int detections = 0;
+  int false_detections = 0;
+  double time_ms = 0;  // scene side, the frame already in memory as gray
+  // The frame's conditions (manifest): sign scale in the frame (square root
+  // of its outline's area over the sign image's), hidden fraction, blur, noise.
+  double scale = 0, occluded = 0, blur_sigma = 0, noise_sigma = 0;
+  int motion_blur = 0;
+};
+
+// A detection of model `model` (an id within the searched index).
+struct SynthDetection {
+  int model = -1;
+  Homography homography{};  // model pixels -> frame pixels
+};
+// Scores one frame's detections against its ground truth: fills found,
+// corner_error, detections and false_detections of `c`. The index searched
+// holds signs group_begin, group_begin + 1, ...; `sign_size` is the size of
+// the frame's sign (unused for a sign-free frame).
+void score_synth_frame(const std::vector<SynthDetection>& detections, const SynthFrameInfo& truth,
+                       cv::Size sign_size, int group_begin, SynthCase& c);
+
+Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& cases,
+                      void (*progress)(const SynthCase&) = nullptr);
+
+// Scores of one method at one index size.
+struct SynthRow {
+  std::string method;
+  int index_size = 0;
+  int frames = 0, sign_frames = 0, sign_free_frames = 0;
+  int within3 = 0, within10 = 0;
+  double median_corner_error = 0;  // of the found signs, px
+  int false_detections = 0;
+  int sign_free_with_false = 0;  // sign-free frames with any detection
+  double median_ms = 0, mean_ms = 0;
+};
+std::vector<SynthRow> synth_tallies(const std::vector<SynthCase>& cases,
+                                    const SynthEvalOptions& options);
+
+// Found within 10 px per bucket of sign scale in the frame, per method, at
+// one index size: the buckets' upper bounds and per method the counts.
+struct SynthScaleRow {
+  std::string method;
+  int index_size = 0;
+  std::vector<int> frames, found;  // per bucket
+};
+const std::vector<double>& synth_scale_buckets();  // upper bounds, last is infinity
+std::vector<SynthScaleRow> synth_by_scale(const std::vector<SynthCase>& cases,
+                                          const SynthEvalOptions& options);
+
+std::string synth_text(const std::vector<SynthRow>& rows,
+                       const std::vector<SynthScaleRow>& by_scale = {});
+
+// summary.json and cases.csv in `dir`.
+Status write_synth_report(const std::string& dir, const SynthEvalOptions& options,
+                          const std::vector<SynthCase>& cases);
+
+}  // namespace kg

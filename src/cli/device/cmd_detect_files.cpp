@@ -1,0 +1,85 @@
+// keygraph detect --index I.kgi [--json] [--draw OUT.pgm] SCENE...
+// The device build's detect: scenes read by platform/files (binary PGM;
+// more formats when that library was built with OpenCV), the core detector,
+// and the same output as the desktop detect. --draw writes PGM.
+#include <chrono>
+#include <filesystem>
+
+#include "cli/device/device_commands.h"
+#include "cli/device/frame_output.h"
+#include "keygraph/detector.h"
+#include "platform/files/file_source.h"
+#include "platform/files/pgm.h"
+
+namespace kg::cli {
+
+namespace {
+
+// With several scenes, --draw OUT.pgm becomes OUT_<scene stem>.pgm.
+std::string draw_path(const std::string& draw, const std::string& scene, bool several) {
+  if (!several) return draw;
+  const std::filesystem::path p(draw);
+  return (p.parent_path() /
+          (p.stem().string() + "_" + std::filesystem::path(scene).stem().string() + ".pgm"))
+      .string();
+}
+
+}  // namespace
+
+int cmd_detect_files(const Args& args) {
+  std::string index_path, draw;
+  bool json = false;
+  std::vector<std::string> scenes;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a == "--index" || a == "--draw") {
+      if (i + 1 >= args.size()) return fail("detect: " + a + " needs a value");
+      (a == "--index" ? index_path : draw) = args[++i];
+    } else if (a == "--json") {
+      json = true;
+    } else if (!a.empty() && a[0] == '-') {
+      return fail("detect: unknown option " + a);
+    } else {
+      scenes.push_back(a);
+    }
+  }
+  if (index_path.empty()) return fail("detect: no index given (--index I.kgi)");
+  if (scenes.empty()) return fail("detect: no scene images given");
+  if (!draw.empty() && std::filesystem::path(draw).extension() != ".pgm")
+    return fail("detect: --draw " + draw + ": this build writes PGM only (use a .pgm name)");
+  ModelIndex index;
+  if (Status s = ModelIndex::open(index_path, index); !s) return fail(s.message());
+  if (const std::string problem = core_detector_problem(index); !problem.empty())
+    return fail("detect: " + index_path + ": " + problem);
+
+  Detector detector(index);
+  DetectionList found;
+  platform::GrayImage scene_image, canvas;
+  int exit_code = 0;
+  for (const std::string& scene : scenes) {
+    if (Status s = platform::read_image(scene, scene_image); !s) {
+      exit_code = fail(s.message());
+      continue;
+    }
+    const ImageView view = scene_image.view();
+    const auto start = std::chrono::steady_clock::now();
+    const Status s = detector.detect(view, found);
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    if (!s) {
+      exit_code = fail(scene + ": " + s.message());
+      continue;
+    }
+    print_detections(scene, view, ms, found, detector.stats(), json);
+    std::fflush(stdout);
+    if (!draw.empty()) {
+      draw_outlines(view, found, canvas);
+      if (Status w = platform::write_pgm(draw_path(draw, scene, scenes.size() > 1), canvas.view());
+          !w)
+        exit_code = fail(w.message());
+    }
+  }
+  return exit_code;
+}
+
+}  // namespace kg::cli

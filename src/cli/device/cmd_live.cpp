@@ -1,0 +1,308 @@
+// keygraph live --index I.kgi (--v4l2 /dev/videoN | --libcamera [ID] | --images PATH)
+//               [--size WxH] [--loop] [--json] [--draw DIR] [--frames N]
+// Detects on every frame of a camera or of image files. stdout gets the
+// same lines as `keygraph detect` (with --json, exactly its JSON lines);
+// stderr gets the source's description, a frames-per-second line about
+// once a second, and a summary at the end. Ctrl-C (SIGINT) or SIGTERM
+// finishes the current frame, stops the source and exits 0.
+#include <cerrno>
+#include <chrono>
+#include <cinttypes>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <system_error>
+
+#include "cli/device/detector_compat.h"
+#include "cli/device/device_commands.h"
+#include "cli/device/frame_output.h"
+#include "cli/device/stop_signal.h"
+#include "keygraph/detector.h"
+#include "platform/files/file_source.h"
+#include "platform/frame_source.h"
+#if KG_CLI_HAVE_V4L2
+#include "platform/v4l2/v4l2_source.h"
+#endif
+#if KG_CLI_HAVE_LIBCAMERA
+#include "platform/libcamera/libcamera_source.h"
+#endif
+
+namespace kg::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+// next() waits this long at most, so a stop request is seen within it.
+constexpr int kPollMs = 250;
+// A camera that delivers nothing for this long is reported as failed.
+constexpr double kNoFrameLimitS = 10.0;
+// Bad frames beyond this many are counted, not shown one by one.
+constexpr int kShownBadFrames = 5;
+
+enum class SourceKind { kNone, kV4l2, kLibcamera, kImages };
+
+struct LiveOptions {
+  std::string index_path;
+  SourceKind kind = SourceKind::kNone;
+  std::string source;  // device path, camera id (may be empty) or image path
+  int width = 640, height = 480;
+  bool size_given = false;
+  bool loop = false;
+  bool json = false;
+  std::string draw_dir;
+  int max_frames = 0;  // 0: no limit
+};
+
+double seconds(Clock::duration d) {
+  return std::chrono::duration<double>(d).count();
+}
+
+// Returns an error message, or empty when the options are usable.
+std::string parse(const Args& args, LiveOptions& o) {
+  auto set_source = [&o](SourceKind kind, std::string value) -> std::string {
+    if (o.kind != SourceKind::kNone) return "give one source: --v4l2, --libcamera or --images";
+    o.kind = kind;
+    o.source = std::move(value);
+    return {};
+  };
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    const bool has_value = i + 1 < args.size();
+    std::string error;
+    if (a == "--index" || a == "--v4l2" || a == "--images" || a == "--draw" || a == "--frames" ||
+        a == "--size") {
+      if (!has_value) return a + " needs a value";
+      const std::string& v = args[++i];
+      if (a == "--index") {
+        o.index_path = v;
+      } else if (a == "--v4l2") {
+        error = set_source(SourceKind::kV4l2, v);
+      } else if (a == "--images") {
+        error = set_source(SourceKind::kImages, v);
+      } else if (a == "--draw") {
+        o.draw_dir = v;
+      } else if (a == "--frames") {
+        if (!parse_int(v, 1, 1 << 30, o.max_frames)) return "--frames " + v + ": not a count >= 1";
+      } else if (!parse_size(v, o.width, o.height)) {
+        return "--size " + v + ": expected WIDTHxHEIGHT, e.g. 640x480";
+      } else {
+        o.size_given = true;
+      }
+    } else if (a == "--libcamera") {
+      // The camera id is optional: the next argument, unless it is an option.
+      std::string id;
+      if (has_value && (args[i + 1].empty() || args[i + 1][0] != '-')) id = args[++i];
+      error = set_source(SourceKind::kLibcamera, id);
+    } else if (a == "--json") {
+      o.json = true;
+    } else if (a == "--loop") {
+      o.loop = true;
+    } else {
+      return "unknown " + std::string(!a.empty() && a[0] == '-' ? "option " : "argument ") + a;
+    }
+    if (!error.empty()) return error;
+  }
+  if (o.index_path.empty()) return "no index given (--index I.kgi)";
+  if (o.kind == SourceKind::kNone)
+    return "no frame source given (--v4l2 /dev/videoN, --libcamera [ID] or --images DIR)";
+  if (o.loop && o.kind != SourceKind::kImages) return "--loop applies to --images only";
+  if (o.size_given && o.kind == SourceKind::kImages) return "--size applies to cameras only";
+  if (!o.draw_dir.empty()) {
+    std::error_code ec;
+    if (!fs::is_directory(o.draw_dir, ec)) return "--draw " + o.draw_dir + ": no such directory";
+    if (o.kind == SourceKind::kImages && fs::equivalent(o.draw_dir, o.source, ec))
+      return "--draw " + o.draw_dir + " is the --images directory: pictures would replace frames";
+  }
+  return {};
+}
+
+// The source for the options, or an error message in `error`.
+std::unique_ptr<platform::FrameSource> make_source(const LiveOptions& o, std::string& error) {
+  switch (o.kind) {
+    case SourceKind::kImages: {
+      platform::FileSourceOptions options;
+      options.loop = o.loop;
+      return std::make_unique<platform::FileSource>(std::vector<std::string>{o.source}, options);
+    }
+    case SourceKind::kV4l2: {
+#if KG_CLI_HAVE_V4L2
+      platform::V4l2Options options;
+      options.device = o.source;
+      options.width = o.width;
+      options.height = o.height;
+      return std::make_unique<platform::V4l2Source>(options);
+#else
+      error = "--v4l2: this keygraph was built without the V4L2 source (no linux/videodev2.h)";
+      return nullptr;
+#endif
+    }
+    case SourceKind::kLibcamera: {
+#if KG_CLI_HAVE_LIBCAMERA
+      // libcamera logs INFO and WARN lines on stderr by default; keep only
+      // its errors unless the user chose levels (LIBCAMERA_LOG_LEVELS).
+      ::setenv("LIBCAMERA_LOG_LEVELS", "*:ERROR", 0);
+      platform::LibcameraOptions options;
+      options.camera_id = o.source;
+      options.width = o.width;
+      options.height = o.height;
+      return std::make_unique<platform::LibcameraSource>(options);
+#else
+      error =
+          "--libcamera: this keygraph was built without the libcamera source (libcamera not "
+          "found, or KG_WITH_LIBCAMERA=OFF)";
+      return nullptr;
+#endif
+    }
+    case SourceKind::kNone:
+      break;
+  }
+  error = "no frame source";
+  return nullptr;
+}
+
+// Frames per second over the last report interval (about a second).
+class RateMeter {
+ public:
+  explicit RateMeter(Clock::time_point start) : window_start_(start) {}
+  // Counts one frame; returns true when a report is due.
+  bool frame(Clock::time_point now, double detect_ms) {
+    ++frames_;
+    detect_ms_ += detect_ms;
+    return now - window_start_ >= std::chrono::seconds(1);
+  }
+  void report(Clock::time_point now, std::uint64_t total) {
+    const double s = seconds(now - window_start_);
+    std::fprintf(stderr, "live: %" PRIu64 " frames, %.1f fps, detect %.1f ms/frame (last %.1f s)\n",
+                 total, frames_ / s, detect_ms_ / frames_, s);
+    window_start_ = now;
+    frames_ = 0;
+    detect_ms_ = 0;
+  }
+
+ private:
+  Clock::time_point window_start_;
+  int frames_ = 0;
+  double detect_ms_ = 0;
+};
+
+}  // namespace
+
+int cmd_live(const Args& args) {
+  LiveOptions o;
+  if (std::string error = parse(args, o); !error.empty()) return fail("live: " + error);
+  ModelIndex index;
+  if (Status s = ModelIndex::open(o.index_path, index); !s) return fail(s.message());
+  if (const std::string problem = core_detector_problem(index); !problem.empty())
+    return fail("live: " + o.index_path + ": " + problem);
+  std::string error;
+  std::unique_ptr<platform::FrameSource> source = make_source(o, error);
+  if (source == nullptr) return fail("live: " + error);
+  auto* files = dynamic_cast<platform::FileSource*>(source.get());
+
+  // Everything the loop needs is allocated here, before the first frame.
+  Detector detector(index);
+  DetectionList found;
+  reserve_detections(found, Limits{}.max_detections);
+  platform::GrayImage canvas;
+  std::string name;
+
+  const StopSignal stop;
+  if (Status s = source->start(); !s) return fail("live: " + s.message());
+  std::fprintf(stderr, "live: %s\n", source->description().c_str());
+
+  const Clock::time_point start = Clock::now();
+  RateMeter meter(start);
+  Clock::time_point last_frame = start;
+  std::uint64_t frames = 0, with_detections = 0;
+  int bad_frames = 0;
+  std::string stopped_by = "end of the images";
+  int exit_code = 0;
+  for (;;) {
+    if (const int sig = StopSignal::received(); sig != 0) {
+      stopped_by = StopSignal::name(sig);
+      break;
+    }
+    if (o.max_frames > 0 && frames >= static_cast<std::uint64_t>(o.max_frames)) {
+      stopped_by = "--frames " + std::to_string(o.max_frames);
+      break;
+    }
+    platform::Frame frame;
+    const Status s = source->next(frame, kPollMs);
+    if (platform::is_timeout(s)) {
+      if (seconds(Clock::now() - last_frame) < kNoFrameLimitS) continue;
+      exit_code = fail("live: no frame from " + source->description() + " for " +
+                       std::to_string(static_cast<int>(kNoFrameLimitS)) + " s");
+      stopped_by.clear();
+      break;
+    }
+    if (platform::is_end_of_stream(s)) break;
+    if (platform::is_bad_frame(s)) {
+      if (++bad_frames <= kShownBadFrames) {
+        std::fprintf(stderr, "keygraph: live: %s (frame skipped%s)\n", s.message().c_str(),
+                     bad_frames == kShownBadFrames ? "; further bad frames are only counted" : "");
+      }
+      continue;
+    }
+    if (!s) {
+      exit_code = fail("live: " + s.message());
+      stopped_by.clear();
+      break;
+    }
+    last_frame = Clock::now();
+
+    const Status d = detector.detect(frame.image, found);
+    const Clock::time_point done = Clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(done - last_frame).count();
+    if (files != nullptr) {
+      name = files->last_path();
+    } else {
+      name = o.source.empty() ? std::string("libcamera") : o.source;
+      name += ":" + std::to_string(frame.sequence);
+    }
+    if (!d) {
+      exit_code = fail("live: " + name + ": " + d.message());
+      stopped_by.clear();
+      break;
+    }
+    ++frames;
+    if (!found.empty()) ++with_detections;
+    print_detections(name, frame.image, ms, found, detector.stats(), o.json);
+    if (std::fflush(stdout) != 0) {
+      // A closed pipe (e.g. `| head`) is a normal way to stop.
+      stopped_by = "stdout closed";
+      if (errno != EPIPE) exit_code = fail("live: cannot write to stdout");
+      break;
+    }
+    if (!o.draw_dir.empty()) {
+      draw_outlines(frame.image, found, canvas);
+      char numbered[32];
+      std::snprintf(numbered, sizeof(numbered), "frame_%06" PRIu64 ".pgm", frame.sequence);
+      const fs::path out = fs::path(o.draw_dir) /
+                           (files != nullptr ? fs::path(name).stem().string() + ".pgm" : numbered);
+      if (Status w = platform::write_pgm(out.string(), canvas.view()); !w) {
+        exit_code = fail("live: " + w.message());
+        stopped_by.clear();
+        break;
+      }
+    }
+    if (meter.frame(done, ms)) meter.report(done, frames);
+  }
+  source->stop();
+
+  const double total_s = seconds(Clock::now() - start);
+  std::fprintf(stderr,
+               "live: %" PRIu64 " frames in %.1f s (%.1f fps), %" PRIu64
+               " with detections, %d bad frames skipped%s%s\n",
+               frames, total_s, total_s > 0 ? static_cast<double>(frames) / total_s : 0.0,
+               with_detections, bad_frames, stopped_by.empty() ? "" : "; stopped by ",
+               stopped_by.c_str());
+  // Image files that could not be read are errors, as in `keygraph detect`;
+  // a camera's occasional bad frame is not.
+  if (exit_code == 0 && bad_frames > 0 && o.kind == SourceKind::kImages) exit_code = 1;
+  return exit_code;
+}
+
+}  // namespace kg::cli

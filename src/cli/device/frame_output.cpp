@@ -1,0 +1,101 @@
+#include "cli/device/frame_output.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+#include "cli/device/json.h"
+#include "platform/convert.h"
+
+namespace kg::cli {
+
+std::string core_detector_problem(const ModelIndex& index) {
+  const Params& p = index.params();
+  if (p.keypoints.detector != KeypointDetector::kHessian) {
+    return "the index was built with --detector mser, which needs OpenCV; build it with the "
+           "default detector (hessian) to detect with the core";
+  }
+  if (p.descriptor.vertex_descriptor != VertexDescriptor::kNone) {
+    return "the index was built with --vertex-descriptor sift, which needs OpenCV; build it "
+           "without vertex descriptors to detect with the core";
+  }
+  return {};
+}
+
+void print_detections(const std::string& name, const ImageView& frame, double ms,
+                      const DetectionList& found, const DetectStats& stats, bool json) {
+  if (json) {
+    std::printf("%s\n", detection_json(name, frame.width, frame.height, ms, found, stats).c_str());
+    return;
+  }
+  std::printf("%s: %zu detection(s) in %.1f ms\n", name.c_str(), found.size(), ms);
+  for (const Detection& d : found) {
+    std::printf("  %.*s: inliers %d, score %.3f, corners", static_cast<int>(d.model_name.size()),
+                d.model_name.data(), d.inliers, d.score);
+    for (const Point2f& c : d.corners) std::printf(" (%.1f, %.1f)", c.x, c.y);
+    std::printf("\n");
+  }
+}
+
+namespace {
+
+// A square brush of half-width r centred on (x, y), clipped to the image.
+void stamp(platform::GrayImage& img, long x, long y, int r, std::uint8_t value) {
+  for (long yy = std::max(0L, y - r); yy <= std::min<long>(img.height - 1, y + r); ++yy) {
+    for (long xx = std::max(0L, x - r); xx <= std::min<long>(img.width - 1, x + r); ++xx) {
+      img.pixels[static_cast<std::size_t>(yy) * static_cast<std::size_t>(img.width) +
+                 static_cast<std::size_t>(xx)] = value;
+    }
+  }
+}
+
+// Bresenham from a to b. Endpoints far outside the frame (a wild pose) are
+// clamped first so the loop stays short; the visible part of a line whose
+// ends are clamped can shift, which is fine for a picture.
+void line(platform::GrayImage& img, Point2f a, Point2f b, int r, std::uint8_t value) {
+  if (!std::isfinite(a.x) || !std::isfinite(a.y) || !std::isfinite(b.x) || !std::isfinite(b.y))
+    return;
+  const double limit = 4.0 * std::max(img.width, img.height);
+  auto clamp = [limit](float v) {
+    return std::lround(std::clamp(static_cast<double>(v), -limit, limit));
+  };
+  long x0 = clamp(a.x), y0 = clamp(a.y);
+  const long x1 = clamp(b.x), y1 = clamp(b.y);
+  const long dx = std::labs(x1 - x0), dy = -std::labs(y1 - y0);
+  const long sx = x0 < x1 ? 1 : -1, sy = y0 < y1 ? 1 : -1;
+  long err = dx + dy;
+  for (;;) {
+    stamp(img, x0, y0, r, value);
+    if (x0 == x1 && y0 == y1) break;
+    const long e2 = 2 * err;
+    if (e2 >= dy) {
+      err += dy;
+      x0 += sx;
+    }
+    if (e2 <= dx) {
+      err += dx;
+      y0 += sy;
+    }
+  }
+}
+
+}  // namespace
+
+void draw_outlines(const ImageView& frame, const DetectionList& found,
+                   platform::GrayImage& canvas) {
+  canvas.width = frame.width;
+  canvas.height = frame.height;
+  canvas.pixels.resize(static_cast<std::size_t>(frame.width) *
+                       static_cast<std::size_t>(frame.height));
+  platform::copy_gray(frame, canvas.pixels.data(), frame.width);
+  // Black 5 pixels wide first, then white 3 pixels wide on top.
+  for (const Detection& d : found) {
+    for (int i = 0; i < 4; ++i) line(canvas, d.corners[i], d.corners[(i + 1) % 4], 2, 0);
+  }
+  for (const Detection& d : found) {
+    for (int i = 0; i < 4; ++i) line(canvas, d.corners[i], d.corners[(i + 1) % 4], 1, 255);
+  }
+}
+
+}  // namespace kg::cli

@@ -1,0 +1,29 @@
+// Output shared by the device commands (detect on files, live): one frame's
+// detections as text or as the JSON line of `keygraph detect --json`, and
+// the detections drawn into a gray copy of the frame, for PGM files.
+#pragma once
+
+#include <string>
+
+#include "keygraph/detector.h"
+#include "keygraph/image.h"
+#include "keygraph/model_index.h"
+#include "platform/files/pgm.h"
+
+namespace kg::cli {
+
+// Empty when the core Detector can run on `index` with its built-in
+// keypoint detector; otherwise why not, for an error line.
+std::string core_detector_problem(const ModelIndex& index);
+
+// Prints one frame's result on stdout: the JSON line of cli/device/json.h,
+// or "NAME: K detection(s) in T ms" and a line per detection.
+void print_detections(const std::string& name, const ImageView& frame, double ms,
+                      const DetectionList& found, const DetectStats& stats, bool json);
+
+// Copies `frame` into `canvas` (its capacity reused) and draws each
+// detection's outline: a white line with a black edge, 3 pixels wide, so it
+// shows on any background.
+void draw_outlines(const ImageView& frame, const DetectionList& found, platform::GrayImage& canvas);
+
+}  // namespace kg::cli

@@ -1,0 +1,67 @@
+#!/bin/sh
+# keygraph synth and keygraph eval on bad input: one line on stderr, a
+# non-zero exit, nothing left behind; and a small synth set end to end
+# (written, evaluated, its JSON summary valid).
+#
+# usage: cli_eval_synth.sh PATH/TO/keygraph
+set -u
+KG=${1:?usage: cli_eval_synth.sh KEYGRAPH_BINARY}
+[ -x "$KG" ] || { echo "no keygraph binary at $KG" >&2; exit 1; }
+KG=$(cd "$(dirname "$KG")" && pwd)/$(basename "$KG")  # commands run in other directories
+command -v python3 >/dev/null 2>&1 || { echo "python3 is needed to validate JSON" >&2; exit 1; }
+WORK=$(mktemp -d "${TMPDIR:-/tmp}/kg_synth_cli.XXXXXX") || exit 1
+trap 'rm -rf "$WORK"' EXIT
+failures=0
+bad() {
+  echo "FAIL: $*" >&2
+  failures=$((failures + 1))
+}
+
+# expect_failure NAME CMD...: one stderr line, non-zero exit, no new files in $WORK/case.
+expect_failure() {
+  name=$1
+  shift
+  rm -rf "$WORK/case" && mkdir "$WORK/case"
+  (cd "$WORK/case" && "$@") >"$WORK/stdout" 2>"$WORK/stderr"
+  rc=$?
+  [ $rc -ne 0 ] || bad "$name: exit code 0"
+  [ $rc -lt 128 ] || bad "$name: crashed (exit $rc)"
+  lines=$(wc -l <"$WORK/stderr")
+  [ "$lines" -eq 1 ] || bad "$name: $lines lines on stderr: $(cat "$WORK/stderr")"
+  grep -q '^keygraph: ' "$WORK/stderr" || bad "$name: message does not start with 'keygraph: '"
+  [ -z "$(ls -A "$WORK/case")" ] || bad "$name: left files behind: $(ls -A "$WORK/case")"
+}
+
+expect_failure "synth without -o" "$KG" synth
+expect_failure "synth bad number" "$KG" synth -o out --frames many
+expect_failure "synth too many signs" "$KG" synth -o out --signs 1000
+expect_failure "synth no backgrounds" "$KG" synth -o out --backgrounds "$WORK/none"
+expect_failure "eval without input" "$KG" eval
+expect_failure "eval both inputs" "$KG" eval --dataset a --synth b
+expect_failure "eval missing synth dir" "$KG" eval --synth "$WORK/none"
+mkdir -p "$WORK/corrupt" && echo "keygraph-synth 2" >"$WORK/corrupt/manifest.txt"
+expect_failure "eval corrupt manifest" "$KG" eval --synth "$WORK/corrupt"
+expect_failure "eval bad sizes" "$KG" eval --synth "$WORK/corrupt" --sizes 0
+expect_failure "eval unknown option" "$KG" eval --synth "$WORK/corrupt" --bogus 1
+
+# A small set, end to end.
+"$KG" synth -o "$WORK/set" --signs 2 --frames 4 --seed 3 >/dev/null 2>"$WORK/stderr" ||
+  bad "synth failed: $(cat "$WORK/stderr")"
+[ -f "$WORK/set/manifest.txt" ] || bad "no manifest"
+[ "$(ls "$WORK/set/frames" | wc -l)" -eq 4 ] || bad "expected 4 frames"
+ls -A "$WORK" | grep -q '^\.tmp-' && bad "temporary directory left behind"
+expect_failure "synth into a non-empty directory" "$KG" synth -o "$WORK/set"
+[ -f "$WORK/set/manifest.txt" ] || bad "the existing set was damaged"
+expect_failure "eval unknown method" "$KG" eval --synth "$WORK/set" --methods nonesuch
+"$KG" eval --synth "$WORK/set" --sizes 1,2 --methods keygraph,orb-ransac --out "$WORK/out" \
+  >"$WORK/stdout" 2>"$WORK/stderr" || bad "eval --synth failed: $(cat "$WORK/stderr")"
+grep -q '^orb-ransac  *2 ' "$WORK/stdout" || bad "no orb-ransac row for the index of 2: $(cat "$WORK/stdout")"
+python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert len(d['results']) == 4" \
+  "$WORK/out/synth-summary.json" || bad "synth-summary.json is not the expected JSON"
+[ "$(wc -l <"$WORK/out/synth-cases.csv")" -eq 17 ] || bad "synth-cases.csv: expected 16 rows"
+
+if [ $failures -ne 0 ]; then
+  echo "$failures failure(s)" >&2
+  exit 1
+fi
+echo "cli_eval_synth: all checks passed"
