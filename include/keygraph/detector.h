@@ -2,18 +2,24 @@
 //
 //   kg::ModelIndex index;
 //   if (auto s = kg::ModelIndex::open("signs.kgi", index); !s) { ... }
-//   kg::Detector detector(index);            // sizes its buffers once
-//   kg::DetectionList found;
+//   kg::Detector detector(index);            // one workspace, allocated here
+//   kg::DetectionList found;                 // fixed capacity, no heap
 //   detector.detect(kg::ImageView{data, w, h, stride}, found);
+//
+// Memory: the constructor lays out one workspace for `Limits` (frame size,
+// keypoints, keygraphs, correspondences, detections) and allocates it in one
+// piece, or uses a buffer the caller supplies; detect() never allocates. When
+// a frame needs more than the limits allow, detection degrades (the stats'
+// truncated_* flags say what was cut) instead of overflowing. A frame larger
+// than max_width x max_height is an error.
 //
 // The index must outlive the detector. A Detector is not thread-safe; use
 // one per thread (they can share one index).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
-#include <memory>
 #include <string_view>
-#include <vector>
 
 #include "keygraph/image.h"
 #include "keygraph/model_index.h"
@@ -22,14 +28,28 @@
 
 namespace kg {
 
-// Capacities of the per-frame work. Reaching one degrades detection (the
-// stats say what was cut); it never overflows.
+inline constexpr int kMaxDetections = 64;  // capacity of a DetectionList
+
+// Capacities of the per-frame work, from which the workspace is sized.
+// Reaching one degrades detection (the stats say what was cut); it never
+// overflows. Detector::workspace_bytes() gives the memory they need (about
+// 21 MB for the defaults at 640x480: tests/integration/test_runtime_memory.cpp).
 struct Limits {
-  int max_keypoints = 4000;          // detector output, strongest kept
-  int max_scene_keypoints = 2000;    // after Chebyshev sampling
-  int max_arc_matches = 4096;        // model arcs kept per scene arc query
-  int max_correspondences = 200000;  // keygraph correspondences per frame
-  int max_detections = 16;
+  int max_width = 640;  // largest frame, pixels
+  int max_height = 480;
+  int max_keypoints = 4000;         // detector output, strongest kept
+  int max_scene_keypoints = 2000;   // after Chebyshev sampling
+  int max_arc_matches = 4096;       // model arcs kept per scene arc query
+  int max_arc_pool = 1 << 20;       // model arcs kept over all queries of a frame
+  int max_correspondences = 20000;  // keygraph correspondences per frame
+  int max_detections = 16;          // at most kMaxDetections
+  // The same limits for frames up to width x height.
+  Limits for_frame(int width, int height) const {
+    Limits l = *this;
+    l.max_width = width;
+    l.max_height = height;
+    return l;
+  }
 };
 
 struct Detection {
@@ -68,7 +88,54 @@ struct DetectStats {
   double ms_keypoints = 0, ms_graph = 0, ms_describe = 0, ms_select = 0, ms_pose = 0;
 };
 
-using DetectionList = std::vector<Detection>;
+// Detections of one frame: a fixed-capacity list (no heap), filled by
+// Detector::detect().
+class DetectionList {
+ public:
+  using value_type = Detection;
+  using iterator = Detection*;
+  using const_iterator = const Detection*;
+
+  std::size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  static constexpr std::size_t capacity() { return kMaxDetections; }
+  void clear() { size_ = 0; }
+  // False (and nothing added) when full.
+  bool push_back(const Detection& d) {
+    if (size_ == capacity()) return false;
+    items_[size_++] = d;
+    return true;
+  }
+  Detection& operator[](std::size_t i) { return items_[i]; }
+  const Detection& operator[](std::size_t i) const { return items_[i]; }
+  iterator begin() { return items_; }
+  iterator end() { return items_ + size_; }
+  const_iterator begin() const { return items_; }
+  const_iterator end() const { return items_ + size_; }
+
+ private:
+  Detection items_[kMaxDetections];
+  std::size_t size_ = 0;
+};
+
+// A read-only view of an array the detector owns (valid until the next
+// detect() call or the detector's end).
+template <class T>
+class ConstSpan {
+ public:
+  ConstSpan() = default;
+  ConstSpan(const T* data, std::size_t size) : data_(data), size_(size) {}
+  std::size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  const T* data() const { return data_; }
+  const T& operator[](std::size_t i) const { return data_[i]; }
+  const T* begin() const { return data_; }
+  const T* end() const { return data_ + size_; }
+
+ private:
+  const T* data_ = nullptr;
+  std::size_t size_ = 0;
+};
 
 // One keygraph correspondence: model keypoint ids (global) and scene
 // keypoint positions for each vertex of the structure.
@@ -80,10 +147,31 @@ struct KeygraphMatch {
 
 class Detector {
  public:
+  // Allocates the workspace for `limits` (one allocation).
   explicit Detector(const ModelIndex& index, const Limits& limits = Limits{});
+  // Uses `size` bytes at `buffer` (64-byte aligned, at least
+  // workspace_bytes(index, limits)) as the workspace and allocates nothing;
+  // the caller keeps the buffer alive and untouched while the detector
+  // exists. A buffer too small or misaligned leaves the detector failed:
+  // status() says why and detect() returns that status.
+  Detector(const ModelIndex& index, const Limits& limits, void* buffer, std::size_t size);
   ~Detector();
   Detector(Detector&&) noexcept;
   Detector& operator=(Detector&&) noexcept;
+  Detector(const Detector&) = delete;
+  Detector& operator=(const Detector&) = delete;
+
+  // Bytes of workspace a Detector for `index` and `limits` uses. Found by
+  // laying the workspace out once, which allocates temporarily: call it
+  // where a heap exists (the figure is the same on every run of one build).
+  static std::size_t workspace_bytes(const ModelIndex& index, const Limits& limits);
+  std::size_t workspace_bytes() const;
+  // Bytes of the workspace handed out so far: equal to workspace_bytes()
+  // after construction and, since detect() allocates nothing, ever after.
+  std::size_t workspace_used() const;
+  // Ok, or why construction failed (limits out of range, buffer too small).
+  const Status& status() const;
+  const Limits& limits() const;
 
   // Detects with the built-in keypoint detector (the index's detector must
   // be kHessian, and the index must have no vertex descriptors). Clears and
@@ -103,14 +191,25 @@ class Detector {
 
   const DetectStats& stats() const;
   // Keygraph correspondences selected in the last frame (evaluation, tests).
-  const std::vector<KeygraphMatch>& last_matches() const;
+  ConstSpan<KeygraphMatch> last_matches() const;
   // Scene keypoints (after sampling) of the last frame.
-  const std::vector<Keypoint>& last_keypoints() const;
+  ConstSpan<Keypoint> last_keypoints() const;
   const ModelIndex& index() const;
 
  private:
   struct Impl;
-  std::unique_ptr<Impl> impl_;
+  struct Header;  // at the start of the workspace: its allocator and the Impl
+  static std::size_t header_bytes();
+  void place(void* buffer, std::size_t size);
+  void release();
+
+  const ModelIndex* index_ = nullptr;
+  Header* header_ = nullptr;  // at the start of the workspace
+  Impl* impl_ = nullptr;      // header_->impl
+  void* owned_ = nullptr;     // the workspace, when the detector allocated it
+  std::size_t workspace_size_ = 0;
+  Limits limits_;
+  Status status_;
 };
 
 }  // namespace kg

@@ -1,5 +1,6 @@
 #include "build/desktop_detect.h"
 
+#include <algorithm>
 #include <string>
 
 #include <opencv2/imgproc.hpp>
@@ -9,6 +10,13 @@
 namespace kg {
 
 Status DesktopDetector::detect(const cv::Mat& gray, DetectionList& out) {
+  // Desktop frames come in any size: grow the core's workspace to fit.
+  const Limits& current = detector_.limits();
+  if (gray.cols > current.max_width || gray.rows > current.max_height) {
+    detector_ =
+        Detector(detector_.index(), current.for_frame(std::max(gray.cols, current.max_width),
+                                                      std::max(gray.rows, current.max_height)));
+  }
   const Params& params = detector_.index().params();
   if (params.descriptor.vertex_descriptor == VertexDescriptor::kSift) {
     if (gray.empty() || gray.type() != CV_8UC1)

@@ -53,6 +53,7 @@ struct KeygraphRun {
 constexpr Limits curve_limits() {
   Limits l;
   l.max_arc_matches = 1 << 16;
+  l.max_arc_pool = 1 << 25;
   l.max_correspondences = 1 << 21;
   return l;
 }
@@ -76,14 +77,15 @@ Status measure_curves(KeygraphRun& run, const cv::Mat& scene, const Homography& 
   const Detector& core = run.curve_detector->core();
   const DetectStats& stats = core.stats();
   r.curve_truncated = stats.truncated_arc_matches || stats.truncated_correspondences;
-  const std::vector<Keypoint>& keypoints = core.last_keypoints();
+  const std::vector<Keypoint> keypoints(core.last_keypoints().begin(), core.last_keypoints().end());
+  const std::vector<KeygraphMatch> matches(core.last_matches().begin(), core.last_matches().end());
   const int count = static_cast<int>(keypoints.size());
   CorrespondenceTruth truths;
   truths.build(run.model.keypoints, keypoints.data(), count, truth, tolerance);
   const cv::Mat blurred = blur_for_descriptors(scene, run.params.descriptor.blur_sigma);
-  r.keygraph_curve = keygraph_curve(run.model, core.index().model(0).keypoint_begin, blurred,
-                                    keypoints.data(), count, core.last_matches(), 0,
-                                    run.curve_index.index().params(), truths, grids.arc);
+  r.keygraph_curve =
+      keygraph_curve(run.model, core.index().model(0).keypoint_begin, blurred, keypoints.data(),
+                     count, matches, 0, run.curve_index.index().params(), truths, grids.arc);
   keypoint_curves(run.model_sift, unit_sift(scene, keypoints), truths, grids.sift_distance,
                   grids.sift_ratio, r.sift_distance_curve, r.sift_ratio_curve);
   r.has_curves = true;

@@ -50,33 +50,53 @@ bool round_inside(float v, int size, int& out) {
 
 }  // namespace
 
-bool mean_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset,
-                  std::vector<float>& profile) {
+namespace {
+
+// The rounded endpoints and axes of the Bresenham line from a to b, or
+// false when the arc leaves the image (with the parallel offset) or is a
+// single pixel.
+struct ProfileLine {
+  int ax, ay, bx, by, dx, dy, adx, ady, pdx, pdy, par;
+  bool x_major;
+};
+
+bool profile_line(ImageView blurred, Point2f a, Point2f b, int parallel_offset, ProfileLine& l) {
   if (blurred.empty()) return false;
-  int ax, ay, bx, by;
-  if (!round_inside(a.x, blurred.width, ax) || !round_inside(a.y, blurred.height, ay) ||
-      !round_inside(b.x, blurred.width, bx) || !round_inside(b.y, blurred.height, by)) {
+  if (!round_inside(a.x, blurred.width, l.ax) || !round_inside(a.y, blurred.height, l.ay) ||
+      !round_inside(b.x, blurred.width, l.bx) || !round_inside(b.y, blurred.height, l.by)) {
     return false;
   }
-  const int dx = bx - ax;
-  const int dy = by - ay;
-  const int adx = std::abs(dx);
-  const int ady = std::abs(dy);
-  if (adx == 0 && ady == 0) return false;
+  l.dx = l.bx - l.ax;
+  l.dy = l.by - l.ay;
+  l.adx = std::abs(l.dx);
+  l.ady = std::abs(l.dy);
+  if (l.adx == 0 && l.ady == 0) return false;
 
   // Major axis x when the line is more horizontal than vertical; the
   // parallel profiles are offset along the other (minor) axis.
-  const bool x_major = adx > ady;
-  const int par = std::abs(parallel_offset);
-  const int pdx = x_major ? 0 : par;
-  const int pdy = x_major ? par : 0;
+  l.x_major = l.adx > l.ady;
+  l.par = std::abs(parallel_offset);
+  l.pdx = l.x_major ? 0 : l.par;
+  l.pdy = l.x_major ? l.par : 0;
   // Every Bresenham pixel lies in the endpoints' bounding box, so one box
   // test widened by the parallel offset covers all three profiles.
-  if (std::min(ax, bx) - pdx < 0 || std::max(ax, bx) + pdx >= blurred.width ||
-      std::min(ay, by) - pdy < 0 || std::max(ay, by) + pdy >= blurred.height) {
-    return false;
-  }
+  return !(std::min(l.ax, l.bx) - l.pdx < 0 || std::max(l.ax, l.bx) + l.pdx >= blurred.width ||
+           std::min(l.ay, l.by) - l.pdy < 0 || std::max(l.ay, l.by) + l.pdy >= blurred.height);
+}
 
+}  // namespace
+
+int profile_samples(ImageView blurred, Point2f a, Point2f b, int parallel_offset) {
+  ProfileLine l;
+  if (!profile_line(blurred, a, b, parallel_offset, l)) return 0;
+  return std::max(l.adx, l.ady) + 1;
+}
+
+bool mean_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset, float* out) {
+  ProfileLine l;
+  if (!profile_line(blurred, a, b, parallel_offset, l)) return false;
+  const int ax = l.ax, ay = l.ay, dx = l.dx, dy = l.dy, adx = l.adx, ady = l.ady, par = l.par;
+  const bool x_major = l.x_major;
   const std::ptrdiff_t stride = blurred.stride;
   const std::ptrdiff_t sx = dx >= 0 ? 1 : -1;
   const std::ptrdiff_t sy = dy >= 0 ? stride : -stride;
@@ -86,12 +106,6 @@ bool mean_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset,
   const bool minor_positive = (x_major ? dy : dx) > 0;
   const std::ptrdiff_t d = x_major ? adx : ady;   // Chebyshev length
   const std::ptrdiff_t dm = x_major ? ady : adx;  // |minor delta|
-
-  const std::size_t n = static_cast<std::size_t>(d) + 1;
-  if (profile.capacity() < n)
-    profile.reserve(std::max<std::size_t>({n, 2 * profile.capacity(), 128}));
-  profile.resize(n);
-  float* out = profile.data();
 
   // Minor offset at step t is t*dm/d rounded to nearest. rem tracks
   // (2*t*dm + d) mod 2d, so p sits on the round-half-up pixel and rem == 0
@@ -230,17 +244,16 @@ bool descriptor_from_profile(const float* profile, int length, int coefficients,
   return true;
 }
 
-bool arc_descriptor(ImageView blurred, Point2f a, Point2f b, const DescriptorParams& params,
-                    std::vector<float>& scratch, ArcDescriptor& out) {
+bool descriptor_from_samples(const float* samples, int n, const DescriptorParams& params,
+                             ArcDescriptor& out) {
   out.fill(0.f);
   const int length = params.profile_length;
   if (length < 2 || length > kMaxProfileLength || params.coefficients < 1 ||
-      params.coefficients > kMaxCoefficients || params.coefficients >= length) {
+      params.coefficients > kMaxCoefficients || params.coefficients >= length || n < 2) {
     return false;
   }
-  if (!mean_profile(blurred, a, b, params.parallel_offset, scratch)) return false;
   float resampled[kMaxProfileLength];
-  resample_linear(scratch.data(), static_cast<int>(scratch.size()), resampled, length);
+  resample_linear(samples, n, resampled, length);
   return descriptor_from_profile(resampled, length, params.coefficients, out);
 }
 

@@ -19,11 +19,25 @@
 
 namespace kg {
 
-// Mean of the three parallel profiles from a to b; `profile` gets
-// Chebyshev(a, b) + 1 samples. Returns false when any sampled pixel lies
-// outside the image or a == b.
-bool mean_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset,
-                  std::vector<float>& profile);
+// Samples of the mean profile from a to b: the Chebyshev length of the
+// rounded endpoints plus one; 0 when a sampled pixel lies outside the image
+// or a == b.
+int profile_samples(ImageView blurred, Point2f a, Point2f b, int parallel_offset);
+
+// Mean of the three parallel profiles from a to b into out[0 ..
+// profile_samples()). Returns false (writing nothing) when
+// profile_samples() is 0.
+bool mean_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset, float* out);
+
+// The same into a vector resized to profile_samples() (std::vector or
+// WorkVector: within its capacity this allocates nothing).
+template <class Vector>
+bool mean_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset, Vector& profile) {
+  const int n = profile_samples(blurred, a, b, parallel_offset);
+  if (n == 0) return false;
+  profile.resize(static_cast<std::size_t>(n));
+  return mean_profile(blurred, a, b, parallel_offset, profile.data());
+}
 
 // Linear resampling of `in` (n >= 2 samples) onto `length` samples whose
 // first and last coincide with in's first and last.
@@ -34,10 +48,21 @@ void resample_linear(const float* in, int n, float* out, int length);
 bool descriptor_from_profile(const float* profile, int length, int coefficients,
                              ArcDescriptor& out);
 
+// Descriptor of n >= 2 profile samples: resampled to params.profile_length,
+// then descriptor_from_profile(). False for bad parameters or a flat profile.
+bool descriptor_from_samples(const float* samples, int n, const DescriptorParams& params,
+                             ArcDescriptor& out);
+
 // Full descriptor of the arc a -> b. Returns false when the arc leaves the
-// image, is degenerate or its profile is flat. `scratch` is reused storage.
+// image, is degenerate or its profile is flat. `scratch` is reused storage
+// for the profile (a std::vector or WorkVector).
+template <class Vector>
 bool arc_descriptor(ImageView blurred, Point2f a, Point2f b, const DescriptorParams& params,
-                    std::vector<float>& scratch, ArcDescriptor& out);
+                    Vector& scratch, ArcDescriptor& out) {
+  out.fill(0.f);
+  if (!mean_profile(blurred, a, b, params.parallel_offset, scratch)) return false;
+  return descriptor_from_samples(scratch.data(), static_cast<int>(scratch.size()), params, out);
+}
 
 inline float squared_distance(const ArcDescriptor& p, const ArcDescriptor& q) {
   float s = 0.f;

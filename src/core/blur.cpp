@@ -20,8 +20,7 @@ struct Kernel {
 };
 
 void make_kernel(float sigma, Kernel& k) {
-  const float r = std::ceil(3.f * sigma);
-  k.radius = r >= static_cast<float>(kMaxRadius) ? kMaxRadius : static_cast<int>(r);
+  k.radius = blur_radius(sigma);
   const double inv_two_var = 1.0 / (2.0 * static_cast<double>(sigma) * sigma);
   double sum = 1.0;
   for (int i = 1; i <= k.radius; ++i) sum += 2.0 * std::exp(-i * i * inv_two_var);
@@ -114,6 +113,11 @@ void pad_row(float* row, int w, int radius) {
 }
 
 }  // namespace
+
+int blur_radius(float sigma) {
+  const float r = std::ceil(3.f * sigma);
+  return !(r > 0.f) ? 0 : r >= static_cast<float>(kMaxRadius) ? kMaxRadius : static_cast<int>(r);
+}
 
 void gaussian_blur(ImageView src, float sigma, Plane<std::uint8_t>& dst, Plane<float>& scratch) {
   if (src.empty()) {

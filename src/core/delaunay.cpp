@@ -222,13 +222,13 @@ void Circumcenter(const Point2f& a, const Point2f& b, const Point2f& c, double& 
 // Working state of one triangulate() call; all storage belongs to Delaunay.
 struct Sweep {
   const Point2f* pts;
-  std::vector<int>& triangles;
-  std::vector<int>& halfedges;
-  std::vector<int>& hull_prev;
-  std::vector<int>& hull_next;
-  std::vector<int>& hull_tri;
-  std::vector<int>& hull_hash;
-  std::vector<int>& edge_stack;
+  WorkVector<int>& triangles;
+  WorkVector<int>& halfedges;
+  WorkVector<int>& hull_prev;
+  WorkVector<int>& hull_next;
+  WorkVector<int>& hull_tri;
+  WorkVector<int>& hull_hash;
+  WorkVector<int>& edge_stack;
   double cx = 0.0;
   double cy = 0.0;
   int hash_size = 1;
@@ -320,6 +320,38 @@ struct Sweep {
 };
 
 }  // namespace
+
+Delaunay::Delaunay(std::pmr::memory_resource* memory)
+    : triangles_(memory),
+      halfedges_(memory),
+      ids_(memory),
+      dists_(memory),
+      hull_prev_(memory),
+      hull_next_(memory),
+      hull_tri_(memory),
+      hull_hash_(memory),
+      edge_stack_(memory) {}
+
+namespace {
+
+int hash_size_for(int n) {
+  return std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n)))));
+}
+
+}  // namespace
+
+void Delaunay::reserve(int max_points) {
+  const auto n = static_cast<std::size_t>(std::max(0, max_points));
+  triangles_.reserve(6 * n);
+  halfedges_.reserve(6 * n);
+  ids_.reserve(n);
+  dists_.reserve(n);
+  hull_prev_.reserve(n);
+  hull_next_.reserve(n);
+  hull_tri_.reserve(n);
+  hull_hash_.reserve(static_cast<std::size_t>(hash_size_for(max_points)));
+  edge_stack_.reserve(n + 3);  // Legalize() flips at most n + 3 times per point
+}
 
 void Delaunay::triangulate(const Point2f* points, int n) {
   triangles_.clear();
@@ -415,7 +447,7 @@ void Delaunay::triangulate(const Point2f* points, int n) {
   hull_prev_.resize(count);
   hull_next_.resize(count);
   hull_tri_.resize(count);
-  const int hash_size = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n)))));
+  const int hash_size = hash_size_for(n);
   hull_hash_.assign(static_cast<std::size_t>(hash_size), -1);
 
   Sweep s{points,     triangles_,  halfedges_, hull_prev_, hull_next_, hull_tri_,

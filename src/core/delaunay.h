@@ -14,33 +14,38 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/workspace.h"
 #include "keygraph/types.h"
 
 namespace kg {
 
 class Delaunay {
  public:
+  explicit Delaunay(std::pmr::memory_resource* memory = std::pmr::get_default_resource());
+  // Sizes every buffer for up to max_points points: triangulate() then
+  // allocates nothing.
+  void reserve(int max_points);
   // Triangulates points[0..n). Buffers are kept between calls and reused.
   void triangulate(const Point2f* points, int n);
 
-  const std::vector<int>& triangles() const { return triangles_; }
-  const std::vector<int>& halfedges() const { return halfedges_; }
+  const WorkVector<int>& triangles() const { return triangles_; }
+  const WorkVector<int>& halfedges() const { return halfedges_; }
   int triangle_count() const { return static_cast<int>(triangles_.size() / 3); }
 
   static int next(int e) { return (e % 3 == 2) ? e - 2 : e + 1; }
   static int prev(int e) { return (e % 3 == 0) ? e + 2 : e - 1; }
 
  private:
-  std::vector<int> triangles_;
-  std::vector<int> halfedges_;
+  WorkVector<int> triangles_;
+  WorkVector<int> halfedges_;
   // Working storage (hull linked list, hash, sort order, flip stack ...).
-  std::vector<int> ids_;
-  std::vector<double> dists_;
-  std::vector<int> hull_prev_;
-  std::vector<int> hull_next_;
-  std::vector<int> hull_tri_;
-  std::vector<int> hull_hash_;
-  std::vector<int> edge_stack_;
+  WorkVector<int> ids_;
+  WorkVector<double> dists_;
+  WorkVector<int> hull_prev_;
+  WorkVector<int> hull_next_;
+  WorkVector<int> hull_tri_;
+  WorkVector<int> hull_hash_;
+  WorkVector<int> edge_stack_;
 };
 
 }  // namespace kg

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <new>
+#include <string>
+#include <utility>
 
 #include "core/blur.h"
 #include "core/delaunay.h"
@@ -14,6 +17,7 @@
 #include "core/sampling.h"
 #include "core/selection.h"
 #include "core/vertex_descriptor.h"
+#include "core/workspace.h"
 
 namespace kg {
 
@@ -25,6 +29,8 @@ double ms_since(Clock::time_point t) {
 }
 
 constexpr auto kRow = static_cast<std::size_t>(kVertexDescriptorSize);
+// Extremum candidates kept per Hessian scale level, per output keypoint.
+constexpr int kCandidatesPerKeypoint = 16;
 
 bool wants_vertex_descriptors(const ModelIndex& index) {
   return index.params().descriptor.vertex_descriptor != VertexDescriptor::kNone;
@@ -36,93 +42,293 @@ Status missing_vertex_descriptors() {
           "keypoints with their descriptors (DesktopDetector does)"};
 }
 
+Status check_limits(const Limits& l) {
+  const bool ok = l.max_width >= 1 && l.max_height >= 1 && l.max_width <= 16384 &&
+                  l.max_height <= 16384 && l.max_keypoints >= 1 && l.max_scene_keypoints >= 1 &&
+                  l.max_arc_matches >= 1 && l.max_arc_pool >= 1 && l.max_correspondences >= 1 &&
+                  l.max_detections >= 1 && l.max_detections <= kMaxDetections;
+  if (ok) return Status::ok();
+  return {StatusCode::kInvalidArgument,
+          "detector limits out of range (frame 1..16384 px a side, every count >= 1, "
+          "max_detections <= " +
+              std::to_string(kMaxDetections) + ")"};
+}
+
+std::uint32_t largest_model(const ModelIndex& index) {
+  std::uint32_t most = 0;
+  for (int m = 0; m < index.model_count(); ++m)
+    most = std::max(most, index.model(m).keypoint_count);
+  return most;
+}
+
+// Orders keypoints strongest first, ties by input position: a heap of the
+// strongest kept (its front the weakest) while scanning.
+struct Stronger {
+  const Keypoint* keypoints;
+  bool operator()(int a, int b) const {
+    return keypoints[a].response > keypoints[b].response ||
+           (keypoints[a].response == keypoints[b].response && a < b);
+  }
+};
+
 }  // namespace
 
 struct Detector::Impl {
-  const ModelIndex* index = nullptr;
+  // Reserves every buffer from `memory`. With fill == false only reserves
+  // (the measuring pass of Detector::workspace_bytes, whose memory is a
+  // placeholder): nothing is written.
+  Impl(const ModelIndex& index, const Limits& limits, std::pmr::memory_resource* memory, bool fill);
+
+  const ModelIndex* index;
   Limits limits;
   ArcSearch search;
   DetectStats stats;
 
   HessianDetector hessian;
-  std::vector<Keypoint> detected;
+  WorkVector<Keypoint> detected;
   // Vertex descriptors: of the model keypoints' inverse norms (once), of the
   // strongest keypoints when the input is cut to max_keypoints, and of the
   // sampled keypoints.
-  std::vector<float> model_inverse_norms;
-  std::vector<int> order;
-  std::vector<std::uint8_t> detected_descriptors;
-  std::vector<std::uint8_t> scene_descriptors;
-  std::vector<float> scene_inverse_norms;
+  WorkVector<float> model_inverse_norms;
+  WorkVector<int> order;
+  WorkVector<std::uint8_t> detected_descriptors;
+  WorkVector<std::uint8_t> scene_descriptors;
+  WorkVector<float> scene_inverse_norms;
   Plane<std::uint8_t> blurred;
   Plane<float> blur_scratch;
   SeparatedSampler sampler;
-  std::vector<int> selected;
-  std::vector<Keypoint> scene_keypoints;
-  std::vector<Point2f> scene_points;
-  std::vector<float> scene_scales;
+  WorkVector<int> selected;
+  WorkVector<Keypoint> scene_keypoints;
+  WorkVector<Point2f> scene_points;
+  WorkVector<float> scene_scales;
   Delaunay triangulation;
-  std::vector<SceneKeygraph> keygraphs;
+  WorkVector<SceneKeygraph> keygraphs;
   Selector selector;
-  std::vector<KeygraphMatch> matches;
-  std::vector<KeygraphMatch> model_matches;
+  WorkVector<KeygraphMatch> matches;  // in selection order
+  WorkVector<KeygraphMatch> grouped;  // the same grouped by model (stable)
+  WorkVector<std::uint32_t> model_begin;
   PoseEstimator pose;
   PointGrid grid;
 
+  // Keeps the limits.max_keypoints strongest of keypoints[0..count) (and
+  // their descriptors) in `detected` (and detected_descriptors).
+  void keep_strongest(const Keypoint* keypoints, int count, const std::uint8_t* descriptors);
   Status run(ImageView frame, const Keypoint* keypoints, int count, const std::uint8_t* descriptors,
              DetectionList& out, Clock::time_point start);
 };
 
-Detector::Detector(const ModelIndex& index, const Limits& limits) : impl_(new Impl) {
-  impl_->index = &index;
-  impl_->limits = limits;
-  impl_->search = ArcSearch(index);
-  impl_->detected.reserve(static_cast<std::size_t>(std::max(0, limits.max_keypoints)));
-  impl_->matches.reserve(static_cast<std::size_t>(std::max(0, limits.max_correspondences)));
-  if (const std::uint8_t* v = index.vertex_descriptors()) {
-    impl_->model_inverse_norms.resize(index.keypoint_count());
-    for (std::uint32_t i = 0; i < index.keypoint_count(); ++i)
-      impl_->model_inverse_norms[i] = vertex_inverse_norm(v + i * kRow);
-    const auto frame_keypoints = static_cast<std::size_t>(std::max(0, limits.max_keypoints));
-    impl_->order.reserve(frame_keypoints);
-    impl_->detected_descriptors.reserve(frame_keypoints * kRow);
-    impl_->scene_descriptors.reserve(
-        static_cast<std::size_t>(std::max(0, limits.max_scene_keypoints)) * kRow);
-    impl_->scene_inverse_norms.reserve(
-        static_cast<std::size_t>(std::max(0, limits.max_scene_keypoints)));
+Detector::Impl::Impl(const ModelIndex& idx, const Limits& l, std::pmr::memory_resource* memory,
+                     bool fill)
+    : index(&idx),
+      limits(l),
+      search(idx),
+      hessian(memory),
+      detected(memory),
+      model_inverse_norms(memory),
+      order(memory),
+      detected_descriptors(memory),
+      scene_descriptors(memory),
+      scene_inverse_norms(memory),
+      blurred(memory),
+      blur_scratch(memory),
+      sampler(memory),
+      selected(memory),
+      scene_keypoints(memory),
+      scene_points(memory),
+      scene_scales(memory),
+      triangulation(memory),
+      keygraphs(memory),
+      selector(memory),
+      matches(memory),
+      grouped(memory),
+      model_begin(memory),
+      pose(memory),
+      grid(memory) {
+  const Params& params = idx.params();
+  const auto frame_keypoints = static_cast<std::size_t>(l.max_keypoints);
+  const auto scene = static_cast<std::size_t>(l.max_scene_keypoints);
+  const auto correspondences = static_cast<std::size_t>(l.max_correspondences);
+  hessian.reserve(l.max_width, l.max_height, params.keypoints, l.max_keypoints,
+                  kCandidatesPerKeypoint * l.max_keypoints);
+  detected.reserve(frame_keypoints);
+  blurred.reserve(l.max_width, l.max_height);
+  blur_scratch.reserve(l.max_width + 2 * blur_radius(params.descriptor.blur_sigma), 2);
+  sampler.reserve(l.max_keypoints, l.max_width, l.max_height, params.graph.scene_sample_distance);
+  selected.reserve(frame_keypoints);  // the sampler's output, cut afterwards
+  scene_keypoints.reserve(scene);
+  scene_points.reserve(scene);
+  scene_scales.reserve(scene);
+  triangulation.reserve(l.max_scene_keypoints);
+  keygraphs.reserve(3 * scene);  // edges, faces (2n) or internal edges (3n)
+  selector.reserve(l);
+  matches.reserve(correspondences);
+  grouped.reserve(correspondences);
+  model_begin.reserve(static_cast<std::size_t>(idx.model_count()) + 1);
+  pose.reserve(l.max_correspondences, vertex_count(params.graph.structure), largest_model(idx));
+  grid.reserve(l.max_keypoints, l.max_width, l.max_height,
+               std::max(4.f, static_cast<float>(params.ransac.inlier_threshold)));
+  if (const std::uint8_t* v = idx.vertex_descriptors()) {
+    model_inverse_norms.reserve(idx.keypoint_count());
+    for (std::uint32_t i = 0; fill && i < idx.keypoint_count(); ++i)
+      model_inverse_norms.push_back(vertex_inverse_norm(v + i * kRow));
+    order.reserve(frame_keypoints);
+    detected_descriptors.reserve(frame_keypoints * kRow);
+    scene_descriptors.reserve(scene * kRow);
+    scene_inverse_norms.reserve(scene);
   }
 }
 
-Detector::~Detector() = default;
-Detector::Detector(Detector&&) noexcept = default;
-Detector& Detector::operator=(Detector&&) noexcept = default;
+// What a workspace block starts with: the bump allocator over the rest of
+// the block, and the detector's state, whose buffers come from it.
+struct Detector::Header {
+  Header(std::uint8_t* rest, std::size_t rest_size, const ModelIndex& index, const Limits& limits)
+      : memory(rest, rest_size), impl(index, limits, &memory, true) {}
+  Workspace memory;
+  Impl impl;
+};
 
+std::size_t Detector::header_bytes() {
+  return align_up(sizeof(Header), kWorkspaceAlignment);
+}
+
+std::size_t Detector::workspace_bytes(const ModelIndex& index, const Limits& limits) {
+  if (!check_limits(limits)) return 0;
+  // The constructor's own reserve() calls, counted: nothing is allocated.
+  MeasuringResource measure;
+  const Impl dry(index, limits, &measure, false);
+  return header_bytes() + measure.measured();
+}
+
+Detector::Detector(const ModelIndex& index, const Limits& limits)
+    : index_(&index), limits_(limits) {
+  status_ = check_limits(limits);
+  if (!status_) return;
+  const std::size_t bytes = workspace_bytes(index, limits);
+  owned_ = ::operator new (bytes, std::align_val_t{kWorkspaceAlignment});
+  place(owned_, bytes);
+}
+
+Detector::Detector(const ModelIndex& index, const Limits& limits, void* buffer, std::size_t size)
+    : index_(&index), limits_(limits) {
+  status_ = check_limits(limits);
+  if (!status_) return;
+  if (buffer == nullptr || reinterpret_cast<std::uintptr_t>(buffer) % kWorkspaceAlignment != 0) {
+    status_ = {StatusCode::kInvalidArgument, "detector workspace buffer must be 64-byte aligned"};
+    return;
+  }
+  const std::size_t needed = workspace_bytes(index, limits);
+  if (size < needed) {
+    status_ = {StatusCode::kResourceExhausted, "detector workspace buffer of " +
+                                                   std::to_string(size) + " bytes is too small (" +
+                                                   std::to_string(needed) + " needed)"};
+    return;
+  }
+  place(buffer, size);
+}
+
+void Detector::place(void* buffer, std::size_t size) {
+  auto* bytes = static_cast<std::uint8_t*>(buffer);
+  header_ = new (bytes) Header(bytes + header_bytes(), size - header_bytes(), *index_, limits_);
+  impl_ = &header_->impl;
+  workspace_size_ = size;
+}
+
+void Detector::release() {
+  if (header_ != nullptr) header_->~Header();
+  if (owned_ != nullptr) ::operator delete (owned_, std::align_val_t{kWorkspaceAlignment});
+  header_ = nullptr;
+  impl_ = nullptr;
+  owned_ = nullptr;
+  workspace_size_ = 0;
+}
+
+Detector::~Detector() {
+  release();
+}
+
+Detector::Detector(Detector&& other) noexcept
+    : index_(other.index_),
+      header_(std::exchange(other.header_, nullptr)),
+      impl_(std::exchange(other.impl_, nullptr)),
+      owned_(std::exchange(other.owned_, nullptr)),
+      workspace_size_(std::exchange(other.workspace_size_, 0)),
+      limits_(other.limits_),
+      status_(std::move(other.status_)) {
+  other.status_ = {StatusCode::kInvalidArgument, "detector was moved from"};
+}
+
+Detector& Detector::operator=(Detector&& other) noexcept {
+  if (this != &other) {
+    release();
+    index_ = other.index_;
+    header_ = std::exchange(other.header_, nullptr);
+    impl_ = std::exchange(other.impl_, nullptr);
+    owned_ = std::exchange(other.owned_, nullptr);
+    workspace_size_ = std::exchange(other.workspace_size_, 0);
+    limits_ = other.limits_;
+    status_ = std::move(other.status_);
+    other.status_ = {StatusCode::kInvalidArgument, "detector was moved from"};
+  }
+  return *this;
+}
+
+std::size_t Detector::workspace_bytes() const {
+  return workspace_size_;
+}
+std::size_t Detector::workspace_used() const {
+  return header_ != nullptr ? header_bytes() + header_->memory.used() : 0;
+}
+const Status& Detector::status() const {
+  return status_;
+}
+const Limits& Detector::limits() const {
+  return limits_;
+}
 const DetectStats& Detector::stats() const {
-  return impl_->stats;
+  static const DetectStats none{};
+  return impl_ != nullptr ? impl_->stats : none;
 }
-const std::vector<KeygraphMatch>& Detector::last_matches() const {
-  return impl_->matches;
+ConstSpan<KeygraphMatch> Detector::last_matches() const {
+  if (impl_ == nullptr) return {};
+  return {impl_->matches.data(), impl_->matches.size()};
 }
-const std::vector<Keypoint>& Detector::last_keypoints() const {
-  return impl_->scene_keypoints;
+ConstSpan<Keypoint> Detector::last_keypoints() const {
+  if (impl_ == nullptr) return {};
+  return {impl_->scene_keypoints.data(), impl_->scene_keypoints.size()};
 }
 const ModelIndex& Detector::index() const {
-  return *impl_->index;
+  return *index_;
 }
+
+namespace {
+
+Status check_frame(ImageView frame, const Limits& limits) {
+  if (frame.empty() || frame.stride < frame.width)
+    return {StatusCode::kInvalidArgument, "empty or malformed frame"};
+  if (frame.width > limits.max_width || frame.height > limits.max_height)
+    return {StatusCode::kInvalidArgument,
+            "frame " + std::to_string(frame.width) + "x" + std::to_string(frame.height) +
+                " is larger than the detector's limits (" + std::to_string(limits.max_width) + "x" +
+                std::to_string(limits.max_height) + ": Limits::for_frame)"};
+  return Status::ok();
+}
+
+}  // namespace
 
 Status Detector::detect(ImageView frame, DetectionList& out) {
   out.clear();
+  if (impl_ == nullptr) return status_;
   impl_->stats = DetectStats{};
-  if (frame.empty() || frame.stride < frame.width)
-    return {StatusCode::kInvalidArgument, "empty or malformed frame"};
-  const Params& params = impl_->index->params();
-  if (wants_vertex_descriptors(*impl_->index)) return missing_vertex_descriptors();
+  if (Status s = check_frame(frame, limits_); !s) return s;
+  const Params& params = index_->params();
+  if (wants_vertex_descriptors(*index_)) return missing_vertex_descriptors();
   if (params.keypoints.detector != KeypointDetector::kHessian)
     return {
         StatusCode::kInvalidArgument,
         "index was built with a keypoint detector the core does not have (MSER): pass keypoints"};
   const auto start = Clock::now();
-  impl_->hessian.detect(frame, params.keypoints, impl_->limits.max_keypoints, impl_->detected);
+  if (!impl_->hessian.detect(frame, params.keypoints, limits_.max_keypoints, impl_->detected))
+    impl_->stats.truncated_keypoints = true;
   impl_->stats.ms_keypoints = ms_since(start);
   return impl_->run(frame, impl_->detected.data(), static_cast<int>(impl_->detected.size()),
                     nullptr, out, Clock::now());
@@ -135,12 +341,12 @@ Status Detector::detect(ImageView frame, const Keypoint* keypoints, int count, D
 Status Detector::detect(ImageView frame, const Keypoint* keypoints, int count,
                         const std::uint8_t* vertex_descriptors, DetectionList& out) {
   out.clear();
+  if (impl_ == nullptr) return status_;
   impl_->stats = DetectStats{};
-  if (frame.empty() || frame.stride < frame.width)
-    return {StatusCode::kInvalidArgument, "empty or malformed frame"};
+  if (Status s = check_frame(frame, limits_); !s) return s;
   if (count < 0 || (count > 0 && keypoints == nullptr))
     return {StatusCode::kInvalidArgument, "bad keypoint array"};
-  if (!wants_vertex_descriptors(*impl_->index)) {
+  if (!wants_vertex_descriptors(*index_)) {
     vertex_descriptors = nullptr;
   } else if (vertex_descriptors == nullptr && count > 0) {
     return missing_vertex_descriptors();
@@ -148,40 +354,46 @@ Status Detector::detect(ImageView frame, const Keypoint* keypoints, int count,
   return impl_->run(frame, keypoints, count, vertex_descriptors, out, Clock::now());
 }
 
+void Detector::Impl::keep_strongest(const Keypoint* keypoints, int count,
+                                    const std::uint8_t* descriptors) {
+  // A heap of indices (its front the weakest kept), then strongest first.
+  const Stronger stronger{keypoints};
+  const int keep = limits.max_keypoints;
+  order.clear();
+  WorkVector<int>& heap = descriptors != nullptr ? order : selected;
+  heap.clear();
+  for (int i = 0; i < count; ++i) {
+    if (static_cast<int>(heap.size()) < keep) {
+      heap.push_back(i);
+      std::push_heap(heap.begin(), heap.end(), stronger);
+    } else if (stronger(i, heap.front())) {
+      std::pop_heap(heap.begin(), heap.end(), stronger);
+      heap.back() = i;
+      std::push_heap(heap.begin(), heap.end(), stronger);
+    }
+  }
+  std::sort_heap(heap.begin(), heap.end(), stronger);
+  detected.clear();
+  for (int i : heap) detected.push_back(keypoints[i]);
+  if (descriptors != nullptr) {
+    detected_descriptors.resize(heap.size() * kRow);
+    for (std::size_t i = 0; i < heap.size(); ++i)
+      std::copy_n(descriptors + static_cast<std::size_t>(heap[i]) * kRow, kRow,
+                  detected_descriptors.data() + i * kRow);
+  }
+}
+
 Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count,
                            const std::uint8_t* descriptors, DetectionList& out,
                            Clock::time_point start) {
   const Params& params = index->params();
   stats.keypoints = count;
-  if (count > limits.max_keypoints && descriptors != nullptr) {
-    // As below, carrying each keypoint's descriptor along (ties by input order).
-    stats.truncated_keypoints = true;
-    order.resize(static_cast<std::size_t>(count));
-    for (int i = 0; i < count; ++i) order[static_cast<std::size_t>(i)] = i;
-    std::partial_sort(order.begin(), order.begin() + limits.max_keypoints, order.end(),
-                      [keypoints](int a, int b) {
-                        return keypoints[a].response > keypoints[b].response ||
-                               (keypoints[a].response == keypoints[b].response && a < b);
-                      });
-    order.resize(static_cast<std::size_t>(limits.max_keypoints));
-    detected.clear();
-    detected_descriptors.resize(order.size() * kRow);
-    for (std::size_t i = 0; i < order.size(); ++i) {
-      detected.push_back(keypoints[order[i]]);
-      std::copy_n(descriptors + static_cast<std::size_t>(order[i]) * kRow, kRow,
-                  detected_descriptors.data() + i * kRow);
-    }
-    keypoints = detected.data();
-    descriptors = detected_descriptors.data();
-    count = limits.max_keypoints;
-  } else if (count > limits.max_keypoints) {
+  if (count > limits.max_keypoints) {
     // Keep the strongest: callers pass keypoints in any order.
     stats.truncated_keypoints = true;
-    detected.assign(keypoints, keypoints + count);
-    std::partial_sort(detected.begin(), detected.begin() + limits.max_keypoints, detected.end(),
-                      [](const Keypoint& a, const Keypoint& b) { return a.response > b.response; });
-    detected.resize(static_cast<std::size_t>(limits.max_keypoints));
+    keep_strongest(keypoints, count, descriptors);
     keypoints = detected.data();
+    if (descriptors != nullptr) descriptors = detected_descriptors.data();
     count = limits.max_keypoints;
   }
 
@@ -253,17 +465,23 @@ Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count
                std::max(4.f, static_cast<float>(params.ransac.inlier_threshold)));
   }
   frame_keypoints.grid = &grid;
-  std::stable_sort(
-      matches.begin(), matches.end(),
-      [](const KeygraphMatch& a, const KeygraphMatch& b) { return a.model_id < b.model_id; });
+  // Group the correspondences by model, keeping their order (a counting
+  // sort: no temporary buffer beyond the reserved ones).
+  const auto models = static_cast<std::size_t>(index->model_count());
+  model_begin.assign(models + 1, 0);
+  for (const KeygraphMatch& m : matches) ++model_begin[static_cast<std::size_t>(m.model_id) + 1];
+  for (std::size_t i = 0; i < models; ++i) model_begin[i + 1] += model_begin[i];
+  grouped.resize(matches.size());
+  for (const KeygraphMatch& m : matches)
+    grouped[model_begin[static_cast<std::size_t>(m.model_id)]++] = m;
   std::size_t begin = 0;
-  while (begin < matches.size()) {
+  while (begin < grouped.size()) {
     std::size_t end = begin;
-    while (end < matches.size() && matches[end].model_id == matches[begin].model_id) ++end;
+    while (end < grouped.size() && grouped[end].model_id == grouped[begin].model_id) ++end;
     Rng model_rng(params.ransac.seed ^ (0x9e3779b97f4a7c15ULL *
-                                        static_cast<std::uint64_t>(matches[begin].model_id + 1)));
+                                        static_cast<std::uint64_t>(grouped[begin].model_id + 1)));
     stats.ransac_iterations +=
-        pose.estimate(*index, matches[begin].model_id, matches.data() + begin,
+        pose.estimate(*index, grouped[begin].model_id, grouped.data() + begin,
                       static_cast<int>(end - begin), scene_points.data(), frame_keypoints,
                       model_rng, limits.max_detections, out, stats.truncated_detections);
     begin = end;

@@ -27,7 +27,7 @@ bool stronger(const Keypoint& a, const Keypoint& b) {
 
 // Keeps the `max_keypoints` strongest in `out`, a heap whose front is the
 // weakest kept, so memory stays bounded however many extrema there are.
-void offer(const Keypoint& kp, int max_keypoints, std::vector<Keypoint>& out) {
+void offer(const Keypoint& kp, int max_keypoints, WorkVector<Keypoint>& out) {
   if (static_cast<int>(out.size()) < max_keypoints) {
     out.push_back(kp);
     std::push_heap(out.begin(), out.end(), stronger);
@@ -52,8 +52,9 @@ void to_unit_float(ImageView image, Plane<float>& dst) {
 // are above the threshold and above their 4 nearest neighbours. The test is
 // branch-free so the compiler vectorises it; few pixels pass, so the
 // remaining checks run rarely and their branches stay predictable.
-void collect_candidates(const float* m0, const float* m1, const float* m2, int y, int w, float thr,
-                        std::uint8_t* mask, std::vector<std::int32_t>& cand) {
+// Candidates beyond `limit` ints are dropped; returns false then.
+bool collect_candidates(const float* m0, const float* m1, const float* m2, int y, int w, float thr,
+                        std::uint8_t* mask, WorkVector<std::int32_t>& cand, std::size_t limit) {
   for (int x = kBorder; x < w - kBorder; ++x) {
     const float v = m1[x];
     mask[x] = static_cast<std::uint8_t>((v > thr) & (v > m1[x - 1]) & (v >= m1[x + 1]) &
@@ -70,18 +71,21 @@ void collect_candidates(const float* m0, const float* m1, const float* m2, int y
       }
     }
     if (mask[x]) {
+      if (cand.size() + 2 > limit) return false;
       cand.push_back(x);
       cand.push_back(y);
     }
   }
+  return true;
 }
 
 // Scale-normalised sigma^4 (Lxx Lyy - Lxy^2) by central differences, for
 // every pixel with all 8 neighbours; the 1-px frame is never read. With
 // `cand`, also collects the level's extremum candidates while the rows are
 // still in cache.
-void hessian_response(const Plane<float>& L, float sigma, float threshold, Plane<float>& R,
-                      std::vector<std::uint8_t>& mask, std::vector<std::int32_t>* cand) {
+bool hessian_response(const Plane<float>& L, float sigma, float threshold, Plane<float>& R,
+                      WorkVector<std::uint8_t>& mask, WorkVector<std::int32_t>* cand,
+                      std::size_t limit) {
   const int w = L.width();
   const int h = L.height();
   R.resize(w, h);
@@ -90,6 +94,7 @@ void hessian_response(const Plane<float>& L, float sigma, float threshold, Plane
     mask.resize(static_cast<std::size_t>(w) + 8);  // +8: the skip reads 8 bytes at a time
   }
   const float norm = sigma * sigma * sigma * sigma;
+  bool complete = true;
   for (int y = 1; y < h - 1; ++y) {
     const float* a = L.row(y - 1);
     const float* b = L.row(y);
@@ -102,9 +107,11 @@ void hessian_response(const Plane<float>& L, float sigma, float threshold, Plane
       r[x] = norm * (dxx * dyy - dxy * dxy);
     }
     // Row y - 1 has both response neighbours now.
-    if (cand && y - 1 >= kBorder && y - 1 < h - kBorder)
-      collect_candidates(R.row(y - 2), R.row(y - 1), r, y - 1, w, threshold, mask.data(), *cand);
+    if (cand && complete && y - 1 >= kBorder && y - 1 < h - kBorder)
+      complete = collect_candidates(R.row(y - 2), R.row(y - 1), r, y - 1, w, threshold, mask.data(),
+                                    *cand, limit);
   }
+  return complete;
 }
 
 // Halves the image by averaging 2x2 blocks (a trailing odd row or column is
@@ -155,9 +162,9 @@ struct LevelInfo {
 // candidates collected with it; refined and offered to `out`. A plateau
 // yields one maximum: values must be strictly above the neighbours before
 // them in (scale, y, x) order, and at least equal to those after.
-void scan_level(const std::vector<std::int32_t>& cand, const Plane<float>& lo,
+void scan_level(const WorkVector<std::int32_t>& cand, const Plane<float>& lo,
                 const Plane<float>& mid, const Plane<float>& hi, const LevelInfo& info,
-                int max_keypoints, std::vector<Keypoint>& out) {
+                int max_keypoints, WorkVector<Keypoint>& out) {
   for (std::size_t i = 0; i + 1 < cand.size(); i += 2) {
     const int x = cand[i];
     const int y = cand[i + 1];
@@ -211,10 +218,42 @@ void scan_level(const std::vector<std::int32_t>& cand, const Plane<float>& lo,
 
 }  // namespace
 
+HessianDetector::HessianDetector(std::pmr::memory_resource* memory)
+    : levels_{Plane<float>(memory), Plane<float>(memory)},
+      responses_{Plane<float>(memory), Plane<float>(memory), Plane<float>(memory)},
+      scratch_(memory),
+      next_octave_(memory),
+      mask_(memory),
+      candidates_{WorkVector<std::int32_t>(memory), WorkVector<std::int32_t>(memory)},
+      copy_(memory) {}
+
+void HessianDetector::reserve(int max_width, int max_height, const KeypointParams& params,
+                              int max_keypoints, int max_candidates) {
+  for (Plane<float>& p : levels_) p.reserve(max_width, max_height);
+  for (Plane<float>& p : responses_) p.reserve(max_width, max_height);
+  next_octave_.reserve(max_width / 2, max_height / 2);
+  // The widest blur is below the top level's total sigma.
+  const int levels = std::max(1, params.hessian_levels);
+  const int radius = blur_radius(
+      static_cast<float>(kSigma0 * std::pow(2.0, static_cast<double>(levels + 1) / levels)));
+  scratch_.reserve(max_width + 2 * radius, 1);
+  mask_.reserve(static_cast<std::size_t>(max_width) + 8);
+  max_candidate_ints_ = 2 * static_cast<std::size_t>(std::max(0, max_candidates));
+  for (auto& c : candidates_) c.reserve(max_candidate_ints_);
+  copy_.reserve(static_cast<std::size_t>(std::max(0, max_keypoints)));
+}
+
 void HessianDetector::detect(ImageView image, const KeypointParams& params, int max_keypoints,
                              std::vector<Keypoint>& out) {
+  detect(image, params, max_keypoints, copy_);
+  out.assign(copy_.begin(), copy_.end());
+}
+
+bool HessianDetector::detect(ImageView image, const KeypointParams& params, int max_keypoints,
+                             WorkVector<Keypoint>& out) {
   out.clear();
-  if (image.empty() || max_keypoints <= 0 || params.hessian_octaves <= 0) return;
+  if (image.empty() || max_keypoints <= 0 || params.hessian_octaves <= 0) return true;
+  bool complete = true;
   const int levels = std::max(1, params.hessian_levels);
   const double k = std::pow(2.0, 1.0 / levels);
   LevelInfo info;
@@ -238,7 +277,7 @@ void HessianDetector::detect(ImageView image, const KeypointParams& params, int 
     const double first_sigma =
         octave == 0 ? kSigma0 : std::sqrt(kSigma0 * kSigma0 + kHalvingVariance);
     hessian_response(*first, static_cast<float>(first_sigma), info.threshold, responses_[0], mask_,
-                     nullptr);
+                     nullptr, max_candidate_ints_);
     const Plane<float>* prev = first;
     for (int j = 1; j <= levels + 1; ++j) {
       const double s_prev = j == 1 ? first_sigma : kSigma0 * std::pow(k, j - 1);
@@ -248,8 +287,9 @@ void HessianDetector::detect(ImageView image, const KeypointParams& params, int 
       gaussian_blur(*prev, static_cast<float>(std::sqrt(s_cur * s_cur - s_prev * s_prev)), cur,
                     scratch_);
       // Candidates only where maxima are taken: levels 1..levels.
-      hessian_response(cur, static_cast<float>(s_cur), info.threshold, responses_[j % 3], mask_,
-                       j <= levels ? &candidates_[j % 2] : nullptr);
+      complete &=
+          hessian_response(cur, static_cast<float>(s_cur), info.threshold, responses_[j % 3], mask_,
+                           j <= levels ? &candidates_[j % 2] : nullptr, max_candidate_ints_);
       // Octave 0's first level lives in levels_[0], which level 2 overwrites,
       // so the next octave's first level goes to its own plane.
       if (j == levels && more) halve(cur, next_octave_);
@@ -263,6 +303,7 @@ void HessianDetector::detect(ImageView image, const KeypointParams& params, int 
     first = &next_octave_;
   }
   std::sort_heap(out.begin(), out.end(), stronger);
+  return complete;
 }
 
 }  // namespace kg

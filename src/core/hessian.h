@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/plane.h"
+#include "core/workspace.h"
 #include "keygraph/image.h"
 #include "keygraph/params.h"
 #include "keygraph/types.h"
@@ -19,10 +20,24 @@ namespace kg {
 
 class HessianDetector {
  public:
+  explicit HessianDetector(std::pmr::memory_resource* memory = std::pmr::get_default_resource());
+
+  // Sizes every buffer for images up to max_width x max_height, at most
+  // max_keypoints output keypoints and max_candidates extremum candidates
+  // per scale level; after this, detect() within those bounds allocates
+  // nothing, and candidates beyond max_candidates are dropped (the weakest
+  // rows last: scan order) instead of stored.
+  void reserve(int max_width, int max_height, const KeypointParams& params, int max_keypoints,
+               int max_candidates);
+
   // Clears `out` and fills it with at most `max_keypoints` keypoints, the
   // strongest first (ties broken by position so the result is
   // deterministic). Uses params.hessian_threshold, hessian_octaves and
-  // hessian_levels. Buffers are kept between calls and reused.
+  // hessian_levels. Buffers are kept between calls and reused. Returns
+  // false when candidates were dropped (reserve()).
+  bool detect(ImageView image, const KeypointParams& params, int max_keypoints,
+              WorkVector<Keypoint>& out);
+  // The same into a std::vector (desktop and tests).
   void detect(ImageView image, const KeypointParams& params, int max_keypoints,
               std::vector<Keypoint>& out);
 
@@ -32,11 +47,13 @@ class HessianDetector {
   // response levels the 3x3x3 test reads (a ring).
   std::array<Plane<float>, 2> levels_;
   std::array<Plane<float>, 3> responses_;
-  Plane<float> scratch_;            // blur row buffers
-  Plane<float> next_octave_;        // halved level: first level of the next octave
-  std::vector<std::uint8_t> mask_;  // candidate flags of one row
+  Plane<float> scratch_;           // blur row buffers
+  Plane<float> next_octave_;       // halved level: first level of the next octave
+  WorkVector<std::uint8_t> mask_;  // candidate flags of one row
   // Extremum candidates, (x, y) pairs, of the two levels last computed.
-  std::array<std::vector<std::int32_t>, 2> candidates_;
+  std::array<WorkVector<std::int32_t>, 2> candidates_;
+  std::size_t max_candidate_ints_ = static_cast<std::size_t>(-1);  // 2 per candidate
+  WorkVector<Keypoint> copy_;  // the std::vector overload's result, before the copy
 };
 
 }  // namespace kg

@@ -39,10 +39,10 @@ bool is_keytuple(const int* order, int k, const std::uint8_t* sigma, const int* 
 }
 
 void scene_keygraphs(const Delaunay& dt, const Point2f* points, Structure structure,
-                     std::vector<SceneKeygraph>& out) {
+                     WorkVector<SceneKeygraph>& out) {
   out.clear();
-  const std::vector<int>& tri = dt.triangles();
-  const std::vector<int>& half = dt.halfedges();
+  const WorkVector<int>& tri = dt.triangles();
+  const WorkVector<int>& half = dt.halfedges();
   const int edges = static_cast<int>(tri.size());
   switch (structure) {
     case Structure::kArc:

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/delaunay.h"
+#include "core/workspace.h"
 #include "keygraph/params.h"
 #include "keygraph/types.h"
 
@@ -57,7 +58,7 @@ struct SceneKeygraph {
 // edge for the 4-circuit formed by its two faces (skipped when that
 // quadrilateral is not convex, as the model side holds only convex ones).
 void scene_keygraphs(const Delaunay& dt, const Point2f* points, Structure structure,
-                     std::vector<SceneKeygraph>& out);
+                     WorkVector<SceneKeygraph>& out);
 
 // Number of model keygraphs of one model (for reports): circuits whose arcs
 // are all model arcs. Model arcs from keypoint a are to[offsets[a] ..

@@ -1,12 +1,13 @@
 // Owned 2-D pixel buffer used for the core's intermediate images. Its
 // storage is reused across frames: resize() only allocates when the image
-// grows beyond what it already holds.
+// grows beyond what it already holds, which in a Detector never happens
+// (reserve() sized it for the largest frame once).
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
-#include <vector>
 
+#include "core/workspace.h"
 #include "keygraph/image.h"
 
 namespace kg {
@@ -14,6 +15,11 @@ namespace kg {
 template <class T>
 class Plane {
  public:
+  explicit Plane(std::pmr::memory_resource* memory = std::pmr::get_default_resource())
+      : pixels_(memory) {}
+  void reserve(int width, int height) {
+    pixels_.reserve(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  }
   void resize(int width, int height) {
     width_ = width;
     height_ = height;
@@ -31,7 +37,7 @@ class Plane {
   std::size_t capacity_bytes() const { return pixels_.capacity() * sizeof(T); }
 
  private:
-  std::vector<T> pixels_;
+  WorkVector<T> pixels_;
   int width_ = 0;
   int height_ = 0;
 };

@@ -5,11 +5,25 @@
 
 namespace kg {
 
+namespace {
+
+int cells(int pixels, float cell) {
+  return std::max(1, static_cast<int>(std::ceil(static_cast<float>(pixels) / cell)));
+}
+
+}  // namespace
+
+void PointGrid::reserve(int max_points, int max_width, int max_height, float cell) {
+  head_.reserve(static_cast<std::size_t>(cells(max_width, cell)) *
+                static_cast<std::size_t>(cells(max_height, cell)));
+  next_.reserve(static_cast<std::size_t>(max_points));
+}
+
 void PointGrid::build(const Keypoint* keypoints, int n, int width, int height, float cell) {
   points_ = keypoints;
   cell_ = cell;
-  cols_ = std::max(1, static_cast<int>(std::ceil(static_cast<float>(width) / cell)));
-  rows_ = std::max(1, static_cast<int>(std::ceil(static_cast<float>(height) / cell)));
+  cols_ = cells(width, cell);
+  rows_ = cells(height, cell);
   head_.assign(static_cast<std::size_t>(cols_) * static_cast<std::size_t>(rows_), -1);
   next_.assign(static_cast<std::size_t>(n), -1);
   for (int i = 0; i < n; ++i) {

@@ -4,12 +4,17 @@
 
 #include <vector>
 
+#include "core/workspace.h"
 #include "keygraph/types.h"
 
 namespace kg {
 
 class PointGrid {
  public:
+  explicit PointGrid(std::pmr::memory_resource* memory = std::pmr::get_default_resource())
+      : head_(memory), next_(memory) {}
+  // Sizes the buffers for up to max_points in a max_width x max_height frame.
+  void reserve(int max_points, int max_width, int max_height, float cell);
   // Indexes keypoints[0..n) of a width x height frame with square cells of
   // `cell` pixels. Buffers are reused between frames.
   void build(const Keypoint* keypoints, int n, int width, int height, float cell);
@@ -21,8 +26,8 @@ class PointGrid {
   int cols_ = 0;
   int rows_ = 0;
   float cell_ = 1.f;
-  std::vector<int> head_;
-  std::vector<int> next_;
+  WorkVector<int> head_;
+  WorkVector<int> next_;
 };
 
 }  // namespace kg

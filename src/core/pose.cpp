@@ -129,6 +129,37 @@ struct KeygraphEstimator {
   }
 };
 
+PoseEstimator::PoseEstimator(std::pmr::memory_resource* memory)
+    : pairs_(memory),
+      pair_model_(memory),
+      pair_scene_(memory),
+      match_pairs_(memory),
+      pair_inlier_(memory),
+      pair_dead_(memory),
+      match_active_(memory),
+      active_(memory),
+      inlier_model_(memory),
+      inlier_scene_(memory),
+      guided_model_(memory),
+      guided_scene_(memory) {}
+
+void PoseEstimator::reserve(int max_matches, int k, std::uint32_t max_model_keypoints) {
+  const auto n = static_cast<std::size_t>(std::max(0, max_matches));
+  const std::size_t pairs = n * static_cast<std::size_t>(k);
+  pairs_.reserve(pairs);
+  pair_model_.reserve(pairs);
+  pair_scene_.reserve(pairs);
+  match_pairs_.reserve(pairs);
+  pair_inlier_.reserve(pairs);
+  pair_dead_.reserve(pairs);
+  match_active_.reserve(n);
+  active_.reserve(n);
+  inlier_model_.reserve(pairs);
+  inlier_scene_.reserve(pairs);
+  guided_model_.reserve(max_model_keypoints);
+  guided_scene_.reserve(max_model_keypoints);
+}
+
 PoseEstimator::Support PoseEstimator::guided_refine(const ModelIndex& index, const ModelInfo& info,
                                                     const FrameKeypoints& frame, Homography& h) {
   const RansacParams& rp = index.params().ransac;

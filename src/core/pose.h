@@ -13,6 +13,7 @@
 
 #include "core/point_grid.h"
 #include "core/rng.h"
+#include "core/workspace.h"
 #include "keygraph/detector.h"
 #include "keygraph/model_index.h"
 
@@ -33,6 +34,12 @@ struct FrameKeypoints {
 
 class PoseEstimator {
  public:
+  explicit PoseEstimator(std::pmr::memory_resource* memory = std::pmr::get_default_resource());
+  // Sizes the buffers for up to max_matches keygraph correspondences of k
+  // vertices and models of up to max_model_keypoints keypoints: estimate()
+  // then allocates nothing.
+  void reserve(int max_matches, int k, std::uint32_t max_model_keypoints);
+
   // Appends the instances of `model_id` found among matches[0..n) (all of
   // that model) to `out`, at most `max_out` in total in `out`. Returns the
   // RANSAC iterations run.
@@ -52,19 +59,19 @@ class PoseEstimator {
   double chance_fraction(const ModelIndex& index, const ModelInfo& info,
                          const FrameKeypoints& frame, const Homography& h) const;
   // Distinct keypoint correspondences and, per keygraph match, its k indices into them.
-  std::vector<std::uint64_t> pairs_;
-  std::vector<Point2f> pair_model_;
-  std::vector<Point2f> pair_scene_;
-  std::vector<std::uint32_t> match_pairs_;
-  std::vector<std::uint8_t> pair_inlier_;
-  std::vector<std::uint8_t> pair_dead_;  // explained by an instance already found
-  std::vector<std::uint8_t> match_active_;
-  std::vector<int> active_;  // indices of matches still in play
+  WorkVector<std::uint64_t> pairs_;
+  WorkVector<Point2f> pair_model_;
+  WorkVector<Point2f> pair_scene_;
+  WorkVector<std::uint32_t> match_pairs_;
+  WorkVector<std::uint8_t> pair_inlier_;
+  WorkVector<std::uint8_t> pair_dead_;  // explained by an instance already found
+  WorkVector<std::uint8_t> match_active_;
+  WorkVector<int> active_;  // indices of matches still in play
 
-  std::vector<Point2f> inlier_model_;
-  std::vector<Point2f> inlier_scene_;
-  std::vector<Point2f> guided_model_;
-  std::vector<Point2f> guided_scene_;
+  WorkVector<Point2f> inlier_model_;
+  WorkVector<Point2f> inlier_scene_;
+  WorkVector<Point2f> guided_model_;
+  WorkVector<Point2f> guided_scene_;
 };
 
 }  // namespace kg

@@ -5,8 +5,33 @@
 
 namespace kg {
 
+namespace {
+
+int grid_cells(float extent, float cell) {
+  return static_cast<int>(std::min(4095.f, extent / cell)) + 1;
+}
+
+}  // namespace
+
+void SeparatedSampler::reserve(int max_keypoints, int max_width, int max_height,
+                               float min_distance) {
+  const float cell = std::max(min_distance, 1e-3f);
+  max_cells_ = static_cast<std::size_t>(grid_cells(static_cast<float>(max_width), cell)) *
+               static_cast<std::size_t>(grid_cells(static_cast<float>(max_height), cell));
+  order_.reserve(static_cast<std::size_t>(max_keypoints));
+  cell_next_.reserve(static_cast<std::size_t>(max_keypoints));
+  cell_head_.reserve(max_cells_);
+}
+
 void SeparatedSampler::sample(const Keypoint* keypoints, int n, float min_distance, Rng* rng,
                               std::vector<int>& selected) {
+  WorkVector<int> out;
+  sample(keypoints, n, min_distance, rng, out);
+  selected.assign(out.begin(), out.end());
+}
+
+void SeparatedSampler::sample(const Keypoint* keypoints, int n, float min_distance, Rng* rng,
+                              WorkVector<int>& selected) {
   selected.clear();
   if (n <= 0) return;
   order_.resize(static_cast<std::size_t>(n));
@@ -25,10 +50,15 @@ void SeparatedSampler::sample(const Keypoint* keypoints, int n, float min_distan
     max_y = std::max(max_y, keypoints[i].y);
   }
   // With cell size >= min_distance only the 3x3 neighbouring cells can hold
-  // a conflicting point. Cells are capped so huge coordinates stay bounded.
-  const float cell = std::max(min_distance, 1e-3f);
-  const int gw = std::min(4096, static_cast<int>((max_x - min_x) / cell) + 1);
-  const int gh = std::min(4096, static_cast<int>((max_y - min_y) / cell) + 1);
+  // a conflicting point. Cells are capped so huge coordinates stay bounded:
+  // at most 4096 a side, and at most the reserved count (coarser cells).
+  float cell = std::max(min_distance, 1e-3f);
+  int gw = grid_cells(max_x - min_x, cell), gh = grid_cells(max_y - min_y, cell);
+  while (static_cast<std::size_t>(gw) * static_cast<std::size_t>(gh) > max_cells_) {
+    cell *= 1.5f;
+    gw = grid_cells(max_x - min_x, cell);
+    gh = grid_cells(max_y - min_y, cell);
+  }
   const float cell_w = std::max(cell, (max_x - min_x) / static_cast<float>(gw) + 1e-3f);
   const float cell_h = std::max(cell, (max_y - min_y) / static_cast<float>(gh) + 1e-3f);
   cell_head_.assign(static_cast<std::size_t>(gw) * static_cast<std::size_t>(gh), -1);

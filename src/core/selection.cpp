@@ -142,8 +142,14 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
   // instead of describing and searching again. Only arcs within one
   // quantisation step of the threshold can differ.
   const int opposite = in.triangulation->halfedges()[e];
+  const std::size_t room = pool_limit_ - std::min(pool_limit_, pool_.size());
   if (opposite >= 0 && state_[opposite] == kLooked) {
-    const std::uint32_t from = begin_[opposite], n = count_[opposite];
+    const std::uint32_t from = begin_[opposite];
+    std::uint32_t n = count_[opposite];
+    if (n > room) {
+      stats.truncated_arc_matches = true;
+      n = static_cast<std::uint32_t>(room);
+    }
     for (std::uint32_t i = 0; i < n; ++i) {
       const std::uint64_t k = pool_[from + i];
       pool_.push_back(key(to_of(k), from_of(k)));
@@ -153,7 +159,7 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
     count = n;
     return;
   }
-  const std::vector<int>& tri = in.triangulation->triangles();
+  const WorkVector<int>& tri = in.triangulation->triangles();
   const Point2f a = in.scene_points[tri[e]];
   const Point2f b = in.scene_points[tri[Delaunay::next(e)]];
   const Params& params = in.index->params();
@@ -169,9 +175,10 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
                                      in.scene_scales[tri[Delaunay::next(e)]], attributes);
   const std::uint32_t total =
       in.search->radius_search(d, scaled ? attributes : nullptr, found_.data(), cap);
-  if (total > cap) stats.truncated_arc_matches = true;
   stats.arc_matches += total;
-  const std::uint32_t n = std::min(total, cap);
+  std::uint32_t n = std::min(total, cap);
+  if (n > room) n = static_cast<std::uint32_t>(room);
+  if (n < total) stats.truncated_arc_matches = true;
   for (std::uint32_t i = 0; i < n; ++i) {
     const ModelArc arc = in.index->arc(found_[i]);
     pool_.push_back(key(arc.from, arc.to));
@@ -181,8 +188,20 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
   count = n;
 }
 
+void Selector::reserve(const Limits& limits) {
+  const auto half_edges = 6 * static_cast<std::size_t>(std::max(0, limits.max_scene_keypoints));
+  state_.reserve(half_edges);
+  begin_.reserve(half_edges);
+  count_.reserve(half_edges);
+  pool_limit_ = static_cast<std::size_t>(std::max(0, limits.max_arc_pool));
+  pool_.reserve(pool_limit_);
+  found_.reserve(static_cast<std::size_t>(std::max(0, limits.max_arc_matches)));
+  // A profile has at most the frame's longer side plus one samples.
+  profile_.reserve(static_cast<std::size_t>(std::max(limits.max_width, limits.max_height)) + 1);
+}
+
 void Selector::select(const SelectionInput& in, const Limits& limits,
-                      std::vector<KeygraphMatch>& matches, DetectStats& stats) {
+                      WorkVector<KeygraphMatch>& matches, DetectStats& stats) {
   matches.clear();
   const std::size_t edges = in.triangulation->triangles().size();
   state_.assign(edges, kUnseen);
@@ -192,7 +211,7 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   const Structure structure = in.index->params().graph.structure;
   const int k = vertex_count(structure);
   const Point2f* model_points = in.index->keypoints();
-  const std::vector<int>& tri = in.triangulation->triangles();
+  const WorkVector<int>& tri = in.triangulation->triangles();
   const auto cap = static_cast<std::size_t>(limits.max_correspondences);
 
   const Params& params = in.index->params();

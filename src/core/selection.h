@@ -63,7 +63,7 @@ struct SelectionInput {
   // GraphParams::max_scale_error; nullptr skips that check.
   const float* scene_scales = nullptr;
   const Delaunay* triangulation = nullptr;
-  const std::vector<SceneKeygraph>* keygraphs = nullptr;
+  const WorkVector<SceneKeygraph>* keygraphs = nullptr;
   // Vertex descriptors (kVertexDescriptorSize bytes) and their inverse
   // norms, of the model keypoints (global ids) and of the sampled scene
   // keypoints. When set, a correspondence is also rejected when any vertex
@@ -77,9 +77,23 @@ struct SelectionInput {
 
 class Selector {
  public:
-  // Clears and fills `matches`; updates stats.arcs_described, correspondences
-  // and the truncation flags.
-  void select(const SelectionInput& in, const Limits& limits, std::vector<KeygraphMatch>& matches,
+  explicit Selector(std::pmr::memory_resource* memory = std::pmr::get_default_resource())
+      : state_(memory),
+        begin_(memory),
+        count_(memory),
+        pool_(memory),
+        found_(memory),
+        profile_(memory) {}
+
+  // Sizes the buffers for `limits` (scene keypoints, arc matches per query
+  // and per frame, frame size for the profiles): select() then allocates
+  // nothing, and stops looking up model arcs once limits.max_arc_pool are
+  // kept in a frame.
+  void reserve(const Limits& limits);
+
+  // Clears and fills `matches` (at most limits.max_correspondences); updates
+  // stats.arcs_described, correspondences and the truncation flags.
+  void select(const SelectionInput& in, const Limits& limits, WorkVector<KeygraphMatch>& matches,
               DetectStats& stats);
 
  private:
@@ -89,12 +103,13 @@ class Selector {
               DetectStats& stats);
 
   enum : std::uint8_t { kUnseen = 0, kLooked = 1 };
-  std::vector<std::uint8_t> state_;
-  std::vector<std::uint32_t> begin_;
-  std::vector<std::uint32_t> count_;
-  std::vector<std::uint64_t> pool_;
-  std::vector<std::uint32_t> found_;
-  std::vector<float> profile_;
+  WorkVector<std::uint8_t> state_;
+  WorkVector<std::uint32_t> begin_;
+  WorkVector<std::uint32_t> count_;
+  WorkVector<std::uint64_t> pool_;  // model-arc keys of all lookups of the frame
+  WorkVector<std::uint32_t> found_;
+  WorkVector<float> profile_;
+  std::size_t pool_limit_ = static_cast<std::size_t>(-1);
 };
 
 }  // namespace kg

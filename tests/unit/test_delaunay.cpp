@@ -112,8 +112,8 @@ int BoundaryPointCount(const Points& hull, const Points& pts) {
 // points: orientation, half-edge symmetry, every distinct point used exactly
 // once, Euler's relation and area coverage of the convex hull.
 void CheckTriangulation(const Points& pts, const Delaunay& d) {
-  const std::vector<int>& tri = d.triangles();
-  const std::vector<int>& he = d.halfedges();
+  const auto& tri = d.triangles();
+  const auto& he = d.halfedges();
   const int n = static_cast<int>(pts.size());
   ASSERT_EQ(tri.size() % 3, 0u);
   ASSERT_EQ(tri.size(), he.size());
@@ -165,7 +165,7 @@ void CheckTriangulation(const Points& pts, const Delaunay& d) {
 
 // No input point strictly inside any triangle's circumcircle (brute force).
 void CheckEmptyCircumcircles(const Points& pts, const Delaunay& d) {
-  const std::vector<int>& tri = d.triangles();
+  const auto& tri = d.triangles();
   int violations = 0;
   for (int t = 0; t < d.triangle_count(); ++t) {
     const Point2f& a = pts[tri[3 * t]];
@@ -180,8 +180,8 @@ void CheckEmptyCircumcircles(const Points& pts, const Delaunay& d) {
 
 // Local Delaunay property on every internal edge (implies the global one).
 void CheckLocallyDelaunay(const Points& pts, const Delaunay& d) {
-  const std::vector<int>& tri = d.triangles();
-  const std::vector<int>& he = d.halfedges();
+  const auto& tri = d.triangles();
+  const auto& he = d.halfedges();
   int violations = 0;
   for (int e = 0; e < static_cast<int>(he.size()); ++e) {
     if (he[e] == -1) continue;
@@ -306,7 +306,8 @@ TEST(Delaunay, SingleTriangleIsPositivelyOriented) {
     const Delaunay d = Triangulate(pts);
     ASSERT_EQ(d.triangle_count(), 1);
     CheckTriangulation(pts, d);
-    EXPECT_EQ(d.halfedges(), (std::vector<int>{-1, -1, -1}));
+    EXPECT_EQ(std::vector<int>(d.halfedges().begin(), d.halfedges().end()),
+              (std::vector<int>{-1, -1, -1}));
   }
 }
 
@@ -350,7 +351,7 @@ TEST(Delaunay, DuplicatesAreIgnored) {
 TEST(Delaunay, NearDuplicatesAreIgnored) {
   Points pts = {{0.f, 0.f}, {5e-10f, -3e-10f}, {1.f, 0.f}, {0.f, 1.f}, {1.f, 1.f}, {0.5f, 2.f}};
   const Delaunay d = Triangulate(pts);
-  const std::vector<int>& tri = d.triangles();
+  const auto& tri = d.triangles();
   const bool used0 = std::count(tri.begin(), tri.end(), 0) > 0;
   const bool used1 = std::count(tri.begin(), tri.end(), 1) > 0;
   EXPECT_NE(used0, used1);
@@ -373,7 +374,7 @@ TEST(Delaunay, NonFinitePointsAreIgnored) {
   pts.insert(pts.begin() + bad[3], Point2f{5.f, -inf});
   const Delaunay d = Triangulate(pts);
   EXPECT_EQ(d.triangle_count(), Triangulate(base).triangle_count());
-  const std::vector<int>& tri = d.triangles();
+  const auto& tri = d.triangles();
   for (int b : bad) EXPECT_EQ(std::count(tri.begin(), tri.end(), b), 0) << b;
   std::set<int> used(tri.begin(), tri.end());
   EXPECT_EQ(used.size(), base.size());

@@ -213,7 +213,9 @@ TYPED_TEST(KdTreeTyped, RadiusAndBoxSearchEqualsBruteForce) {
     build_kdtree<T, kSearchDims>(data.data(), n, points, ids, nodes, 4.0);
     bool attribute_split = false;
     for (const auto& node : nodes) attribute_split |= node.dim >= kDescriptorSize;
-    if (n >= 5000) EXPECT_TRUE(attribute_split) << n;
+    if (n >= 5000) {
+      EXPECT_TRUE(attribute_split) << n;
+    }
     const BasicKdTreeView<T, kSearchDims> view(points.data(), ids.data(), n, nodes.data(),
                                                kdtree_depth(n));
     std::vector<std::uint32_t> out(n + 1);
@@ -240,7 +242,9 @@ TYPED_TEST(KdTreeTyped, RadiusAndBoxSearchEqualsBruteForce) {
       boxed += found;
       unboxed += view.radius_search(query, r2, out.data(), static_cast<std::uint32_t>(out.size()));
     }
-    if (n >= 5000) EXPECT_LT(boxed * 2, unboxed) << "the box should cut most matches";
+    if (n >= 5000) {
+      EXPECT_LT(boxed * 2, unboxed) << "the box should cut most matches";
+    }
   }
 }
 

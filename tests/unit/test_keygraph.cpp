@@ -196,9 +196,9 @@ TEST(SceneKeygraphs, FromDelaunayEdgesFacesAndInternalEdges) {
   const std::vector<Point2f> pts = random_points(rng, 300, 500.f);
   Delaunay dt;
   dt.triangulate(pts.data(), static_cast<int>(pts.size()));
-  const std::vector<int>& tri = dt.triangles();
-  const std::vector<int>& half = dt.halfedges();
-  std::vector<SceneKeygraph> g;
+  const auto& tri = dt.triangles();
+  const auto& half = dt.halfedges();
+  WorkVector<SceneKeygraph> g;
 
   scene_keygraphs(dt, pts.data(), Structure::kArc, g);
   int undirected = 0;

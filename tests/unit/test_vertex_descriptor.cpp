@@ -337,7 +337,8 @@ TEST(SiftDetector, CoreNeedsDescriptorsFromTheCaller) {
   ASSERT_TRUE(
       cut.detect(test::view(scene), shuffled.data(), n, shuffled_descriptors.data(), cut_found));
   EXPECT_TRUE(cut.stats().truncated_keypoints);
-  const std::vector<KeygraphMatch> cut_matches = cut.last_matches();
+  const std::vector<KeygraphMatch> cut_matches(cut.last_matches().begin(),
+                                               cut.last_matches().end());
   // The extractor returns the strongest first, so its first n / 2 are the
   // ones kept (responses are distinct on this image).
   Detector direct(sift_index.index, limits);

@@ -10,10 +10,10 @@
 #include <chrono>
 #include <cinttypes>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "cli/device/detector_compat.h"
 #include "cli/device/device_commands.h"
 #include "cli/device/frame_output.h"
 #include "cli/device/json.h"
@@ -145,10 +145,16 @@ int cmd_bench(const Args& args) {
   if (std::string error = load_frames(paths, frames); !error.empty())
     return fail("bench: " + error);
 
-  Detector detector(index);
-  const std::optional<std::size_t> workspace = workspace_bytes(detector);
+  // One workspace for the largest frame, allocated before any timing.
+  int width = 1, height = 1;
+  for (const LoadedFrame& f : frames) {
+    width = std::max(width, f.image.view().width);
+    height = std::max(height, f.image.view().height);
+  }
+  Detector detector(index, Limits{}.for_frame(width, height));
+  if (!detector.status()) return fail("bench: " + detector.status().message());
+  const std::optional<std::size_t> workspace = detector.workspace_bytes();
   DetectionList found;
-  reserve_detections(found, Limits{}.max_detections);
   // One row per run: the five stages and the total, filled by the timed loop.
   std::vector<double> table(static_cast<std::size_t>(repeat) * 6);
   std::vector<double> series(static_cast<std::size_t>(repeat));
@@ -157,12 +163,7 @@ int cmd_bench(const Args& args) {
     std::printf("index %s: %d models, %u arcs, %s descriptors; %zu frames, %d runs each\n",
                 index_path.c_str(), index.model_count(), index.arc_count(),
                 encoding_name(index.descriptor_encoding()), frames.size(), repeat);
-    if (workspace) {
-      std::printf("detector workspace: %zu bytes\n", *workspace);
-    } else {
-      std::printf(
-          "detector workspace: not reported (this core has no Detector::workspace_bytes())\n");
-    }
+    std::printf("detector workspace: %zu bytes (frames up to %dx%d)\n", *workspace, width, height);
   }
   std::fflush(stdout);
   for (const LoadedFrame& f : frames) {

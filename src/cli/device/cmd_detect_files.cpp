@@ -5,6 +5,7 @@
 #include <chrono>
 #include <filesystem>
 
+#include "cli/device/detector_fit.h"
 #include "cli/device/device_commands.h"
 #include "cli/device/frame_output.h"
 #include "keygraph/detector.h"
@@ -62,6 +63,7 @@ int cmd_detect_files(const Args& args) {
       continue;
     }
     const ImageView view = scene_image.view();
+    if (const Status& fit = fit_detector(detector, view); !fit) return fail(fit.message());
     const auto start = std::chrono::steady_clock::now();
     const Status s = detector.detect(view, found);
     const double ms =

@@ -14,7 +14,7 @@
 #include <memory>
 #include <system_error>
 
-#include "cli/device/detector_compat.h"
+#include "cli/device/detector_fit.h"
 #include "cli/device/device_commands.h"
 #include "cli/device/frame_output.h"
 #include "cli/device/stop_signal.h"
@@ -203,9 +203,10 @@ int cmd_live(const Args& args) {
   auto* files = dynamic_cast<platform::FileSource*>(source.get());
 
   // Everything the loop needs is allocated here, before the first frame.
+  // The workspace is allocated here for 640x480 and again, once, if the
+  // first frame (or a later, larger one) needs more.
   Detector detector(index);
   DetectionList found;
-  reserve_detections(found, Limits{}.max_detections);
   platform::GrayImage canvas;
   std::string name;
 
@@ -253,6 +254,8 @@ int cmd_live(const Args& args) {
     }
     last_frame = Clock::now();
 
+    if (const Status& fit = fit_detector(detector, frame.image); !fit)
+      return fail("live: " + fit.message());
     const Status d = detector.detect(frame.image, found);
     const Clock::time_point done = Clock::now();
     const double ms = std::chrono::duration<double, std::milli>(done - last_frame).count();

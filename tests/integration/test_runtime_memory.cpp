@@ -1,0 +1,227 @@
+// The device runtime's memory contract (DESIGN.md, issue "device runtime"):
+// one workspace sized from Limits, allocated once or supplied by the
+// caller; detect() allocates nothing, on real frames, however often it runs;
+// tiny limits degrade detection instead of overflowing; the workspace for
+// the default limits at 640x480 does not grow unnoticed.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+#include "build/model_builder.h"
+#include "keygraph/detector.h"
+#include "test_data.h"
+#include "unit/alloc_counter.h"
+
+namespace kg {
+namespace {
+
+struct Fixture {
+  std::vector<std::uint8_t> storage;
+  ModelIndex index;
+  cv::Mat box_scene;  // box_in_scene.png, 512 x 384
+  cv::Mat aero;       // aero1.jpg, 640 x 480
+};
+
+// box.png alone, default parameters, viewed from aligned memory.
+const Fixture& fixture() {
+  static const Fixture* f = [] {
+    auto* out = new Fixture;
+    std::vector<BuiltModel> models(1);
+    const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+    const Params params;
+    if (box.empty() || !build_model(box, "box", params, models[0])) return out;
+    std::vector<std::uint8_t> bytes;
+    if (!serialize_index(models, params, bytes)) return out;
+    out->storage.resize(bytes.size() + 64);
+    const auto addr = reinterpret_cast<std::uintptr_t>(out->storage.data());
+    std::uint8_t* aligned = out->storage.data() + (64 - addr % 64) % 64;
+    std::memcpy(aligned, bytes.data(), bytes.size());
+    if (!ModelIndex::view(aligned, bytes.size(), out->index)) return out;
+    out->box_scene = test::load_gray(test::opencv_data("box_in_scene.png"));
+    out->aero = test::load_gray(test::opencv_data("aero1.jpg"));
+    return out;
+  }();
+  return *f;
+}
+
+void expect_ready(const Fixture& f) {
+  ASSERT_FALSE(f.index.empty()) << "box.png missing or the index failed to build";
+  ASSERT_EQ(f.box_scene.cols, 512);
+  ASSERT_EQ(f.aero.cols, 640);
+  ASSERT_EQ(f.aero.rows, 480);
+}
+
+// 64-byte aligned memory from malloc (not operator new, so it is not counted).
+struct AlignedBlock {
+  explicit AlignedBlock(std::size_t size) : bytes(size) {
+    if (::posix_memalign(&data, 64, size == 0 ? 1 : size) != 0) data = nullptr;
+  }
+  ~AlignedBlock() { std::free(data); }
+  AlignedBlock(const AlignedBlock&) = delete;
+  AlignedBlock& operator=(const AlignedBlock&) = delete;
+  void* data = nullptr;
+  std::size_t bytes;
+};
+
+TEST(RuntimeMemory, DetectAllocatesNothingOnRealFrames) {
+  const Fixture& f = fixture();
+  expect_ready(f);
+  Detector detector(f.index);
+  ASSERT_TRUE(detector.status()) << detector.status().message();
+  EXPECT_EQ(detector.workspace_used(), detector.workspace_bytes());
+  DetectionList found;
+  const ImageView frames[2] = {test::view(f.box_scene), test::view(f.aero)};
+  int box_found = 0;
+  const test::AllocationCounter allocations;
+  for (int run = 0; run < 100; ++run) {
+    const Status s = detector.detect(frames[run % 2], found);
+    ASSERT_TRUE(s.is_ok()) << s.message();
+    if (run % 2 == 0) box_found += found.size() == 1 ? 1 : 0;
+  }
+  EXPECT_EQ(allocations.count(), 0) << "detect() allocated on the heap";
+  // Nor did it take more of its workspace: every buffer kept its capacity.
+  EXPECT_EQ(detector.workspace_used(), detector.workspace_bytes());
+  EXPECT_EQ(box_found, 50) << "the box is found in box_in_scene every time";
+}
+
+TEST(RuntimeMemory, CallerBufferMeansNoAllocationAtAll) {
+  const Fixture& f = fixture();
+  expect_ready(f);
+  const Limits limits;
+  const test::AllocationCounter sizing;
+  const std::size_t bytes = Detector::workspace_bytes(f.index, limits);
+  EXPECT_EQ(sizing.count(), 0) << "workspace_bytes() allocated";
+  ASSERT_GT(bytes, 0u);
+  AlignedBlock block(bytes);
+  ASSERT_NE(block.data, nullptr);
+
+  const test::AllocationCounter allocations;
+  {
+    Detector detector(f.index, limits, block.data, block.bytes);
+    ASSERT_TRUE(detector.status()) << detector.status().message();
+    EXPECT_EQ(detector.workspace_bytes(), bytes);
+    EXPECT_EQ(detector.workspace_used(), bytes);
+    DetectionList found;
+    for (int run = 0; run < 5; ++run) {
+      ASSERT_TRUE(detector.detect(test::view(f.box_scene), found).is_ok());
+      ASSERT_EQ(found.size(), 1u);
+      EXPECT_EQ(found[0].model_name, "box");
+    }
+  }
+  EXPECT_EQ(allocations.count(), 0) << "a detector in a caller's buffer allocated";
+
+  // The same detections as a detector with its own workspace.
+  Detector own(f.index, limits);
+  DetectionList a, b;
+  ASSERT_TRUE(own.detect(test::view(f.box_scene), a).is_ok());
+  Detector placed(f.index, limits, block.data, block.bytes);
+  ASSERT_TRUE(placed.detect(test::view(f.box_scene), b).is_ok());
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i].homography, b[i].homography);
+}
+
+TEST(RuntimeMemory, BadBuffersAndLimitsAreErrors) {
+  const Fixture& f = fixture();
+  expect_ready(f);
+  const Limits limits;
+  const std::size_t bytes = Detector::workspace_bytes(f.index, limits);
+  AlignedBlock block(bytes);
+  DetectionList found;
+
+  Detector small(f.index, limits, block.data, bytes - 1);
+  EXPECT_EQ(small.status().code(), StatusCode::kResourceExhausted);
+  EXPECT_NE(small.status().message().find("too small"), std::string::npos);
+  EXPECT_EQ(small.detect(test::view(f.box_scene), found).code(), StatusCode::kResourceExhausted);
+  EXPECT_TRUE(found.empty());
+
+  Detector misaligned(f.index, limits, static_cast<std::uint8_t*>(block.data) + 8, bytes - 8);
+  EXPECT_EQ(misaligned.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(misaligned.status().message().find("aligned"), std::string::npos);
+
+  Limits bad = limits;
+  bad.max_detections = kMaxDetections + 1;
+  Detector too_many(f.index, bad);
+  EXPECT_EQ(too_many.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(Detector::workspace_bytes(f.index, bad), 0u);
+  bad = limits;
+  bad.max_width = 0;
+  EXPECT_FALSE(Detector(f.index, bad).status());
+
+  // A frame larger than the limits: an error naming both sizes, no detection.
+  Limits tiny_frame = limits.for_frame(320, 240);
+  Detector d(f.index, tiny_frame);
+  ASSERT_TRUE(d.status());
+  const Status s = d.detect(test::view(f.box_scene), found);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("512x384"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("320x240"), std::string::npos) << s.message();
+}
+
+TEST(RuntimeMemory, TinyLimitsDegradeAndSayWhat) {
+  const Fixture& f = fixture();
+  expect_ready(f);
+  Limits tiny;
+  tiny.max_keypoints = 60;
+  tiny.max_scene_keypoints = 25;
+  tiny.max_arc_matches = 3;
+  tiny.max_arc_pool = 40;
+  tiny.max_correspondences = 2;
+  tiny.max_detections = 1;
+  Detector detector(f.index, tiny);
+  ASSERT_TRUE(detector.status()) << detector.status().message();
+  EXPECT_LT(detector.workspace_bytes(), Detector::workspace_bytes(f.index, Limits{}));
+  DetectionList found;
+  for (const cv::Mat* frame : {&f.box_scene, &f.aero}) {
+    const test::AllocationCounter allocations;
+    ASSERT_TRUE(detector.detect(test::view(*frame), found).is_ok());
+    EXPECT_EQ(allocations.count(), 0);
+    const DetectStats& s = detector.stats();
+    EXPECT_TRUE(s.truncated_keypoints);
+    EXPECT_TRUE(s.truncated_arc_matches);
+    EXPECT_LE(s.sampled_keypoints, tiny.max_scene_keypoints);
+    EXPECT_LE(s.correspondences, tiny.max_correspondences);
+    EXPECT_LE(found.size(), 1u);
+    EXPECT_EQ(detector.workspace_used(), detector.workspace_bytes());
+  }
+  // Caller keypoints beyond max_keypoints: the strongest are kept.
+  std::vector<Keypoint> many(5000);
+  for (std::size_t i = 0; i < many.size(); ++i)
+    many[i] = {static_cast<float>(i % 500), static_cast<float>(i / 500) * 30.f, 2.f,
+               static_cast<float>(i)};
+  const test::AllocationCounter allocations;
+  ASSERT_TRUE(detector.detect(test::view(f.aero), many.data(), static_cast<int>(many.size()), found)
+                  .is_ok());
+  EXPECT_EQ(allocations.count(), 0);
+  EXPECT_TRUE(detector.stats().truncated_keypoints);
+  for (const Keypoint& k : detector.last_keypoints()) EXPECT_GE(k.response, 5000.f - 60.f);
+}
+
+// The workspace for the default limits at 640x480, for a one-model index
+// (box.png): recorded here so that growth is a decision, not an accident.
+// Most of it is the Hessian's six float planes (7.4 MB) and the arc pool
+// (max_arc_pool keys, 8 MB).
+TEST(RuntimeMemory, WorkspaceForDefaultLimitsAt640x480) {
+  const Fixture& f = fixture();
+  expect_ready(f);
+  const Limits limits;
+  ASSERT_EQ(limits.max_width, 640);
+  ASSERT_EQ(limits.max_height, 480);
+  const std::size_t bytes = Detector::workspace_bytes(f.index, limits);
+  constexpr std::size_t kRecorded = 21'300'000;  // measured 21 199 896 (x86-64)
+  std::printf("workspace for default limits at 640x480: %zu bytes\n", bytes);
+  EXPECT_LE(bytes, kRecorded) << "the workspace grew past the recorded figure";
+  // The figure is the layout itself: a detector hands out exactly that.
+  Detector detector(f.index, limits);
+  EXPECT_EQ(detector.workspace_bytes(), bytes);
+  EXPECT_EQ(detector.workspace_used(), bytes);
+}
+
+}  // namespace
+}  // namespace kg
