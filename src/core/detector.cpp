@@ -11,6 +11,7 @@
 #include "core/hessian.h"
 #include "core/kdtree.h"
 #include "core/keygraph.h"
+#include "core/log.h"
 #include "core/plane.h"
 #include "core/pose.h"
 #include "core/rng.h"
@@ -487,6 +488,11 @@ Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count
     begin = end;
   }
   stats.ms_pose = ms_since(t);
+  if (stats.truncated_keypoints || stats.truncated_arc_matches || stats.truncated_correspondences ||
+      stats.truncated_detections)
+    KG_LOG("limits reached: keypoints %d, arc matches %d, correspondences %d, detections %d",
+           stats.truncated_keypoints, stats.truncated_arc_matches, stats.truncated_correspondences,
+           stats.truncated_detections);
   return Status::ok();
 }
 

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <limits>
+#include <type_traits>
+
+#include "core/leaf_scan.h"
 
 namespace kg {
 
@@ -192,10 +195,21 @@ std::uint32_t BasicKdTreeView<T, D>::radius_search(const Point& q, Dist radius2,
     const Frame<T> f = stack[--top];
     if (f.bound >= radius2) continue;
     if (f.level == depth_) {
-      for (std::uint32_t i = f.begin; i < f.end; ++i) {
-        if (kd_distance2(points_[i], q) < radius2 && within_box(points_[i], q, box)) {
-          if (found < capacity) out[found] = id(i);
+      if constexpr (std::is_same_v<T, std::int8_t> && D == kSearchDims) {
+        // The model index's default: the vectorised leaf scan.
+        std::uint16_t hits[kLeafSize];
+        const int n = scan_leaf_i8(points_ + f.begin, static_cast<int>(f.end - f.begin), q, radius2,
+                                   box, hits);
+        for (int h = 0; h < n; ++h) {
+          if (found < capacity) out[found] = id(f.begin + hits[h]);
           ++found;
+        }
+      } else {
+        for (std::uint32_t i = f.begin; i < f.end; ++i) {
+          if (kd_distance2(points_[i], q) < radius2 && within_box(points_[i], q, box)) {
+            if (found < capacity) out[found] = id(i);
+            ++found;
+          }
         }
       }
       continue;

@@ -18,6 +18,7 @@
 #include "core/arc_descriptor.h"
 #include "core/descriptor_encoding.h"
 #include "core/kdtree.h"
+#include "core/leaf_scan.h"
 #include "core/rng.h"
 
 namespace kg {
@@ -351,6 +352,37 @@ TYPED_TEST(KdTreeTyped, ExtremeDistancesDoNotOverflow) {
     EXPECT_EQ(t.view.radius_search(q, std::numeric_limits<Dist>::max(), out.data(), 100), 100u);
     EXPECT_EQ(t.view.radius_search(q, far, out.data(), 100), 50u);
   }
+}
+
+// The vectorised leaf scan (NEON or SSE2, whichever this build targets)
+// gives exactly the scalar reference's hits, extremes included.
+TEST(LeafScan, VectorisedEqualsScalar) {
+  std::printf("leaf scan: %s\n", leaf_scan_isa());
+  Rng rng(11);
+  auto random_point = [&](int spread) {
+    ArcSearchPointI8 p;
+    for (auto& v : p)
+      v = static_cast<std::int8_t>(static_cast<int>(rng.uniform(2 * spread + 1)) - spread);
+    return p;
+  };
+  std::vector<ArcSearchPointI8> points(kLeafSize);
+  std::uint16_t a[kLeafSize], b[kLeafSize];
+  long total = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    const int spread = trial % 4 == 0 ? 127 : 40;
+    for (auto& p : points) p = random_point(spread);
+    const ArcSearchPointI8 q = random_point(spread);
+    const int n = 1 + static_cast<int>(rng.uniform(kLeafSize));  // odd and even sizes
+    const std::int32_t radius2 = static_cast<std::int32_t>(rng.uniform(6 * 254 * 254 + 2));
+    const std::int32_t box = trial % 5 == 0 ? std::numeric_limits<std::int32_t>::max()
+                                            : static_cast<std::int32_t>(rng.uniform(256));
+    const int ns = scan_leaf_i8_scalar(points.data(), n, q, radius2, box, a);
+    const int nv = scan_leaf_i8(points.data(), n, q, radius2, box, b);
+    ASSERT_EQ(ns, nv) << "trial " << trial;
+    for (int i = 0; i < ns; ++i) ASSERT_EQ(a[i], b[i]) << "trial " << trial;
+    total += ns;
+  }
+  EXPECT_GT(total, 10000);  // the cases were not all empty
 }
 
 TEST(DescriptorEncoding, QuantiseRoundsAndSaturates) {
