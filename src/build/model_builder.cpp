@@ -113,6 +113,19 @@ Status build_model(const cv::Mat& gray, const std::string& name, const Params& p
   gaussian_blur(view_of(gray), params.descriptor.blur_sigma, blurred, scratch);
   const ImageView bv = view_of(blurred);
   std::vector<float> profile;
+  std::vector<std::int32_t> sums;
+  // As the frames are described: fixed point for the integer encodings
+  // (stored as q / scale, which quantise() turns back into q exactly).
+  const bool fixed = uses_fixed_point(params.descriptor);
+  const std::int32_t scale = encoding_scale(params.descriptor.encoding);
+  auto describe = [&](Point2f from, Point2f to, ArcDescriptor& d) {
+    if (!fixed) return arc_descriptor(bv, from, to, params.descriptor, profile, d);
+    std::int32_t q[kDescriptorSize];
+    if (!arc_descriptor_fixed(bv, from, to, params.descriptor, scale, sums, q)) return false;
+    for (int i = 0; i < kDescriptorSize; ++i)
+      d[i] = static_cast<float>(q[i]) / static_cast<float>(scale);
+    return true;
+  };
   const auto n = static_cast<std::uint32_t>(out.keypoints.size());
   std::vector<std::uint32_t> offsets(n + 1, 0), to;
   for (std::uint32_t a = 0; a < n; ++a) {
@@ -122,8 +135,7 @@ Status build_model(const cv::Mat& gray, const std::string& name, const Params& p
                                   out.keypoint_scales[b], params.graph))
         continue;
       ArcDescriptor d;
-      if (!arc_descriptor(bv, out.keypoints[a], out.keypoints[b], params.descriptor, profile, d))
-        continue;
+      if (!describe(out.keypoints[a], out.keypoints[b], d)) continue;
       out.arcs.push_back({a, b});
       out.descriptors.push_back(d);
     }
@@ -155,7 +167,7 @@ void encode_tree(const std::vector<ArcSearchPoint>& search_points, double attrib
     if constexpr (std::is_same_v<T, float>) {
       source[i] = search_points[i];
     } else {
-      source[i] = quantise<T>(search_points[i]);
+      source[i] = encode_point<T>(search_points[i]);
     }
   }
   std::vector<Point> points;
@@ -251,8 +263,10 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
   // Attributes are split as often as descriptor components when their box
   // is as wide, in the stored domain, as the similarity radius; never when
   // the box is off.
-  const double box = params.graph.max_scale_error / kAttributeRange;
-  const double attribute_weight = box > 0.0 ? params.descriptor.similarity_threshold / box : 0.0;
+  const double box = attribute_box(params.graph);  // grid steps, in every encoding
+  const double radius = static_cast<double>(params.descriptor.similarity_threshold) *
+                        encoding_scale(params.descriptor.encoding);
+  const double attribute_weight = box > 0.0 ? radius / box : 0.0;
   // Search tree in the parameters' encoding; arcs permuted into tree order.
   const DescriptorEncoding encoding = params.descriptor.encoding;
   std::vector<std::uint8_t> tree_points, tree_nodes;

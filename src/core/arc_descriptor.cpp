@@ -92,9 +92,12 @@ int profile_samples(ImageView blurred, Point2f a, Point2f b, int parallel_offset
   return std::max(l.adx, l.ady) + 1;
 }
 
-bool mean_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset, float* out) {
-  ProfileLine l;
-  if (!profile_line(blurred, a, b, parallel_offset, l)) return false;
+namespace {
+
+// Walks the Bresenham line of `l` and hands each step t the sum of its
+// three parallel pixels: store(t, sum).
+template <class Store>
+void walk_profile(ImageView blurred, const ProfileLine& l, Store store) {
   const int ax = l.ax, ay = l.ay, dx = l.dx, dy = l.dy, adx = l.adx, ady = l.ady, par = l.par;
   const bool x_major = l.x_major;
   const std::ptrdiff_t stride = blurred.stride;
@@ -115,7 +118,6 @@ bool mean_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset, 
   // pixels of a -> b reversed.
   const std::uint8_t* p = blurred.row(ay) + ax;
   std::ptrdiff_t rem = d;
-  constexpr float kThird = 1.f / 3.f;
   const std::ptrdiff_t two_d = 2 * d;
   const std::ptrdiff_t two_dm = 2 * dm;
   // Steps t with 2t < half_limit send a tie toward a; half_limit = d + 1
@@ -126,13 +128,29 @@ bool mean_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset, 
   for (std::ptrdiff_t t = 0; t <= d; ++t) {
     const std::ptrdiff_t back = -static_cast<std::ptrdiff_t>((rem == 0) & (2 * t < half_limit));
     const std::uint8_t* q = p - (minor_step & back);
-    const int sum = int{q[0]} + int{q[-par_step]} + int{q[par_step]};
-    out[t] = static_cast<float>(sum) * kThird;
+    store(t, int{q[0]} + int{q[-par_step]} + int{q[par_step]});
     rem += two_dm;
     const std::ptrdiff_t carry = -static_cast<std::ptrdiff_t>(rem >= two_d);
     rem -= two_d & carry;
     p += major_step + (minor_step & carry);
   }
+}
+
+}  // namespace
+
+bool mean_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset, float* out) {
+  ProfileLine l;
+  if (!profile_line(blurred, a, b, parallel_offset, l)) return false;
+  constexpr float kThird = 1.f / 3.f;
+  walk_profile(blurred, l,
+               [out](std::ptrdiff_t t, int sum) { out[t] = static_cast<float>(sum) * kThird; });
+  return true;
+}
+
+bool profile_sums(ImageView blurred, Point2f a, Point2f b, int parallel_offset, std::int32_t* out) {
+  ProfileLine l;
+  if (!profile_line(blurred, a, b, parallel_offset, l)) return false;
+  walk_profile(blurred, l, [out](std::ptrdiff_t t, int sum) { out[t] = sum; });
   return true;
 }
 
@@ -255,6 +273,125 @@ bool descriptor_from_samples(const float* samples, int n, const DescriptorParams
   float resampled[kMaxProfileLength];
   resample_linear(samples, n, resampled, length);
   return descriptor_from_profile(resampled, length, params.coefficients, out);
+}
+
+// --- Fixed point ------------------------------------------------------------
+
+namespace {
+
+// cos and sin of 2 pi k / 30 in Q28: mean deviations have at most 20 bits
+// (30 * 29 * 765), so 30 terms stay below 2^54, and the table's rounding
+// (2^-29) is far below an int16 step (2^-15).
+constexpr double kQ = 268435456.0;  // 2^28
+struct FixedTable {
+  std::int32_t cos[kMaxCoefficients][kTableLength];
+  std::int32_t sin[kMaxCoefficients][kTableLength];
+};
+
+const FixedTable& fixed_table30() {
+  static const FixedTable table = [] {
+    FixedTable t{};
+    for (int x = 0; x < kMaxCoefficients; ++x) {
+      for (int y = 0; y < kTableLength; ++y) {
+        t.cos[x][y] = static_cast<std::int32_t>(
+            std::lround(std::cos(kTwoPi * ((x + 1) * y % kTableLength) / kTableLength) * kQ));
+        t.sin[x][y] = static_cast<std::int32_t>(
+            std::lround(std::sin(kTwoPi * ((x + 1) * y % kTableLength) / kTableLength) * kQ));
+      }
+    }
+    return t;
+  }();
+  return table;
+}
+
+// floor(sqrt(v)) for v < 2^63.
+std::uint64_t isqrt(std::uint64_t v) {
+  std::uint64_t r = static_cast<std::uint64_t>(std::sqrt(static_cast<double>(v)));
+  while (r * r > v) --r;
+  while ((r + 1) * (r + 1) <= v) ++r;
+  return r;
+}
+
+int bit_length(std::uint64_t v) {
+  int n = 0;
+  while (v != 0) {
+    ++n;
+    v >>= 1;
+  }
+  return n;
+}
+
+}  // namespace
+
+void resample_linear_fixed(const std::int32_t* in, int n, std::int32_t* out, int length) {
+  if (length <= 0) return;
+  const int last = length > 1 ? length - 1 : 1;
+  if (n <= 0) {
+    std::fill(out, out + length, 0);
+    return;
+  }
+  if (n == 1 || length == 1) {
+    std::fill(out, out + length, in[0] * last);
+    return;
+  }
+  // resample_linear()'s walk, with the weights' common denominator kept.
+  const int step = (n - 1) / last;
+  const int step_rem = (n - 1) % last;
+  int j = 0;
+  int r = 0;
+  for (int i = 0; i < length; ++i) {
+    out[i] = r == 0 ? in[j] * last : in[j] * (last - r) + in[j + 1] * r;
+    j += step;
+    r += step_rem;
+    if (r >= last) {
+      r -= last;
+      ++j;
+    }
+  }
+}
+
+bool fixed_descriptor(const std::int32_t* profile, int length, int coefficients, std::int32_t scale,
+                      std::int32_t* out) {
+  for (int i = 0; i < kDescriptorSize; ++i) out[i] = 0;
+  if (length != kTableLength || coefficients < 1 || coefficients > kMaxCoefficients || scale < 1)
+    return false;
+  // Deviations from the mean, times the length: exact integers.
+  std::int64_t sum = 0;
+  for (int y = 0; y < length; ++y) sum += profile[y];
+  std::int64_t dev[kTableLength];
+  for (int y = 0; y < length; ++y) dev[y] = std::int64_t{profile[y]} * length - sum;
+  const FixedTable& t = fixed_table30();
+  std::int64_t c[kDescriptorSize];
+  std::uint64_t largest = 0;
+  for (int x = 0; x < coefficients; ++x) {
+    std::int64_t re = 0, im = 0;
+    for (int y = 0; y < length; ++y) {
+      re += dev[y] * t.cos[x][y];
+      im -= dev[y] * t.sin[x][y];
+    }
+    c[2 * x] = re;
+    c[2 * x + 1] = im;
+    largest = std::max({largest, static_cast<std::uint64_t>(re < 0 ? -re : re),
+                        static_cast<std::uint64_t>(im < 0 ? -im : im)});
+  }
+  if (largest == 0) return false;  // flat profile
+  // Shift so that squares of the kept coefficients sum below 2^63.
+  const int shift = std::max(0, bit_length(largest) - 30);
+  std::uint64_t energy = 0;
+  for (int i = 0; i < 2 * coefficients; ++i) {
+    c[i] >>= shift;  // arithmetic: rounds toward minus infinity, alike for all
+    energy += static_cast<std::uint64_t>(c[i] * c[i]);
+  }
+  const auto norm = static_cast<std::int64_t>(isqrt(energy));
+  if (norm == 0) return false;
+  // round(scale * c / norm), half away from zero, as quantise() rounds.
+  for (int i = 0; i < 2 * coefficients; ++i) {
+    const std::int64_t num = 2 * scale * (c[i] < 0 ? -c[i] : c[i]) + norm;
+    std::int64_t q = num / (2 * norm);
+    if (q > scale) q = scale;  // isqrt's floor can push a ratio past 1
+    out[i] = static_cast<std::int32_t>(c[i] < 0 ? -q : q);
+  }
+  return true;
 }
 
 }  // namespace kg

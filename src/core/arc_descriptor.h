@@ -11,6 +11,8 @@
 // nearest pixel. Components past 2*m are set to zero.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "keygraph/image.h"
@@ -62,6 +64,50 @@ bool arc_descriptor(ImageView blurred, Point2f a, Point2f b, const DescriptorPar
   out.fill(0.f);
   if (!mean_profile(blurred, a, b, params.parallel_offset, scratch)) return false;
   return descriptor_from_samples(scratch.data(), static_cast<int>(scratch.size()), params, out);
+}
+
+// --- Fixed point (DescriptorParams::encoding int16 and int8) ------------------
+// The same descriptor in integer arithmetic, for cores where that is faster
+// and so that the quantised descriptor is computed exactly, not rounded
+// twice: the profile's pixel sums (3 times the mean), linear resampling
+// with the weights' common denominator kept, the 3-coefficient DFT with
+// Q28 cos/sin on exact mean deviations, and round(scale * c / |c|). The
+// float path is the reference (tests/unit/test_arc_descriptor.cpp).
+
+// Sums of the three parallel pixels per step (profile_samples() of them).
+bool profile_sums(ImageView blurred, Point2f a, Point2f b, int parallel_offset, std::int32_t* out);
+
+// resample_linear() times (length - 1), exactly.
+void resample_linear_fixed(const std::int32_t* in, int n, std::int32_t* out, int length);
+
+// The quantised descriptor (components round(scale * c), c unit-norm) of a
+// resampled profile of length 30 (the paper's l; other lengths use the
+// float path). out gets kDescriptorSize values, unused ones zero. False for
+// a flat profile.
+bool fixed_descriptor(const std::int32_t* profile, int length, int coefficients, std::int32_t scale,
+                      std::int32_t* out);
+
+// The fixed-point descriptor of the arc a -> b at `scale` (32767 or 127),
+// into out[kDescriptorSize]; `scratch` holds the pixel sums (std::vector or
+// WorkVector of int32). False as arc_descriptor() is, or when
+// params.profile_length is not 30.
+template <class Vector>
+bool arc_descriptor_fixed(ImageView blurred, Point2f a, Point2f b, const DescriptorParams& params,
+                          std::int32_t scale, Vector& scratch, std::int32_t* out) {
+  for (int i = 0; i < kDescriptorSize; ++i) out[i] = 0;
+  const int n = profile_samples(blurred, a, b, params.parallel_offset);
+  if (n < 2 || params.profile_length != 30) return false;
+  scratch.resize(static_cast<std::size_t>(n) + 30);
+  if (!profile_sums(blurred, a, b, params.parallel_offset, scratch.data())) return false;
+  std::int32_t* resampled = scratch.data() + n;
+  resample_linear_fixed(scratch.data(), n, resampled, 30);
+  return fixed_descriptor(resampled, 30, params.coefficients, scale, out);
+}
+
+// Whether arcs are described in fixed point for this encoding (int16 and
+// int8, at the paper's profile length).
+inline bool uses_fixed_point(const DescriptorParams& params) {
+  return params.encoding != DescriptorEncoding::kFloat32 && params.profile_length == 30;
 }
 
 inline float squared_distance(const ArcDescriptor& p, const ArcDescriptor& q) {

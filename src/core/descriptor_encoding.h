@@ -28,15 +28,6 @@ inline constexpr std::size_t encoded_point_size(DescriptorEncoding e) {
                                           : sizeof(ArcSearchPoint);
 }
 
-// The attribute box half-width `half_width` (already over kAttributeRange)
-// in an integer domain: ceil(half_width * scale) + 1, since rounding each
-// value to its step moves their difference by up to one step. Exact (no +1)
-// for float32, whose callers use half_width itself.
-inline std::int64_t scaled_box(float half_width, DescriptorEncoding e) {
-  return static_cast<std::int64_t>(std::ceil(static_cast<double>(half_width) * encoding_scale(e))) +
-         (e == DescriptorEncoding::kFloat32 ? 0 : 1);
-}
-
 inline const char* encoding_name(DescriptorEncoding e) {
   const char* name = enum_name(e);
   return name != nullptr ? name : "unknown";

@@ -76,9 +76,7 @@ ArcSearch::ArcSearch(const ModelIndex& index) {
   encoding_ = params.descriptor.encoding;
   const float radius = params.descriptor.similarity_threshold;
   radius2_ = radius * radius;
-  use_box_ = params.graph.max_scale_error > 0.f;
-  box_ = params.graph.max_scale_error / kAttributeRange;
-  box_scaled_ = scaled_box(box_, encoding_);
+  box_ = attribute_box(params.graph);
   const std::uint32_t n = index.arc_count();
   const int depth = index.tree_depth();
   switch (encoding_) {
@@ -104,25 +102,53 @@ std::uint32_t ArcSearch::radius_search(const ArcDescriptor& q, const float* attr
                                        std::uint32_t* out, std::uint32_t capacity) const {
   const float none[kArcAttributes] = {0.f, 0.f};
   const ArcSearchPoint p = search_point(q, attributes != nullptr ? attributes : none);
-  const bool box = use_box_ && attributes != nullptr;
+  const bool box = box_ > 0 && attributes != nullptr;
   switch (encoding_) {
     case DescriptorEncoding::kFloat32:
-      return box ? f32_.radius_search(p, radius2_, box_, out, capacity)
+      return box ? f32_.radius_search(p, radius2_, static_cast<float>(box_), out, capacity)
                  : f32_.radius_search(p, radius2_, out, capacity);
-    case DescriptorEncoding::kInt16: {
-      const ArcSearchPointI16 p16 = quantise<std::int16_t>(p);
-      return box ? i16_.radius_search(p16, radius2_scaled_, box_scaled_, out, capacity)
-                 : i16_.radius_search(p16, radius2_scaled_, out, capacity);
-    }
-    case DescriptorEncoding::kInt8: {
-      const ArcSearchPointI8 p8 = quantise<std::int8_t>(p);
-      const auto r2 = static_cast<ArcTreeView8::Dist>(radius2_scaled_);
-      return box ? i8_.radius_search(p8, r2, static_cast<ArcTreeView8::Dist>(box_scaled_), out,
-                                     capacity)
-                 : i8_.radius_search(p8, r2, out, capacity);
-    }
+    case DescriptorEncoding::kInt16:
+      return search_encoded(encode_point<std::int16_t>(p), box, out, capacity);
+    case DescriptorEncoding::kInt8:
+      return search_encoded(encode_point<std::int8_t>(p), box, out, capacity);
   }
   return 0;
+}
+
+std::uint32_t ArcSearch::radius_search_quantised(const std::int32_t* q, const float* attributes,
+                                                 std::uint32_t* out, std::uint32_t capacity) const {
+  const float none[kArcAttributes] = {0.f, 0.f};
+  const float* a = attributes != nullptr ? attributes : none;
+  const bool box = box_ > 0 && attributes != nullptr;
+  auto point = [&](auto type_tag) {
+    using T = decltype(type_tag);
+    std::array<T, kSearchDims> p{};
+    for (int i = 0; i < kDescriptorSize; ++i) p[i] = static_cast<T>(q[i]);
+    for (int i = 0; i < kArcAttributes; ++i) p[kDescriptorSize + i] = static_cast<T>(a[i]);
+    return p;
+  };
+  switch (encoding_) {
+    case DescriptorEncoding::kFloat32:
+      return 0;  // float32 indexes are searched with float descriptors
+    case DescriptorEncoding::kInt16:
+      return search_encoded(point(std::int16_t{}), box, out, capacity);
+    case DescriptorEncoding::kInt8:
+      return search_encoded(point(std::int8_t{}), box, out, capacity);
+  }
+  return 0;
+}
+
+std::uint32_t ArcSearch::search_encoded(const ArcSearchPointI16& p, bool box, std::uint32_t* out,
+                                        std::uint32_t capacity) const {
+  return box ? i16_.radius_search(p, radius2_scaled_, box_, out, capacity)
+             : i16_.radius_search(p, radius2_scaled_, out, capacity);
+}
+
+std::uint32_t ArcSearch::search_encoded(const ArcSearchPointI8& p, bool box, std::uint32_t* out,
+                                        std::uint32_t capacity) const {
+  const auto r2 = static_cast<ArcTreeView8::Dist>(radius2_scaled_);
+  return box ? i8_.radius_search(p, r2, box_, out, capacity)
+             : i8_.radius_search(p, r2, out, capacity);
 }
 
 void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, const Limits& limits,
@@ -164,8 +190,15 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
   const Point2f b = in.scene_points[tri[Delaunay::next(e)]];
   const Params& params = in.index->params();
   if (chebyshev(a, b) < params.graph.min_distance) return;
+  // Integer encodings describe in fixed point (already quantised); float32
+  // is the float reference.
+  const bool fixed = uses_fixed_point(params.descriptor);
   ArcDescriptor d;
-  if (!arc_descriptor(in.blurred, a, b, params.descriptor, profile_, d)) return;
+  std::int32_t q[kDescriptorSize];
+  if (fixed ? !arc_descriptor_fixed(in.blurred, a, b, params.descriptor,
+                                    encoding_scale(params.descriptor.encoding), sums_, q)
+            : !arc_descriptor(in.blurred, a, b, params.descriptor, profile_, d))
+    return;
   ++stats.arcs_described;
   const auto cap = static_cast<std::uint32_t>(limits.max_arc_matches);
   found_.resize(cap);
@@ -174,7 +207,9 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
                       arc_attributes(a, b, in.scene_scales[tri[e]],
                                      in.scene_scales[tri[Delaunay::next(e)]], attributes);
   const std::uint32_t total =
-      in.search->radius_search(d, scaled ? attributes : nullptr, found_.data(), cap);
+      fixed
+          ? in.search->radius_search_quantised(q, scaled ? attributes : nullptr, found_.data(), cap)
+          : in.search->radius_search(d, scaled ? attributes : nullptr, found_.data(), cap);
   stats.arc_matches += total;
   std::uint32_t n = std::min(total, cap);
   if (n > room) n = static_cast<std::uint32_t>(room);
@@ -198,6 +233,7 @@ void Selector::reserve(const Limits& limits) {
   found_.reserve(static_cast<std::size_t>(std::max(0, limits.max_arc_matches)));
   // A profile has at most the frame's longer side plus one samples.
   profile_.reserve(static_cast<std::size_t>(std::max(limits.max_width, limits.max_height)) + 1);
+  sums_.reserve(profile_.capacity() + 30);
 }
 
 void Selector::select(const SelectionInput& in, const Limits& limits,

@@ -41,17 +41,24 @@ class ArcSearch {
   // BasicKdTreeView::radius_search for `capacity` and the return value).
   std::uint32_t radius_search(const ArcDescriptor& q, const float* attributes, std::uint32_t* out,
                               std::uint32_t capacity) const;
+  // The same for a descriptor already quantised at the index's encoding
+  // scale (int16 and int8 indexes: arc_descriptor_fixed()).
+  std::uint32_t radius_search_quantised(const std::int32_t* q, const float* attributes,
+                                        std::uint32_t* out, std::uint32_t capacity) const;
 
  private:
+  std::uint32_t search_encoded(const ArcSearchPointI16& p, bool box, std::uint32_t* out,
+                               std::uint32_t capacity) const;
+  std::uint32_t search_encoded(const ArcSearchPointI8& p, bool box, std::uint32_t* out,
+                               std::uint32_t capacity) const;
+
   DescriptorEncoding encoding_ = DescriptorEncoding::kFloat32;
   ArcTreeView f32_;
   ArcTreeView16 i16_;
   ArcTreeView8 i8_;
   float radius2_ = 0.f;              // float32
   std::int64_t radius2_scaled_ = 0;  // int16, int8
-  bool use_box_ = false;             // max_scale_error > 0
-  float box_ = 0.f;                  // float32: half-width in the stored domain
-  std::int64_t box_scaled_ = 0;      // int16, int8
+  std::int32_t box_ = 0;             // attribute box, grid steps (0: none)
 };
 
 struct SelectionInput {
@@ -83,7 +90,8 @@ class Selector {
         count_(memory),
         pool_(memory),
         found_(memory),
-        profile_(memory) {}
+        profile_(memory),
+        sums_(memory) {}
 
   // Sizes the buffers for `limits` (scene keypoints, arc matches per query
   // and per frame, frame size for the profiles): select() then allocates
@@ -109,6 +117,7 @@ class Selector {
   WorkVector<std::uint64_t> pool_;  // model-arc keys of all lookups of the frame
   WorkVector<std::uint32_t> found_;
   WorkVector<float> profile_;
+  WorkVector<std::int32_t> sums_;  // fixed-point profiles
   std::size_t pool_limit_ = static_cast<std::size_t>(-1);
 };
 

@@ -4,6 +4,10 @@
 // (box), and no detection in unrelated photos.
 #include <gtest/gtest.h>
 
+#include <set>
+
+#include <array>
+
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -284,6 +288,77 @@ TEST(Detection, TwoInstancesOfOneModel) {
   auto near = [](Point2f p, Point2f q) { return std::hypot(p.x - q.x, p.y - q.y) < 3.0; };
   EXPECT_TRUE((near(centres[0], expect_a) && near(centres[1], expect_b)) ||
               (near(centres[0], expect_b) && near(centres[1], expect_a)));
+}
+
+// The integer paths (fixed-point descriptors, integer distances) against
+// the float reference (float32 index, float descriptors) on the same models
+// and scenes. int16 selects the same keygraph correspondences (>= 98 %,
+// counted over the union of both sets) and gives the same detections; int8,
+// the default, whose 1/127 steps move arcs across the similarity radius,
+// still shares >= 90 % and finds the same objects (corners within 6 px: the
+// box's far corners move with its inlier set).
+TEST(Detection, FixedPointSelectsWhatFloatSelects) {
+  const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+  ASSERT_FALSE(box.empty());
+  auto with = [](DescriptorEncoding e) {
+    Params p;
+    p.descriptor.encoding = e;
+    return p;
+  };
+  AlignedIndex float_index, int16_index, int8_index;
+  const std::vector<std::pair<std::string, cv::Mat>> models = {{"graf-crop", graf_crop()},
+                                                               {"box", box}};
+  build_index(models, with(DescriptorEncoding::kFloat32), float_index);
+  build_index(models, with(DescriptorEncoding::kInt16), int16_index);
+  build_index(models, with(DescriptorEncoding::kInt8), int8_index);
+  using Key = std::array<std::int64_t, 7>;
+  auto keys = [](const Detector& d) {
+    std::set<Key> out;
+    for (const KeygraphMatch& m : d.last_matches())
+      out.insert({m.model_id, m.model_vertices[0], m.model_vertices[1], m.model_vertices[2],
+                  m.scene_vertices[0], m.scene_vertices[1], m.scene_vertices[2]});
+    return out;
+  };
+  struct Case {
+    const AlignedIndex* index;
+    const char* name;
+    double min_shared;
+    float corner_tolerance;
+  };
+  const Case cases[] = {{&int16_index, "int16", 0.98, 1.0f}, {&int8_index, "int8", 0.90, 6.0f}};
+  for (const char* scene_name : {"graf3.png", "box_in_scene.png"}) {
+    SCOPED_TRACE(scene_name);
+    const cv::Mat scene = test::load_gray(test::opencv_data(scene_name));
+    ASSERT_FALSE(scene.empty());
+    const Limits limits = Limits{}.for_frame(scene.cols, scene.rows);
+    Detector f(float_index.index, limits);
+    DetectionList found_f;
+    ASSERT_TRUE(f.detect(test::view(scene), found_f));
+    const std::set<Key> a = keys(f);
+    ASSERT_GT(a.size(), 50u);
+    for (const Case& c : cases) {
+      SCOPED_TRACE(c.name);
+      Detector x(c.index->index, limits);
+      DetectionList found_x;
+      ASSERT_TRUE(x.detect(test::view(scene), found_x));
+      const std::set<Key> b = keys(x);
+      std::size_t common = 0;
+      for (const Key& k : a) common += b.count(k);
+      const double shared =
+          static_cast<double>(common) / static_cast<double>(a.size() + b.size() - common);
+      std::printf("%s, %s: float %zu, fixed point %zu correspondences, %.1f %% shared\n",
+                  scene_name, c.name, a.size(), b.size(), 100.0 * shared);
+      EXPECT_GE(shared, c.min_shared);
+      ASSERT_EQ(found_f.size(), found_x.size());
+      for (std::size_t i = 0; i < found_f.size(); ++i) {
+        EXPECT_EQ(found_f[i].model_id, found_x[i].model_id);
+        for (int k = 0; k < 4; ++k) {
+          EXPECT_NEAR(found_f[i].corners[k].x, found_x[i].corners[k].x, c.corner_tolerance);
+          EXPECT_NEAR(found_f[i].corners[k].y, found_x[i].corners[k].y, c.corner_tolerance);
+        }
+      }
+    }
+  }
 }
 
 }  // namespace

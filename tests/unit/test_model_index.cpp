@@ -261,9 +261,9 @@ bool slot_holds(const ModelIndex& index, std::uint32_t slot, const ArcDescriptor
     case DescriptorEncoding::kFloat32:
       return index.tree_points_f32()[slot] == p;
     case DescriptorEncoding::kInt16:
-      return index.tree_points_i16()[slot] == quantise<std::int16_t>(p);
+      return index.tree_points_i16()[slot] == encode_point<std::int16_t>(p);
     case DescriptorEncoding::kInt8:
-      return index.tree_points_i8()[slot] == quantise<std::int8_t>(p);
+      return index.tree_points_i8()[slot] == encode_point<std::int8_t>(p);
   }
   return false;
 }
@@ -418,9 +418,8 @@ TEST_F(ModelIndexTest, ArcSearchEqualsBruteForceOnStoredDescriptors) {
     if (e != DescriptorEncoding::kFloat32) {
       ASSERT_TRUE(scaled_radius2(r, e, std::numeric_limits<std::int64_t>::max(), r2));
     }
-    const float box = index.params().graph.max_scale_error / kAttributeRange;
-    ASSERT_GT(box, 0.f);
-    const std::int64_t box_scaled = scaled_box(box, e);
+    const std::int32_t box = attribute_box(index.params().graph);  // grid steps
+    ASSERT_GT(box, 0);
     std::vector<std::uint32_t> out(n);
     std::size_t matches = 0, unboxed_matches = 0;
     // Queries: builder descriptors of every 499th arc of box, slightly
@@ -434,8 +433,8 @@ TEST_F(ModelIndexTest, ArcSearchEqualsBruteForceOnStoredDescriptors) {
       ASSERT_TRUE(arc_attributes(m.keypoints[arc.from], m.keypoints[arc.to],
                                  m.keypoint_scales[arc.from], m.keypoint_scales[arc.to],
                                  attributes));
-      attributes[0] += 0.3f * box;
-      attributes[1] -= 0.6f * box;
+      attributes[0] += 3.f;  // grid steps
+      attributes[1] -= 7.f;
       const ArcSearchPoint p = search_point(query, attributes);
       for (const bool with_box : {true, false}) {
         std::vector<std::uint32_t> expected;
@@ -454,12 +453,13 @@ TEST_F(ModelIndexTest, ArcSearchEqualsBruteForceOnStoredDescriptors) {
               inside = in_box(index.tree_points_f32()[slot], p, box);
               break;
             case DescriptorEncoding::kInt16:
-              near = kd_distance2(index.tree_points_i16()[slot], quantise<std::int16_t>(p)) < r2;
-              inside = in_box(index.tree_points_i16()[slot], quantise<std::int16_t>(p), box_scaled);
+              near =
+                  kd_distance2(index.tree_points_i16()[slot], encode_point<std::int16_t>(p)) < r2;
+              inside = in_box(index.tree_points_i16()[slot], encode_point<std::int16_t>(p), box);
               break;
             case DescriptorEncoding::kInt8:
-              near = kd_distance2(index.tree_points_i8()[slot], quantise<std::int8_t>(p)) < r2;
-              inside = in_box(index.tree_points_i8()[slot], quantise<std::int8_t>(p), box_scaled);
+              near = kd_distance2(index.tree_points_i8()[slot], encode_point<std::int8_t>(p)) < r2;
+              inside = in_box(index.tree_points_i8()[slot], encode_point<std::int8_t>(p), box);
               break;
           }
           if (near && (inside || !with_box)) expected.push_back(slot);
