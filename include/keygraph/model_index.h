@@ -109,6 +109,11 @@ class ModelIndex {
   const ArcSearchPoint* tree_points_f32() const;
   const ArcSearchPointI16* tree_points_i16() const;
   const ArcSearchPointI8* tree_points_i8() const;
+  // Per tree leaf (2^tree_depth(), left to right) the component-wise minimum
+  // and maximum of its points, in the same encoding.
+  const ArcSearchPoint* leaf_bounds_f32() const;
+  const ArcSearchPointI16* leaf_bounds_i16() const;
+  const ArcSearchPointI8* leaf_bounds_i8() const;
   const KdNode* tree_nodes_f32() const;
   const KdNodeInt* tree_nodes_int() const;
   std::uint32_t tree_node_count() const { return tree_node_count_; }
@@ -150,6 +155,7 @@ class ModelIndex {
   std::uint32_t arc_count_ = 0;
   const std::uint8_t* tree_descriptors_ = nullptr;
   const std::uint8_t* tree_nodes_ = nullptr;
+  const std::uint8_t* leaf_bounds_ = nullptr;
   std::uint32_t tree_node_count_ = 0;
   int tree_depth_ = 0;
   const std::uint8_t* vertex_descriptors_ = nullptr;

@@ -160,7 +160,7 @@ namespace {
 template <class T>
 void encode_tree(const std::vector<ArcSearchPoint>& search_points, double attribute_weight,
                  std::vector<ModelArc>& arcs, std::vector<std::uint8_t>& points_bytes,
-                 std::vector<std::uint8_t>& node_bytes) {
+                 std::vector<std::uint8_t>& node_bytes, std::vector<std::uint8_t>& bound_bytes) {
   using Point = KdPoint<T, kSearchDims>;
   std::vector<Point> source(search_points.size());
   for (std::size_t i = 0; i < search_points.size(); ++i) {
@@ -180,6 +180,11 @@ void encode_tree(const std::vector<ArcSearchPoint>& search_points, double attrib
   arcs.swap(ordered);
   points_bytes.resize(points.size() * sizeof(Point));
   if (!points.empty()) std::memcpy(points_bytes.data(), points.data(), points_bytes.size());
+  std::vector<Point> bounds;
+  kdtree_leaf_bounds<T, kSearchDims>(points.data(), static_cast<std::uint32_t>(points.size()),
+                                     bounds);
+  bound_bytes.resize(bounds.size() * sizeof(Point));
+  std::memcpy(bound_bytes.data(), bounds.data(), bound_bytes.size());
   // Nodes field by field: no padding bytes of the struct reach the file.
   node_bytes.assign(nodes.size() * format::tree_node_size(encoding_of<T>()), 0);
   for (std::size_t i = 0; i < nodes.size(); ++i) {
@@ -266,19 +271,22 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
   const double box = attribute_box(params.graph);  // grid steps, in every encoding
   const double radius = static_cast<double>(params.descriptor.similarity_threshold) *
                         encoding_scale(params.descriptor.encoding);
-  const double attribute_weight = box > 0.0 ? radius / box : 0.0;
+  const double attribute_weight = box > 0.0 ? 0.5 * radius / box : 0.0;
   // Search tree in the parameters' encoding; arcs permuted into tree order.
   const DescriptorEncoding encoding = params.descriptor.encoding;
-  std::vector<std::uint8_t> tree_points, tree_nodes;
+  std::vector<std::uint8_t> tree_points, tree_nodes, leaf_bounds;
   switch (encoding) {
     case DescriptorEncoding::kFloat32:
-      encode_tree<float>(search_points, attribute_weight, arcs, tree_points, tree_nodes);
+      encode_tree<float>(search_points, attribute_weight, arcs, tree_points, tree_nodes,
+                         leaf_bounds);
       break;
     case DescriptorEncoding::kInt16:
-      encode_tree<std::int16_t>(search_points, attribute_weight, arcs, tree_points, tree_nodes);
+      encode_tree<std::int16_t>(search_points, attribute_weight, arcs, tree_points, tree_nodes,
+                                leaf_bounds);
       break;
     case DescriptorEncoding::kInt8:
-      encode_tree<std::int8_t>(search_points, attribute_weight, arcs, tree_points, tree_nodes);
+      encode_tree<std::int8_t>(search_points, attribute_weight, arcs, tree_points, tree_nodes,
+                               leaf_bounds);
       break;
   }
   const auto encoding_id = static_cast<std::uint32_t>(encoding);
@@ -320,6 +328,8 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
        static_cast<std::uint32_t>(keypoint_scales.size())},
       {kSectionTreeArcTargets, 0, arc_to_offset.data(), arc_to_offset.size() * sizeof(std::int16_t),
        arc_count},
+      {kSectionLeafBounds, encoding_id, leaf_bounds.data(), leaf_bounds.size(),
+       static_cast<std::uint32_t>(leaf_bounds.size() / encoded_point_size(encoding))},
   };
   const std::size_t params_offset = kHeaderSize;
   const std::size_t table_offset = params_offset + kParamsSize;

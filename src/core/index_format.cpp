@@ -50,6 +50,8 @@ const char* section_name(std::uint32_t id) {
       return "keypoint scales";
     case kSectionTreeArcTargets:
       return "tree arc targets";
+    case kSectionLeafBounds:
+      return "leaf bounds";
     default:
       return "(unknown)";
   }
@@ -99,6 +101,7 @@ Status validate_params(const Params& p) {
     return bad("max_scale_error", "must be in [0, 10]");
   if (!(std::isfinite(p.graph.max_relative_length) && p.graph.max_relative_length >= 0.f))
     return bad("max_relative_length", "must be >= 0");
+  if (p.descriptor.max_search_leaves < 0) return bad("max_search_leaves", "must be >= 0");
   if (!(std::isfinite(p.keypoints.hessian_threshold) && p.keypoints.hessian_threshold >= 0.f))
     return bad("hessian_threshold", "must be >= 0");
   if (p.keypoints.hessian_octaves < 1 || p.keypoints.hessian_octaves > 8)

@@ -19,7 +19,7 @@ inline constexpr std::uint8_t kMagic[8] = {0x89, 'K', 'G', 'I', '\r', '\n', 0x1A
 // 2.0: arcs in tree order (no tree-id section), encoded descriptors.
 // 3.0: keypoint scales (section 8), graph.max_scale_error, and tree points
 // of descriptor plus scale attributes (kSearchDims components).
-inline constexpr std::uint16_t kVersionMajor = 3;
+inline constexpr std::uint16_t kVersionMajor = 4;
 inline constexpr std::uint16_t kVersionMinor = 0;
 inline constexpr std::size_t kAlignment = 64;
 
@@ -56,11 +56,12 @@ enum SectionId : std::uint32_t {
   kSectionVertexDescriptors = 7,  // kVertexDescriptorSize bytes (SIFT) per keypoint, or empty
   kSectionKeypointScales = 8,     // float32 detector scale (sigma, model pixels) per keypoint
   kSectionTreeArcTargets = 9,     // int16 `to - from` per tree slot
+  kSectionLeafBounds = 10,        // per tree leaf: minimum and maximum tree point, encoded
 };
 // Sections 1..kSectionCount are in every index and required (empty ones
 // included). Ids above are skipped by the reader: room for minor versions.
-inline constexpr std::uint32_t kSectionCount = 9;
-inline constexpr std::uint32_t kLastSectionId = 9;
+inline constexpr std::uint32_t kSectionCount = 10;
+inline constexpr std::uint32_t kLastSectionId = 10;
 // A model has at most this many keypoints, so that an arc's `to - from`
 // fits the int16 of section 9.
 inline constexpr int kMaxModelKeypoints = 32768;
@@ -147,6 +148,7 @@ void visit_params(P& p, F&& f) {
   f("descriptor.encoding", p.descriptor.encoding);
   f("graph.max_scale_error", p.graph.max_scale_error);
   f("graph.max_relative_length", p.graph.max_relative_length);
+  f("descriptor.max_search_leaves", p.descriptor.max_search_leaves);
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }

@@ -79,10 +79,43 @@ void build_kdtree(const KdPoint<T, D>* source, std::uint32_t n, std::vector<KdPo
   }
 }
 
+template <class T, std::size_t D>
+void kdtree_leaf_bounds(const KdPoint<T, D>* points, std::uint32_t n,
+                        std::vector<KdPoint<T, D>>& out) {
+  const int depth = kdtree_depth(n);
+  const std::size_t leaves = std::size_t{1} << depth;
+  out.assign(2 * leaves, KdPoint<T, D>{});
+  // Leaf l of the last level covers the range reached by halving [0, n)
+  // along l's bits, most significant first.
+  for (std::size_t l = 0; l < leaves; ++l) {
+    std::uint32_t b = 0, e = n;
+    for (int bit = depth - 1; bit >= 0; --bit) {
+      const std::uint32_t m = b + (e - b) / 2;
+      if ((l >> bit) & 1) {
+        b = m;
+      } else {
+        e = m;
+      }
+    }
+    KdPoint<T, D>& lo = out[2 * l];
+    KdPoint<T, D>& hi = out[2 * l + 1];
+    lo.fill(std::numeric_limits<T>::max());
+    hi.fill(std::numeric_limits<T>::lowest());
+    for (std::uint32_t i = b; i < e; ++i) {
+      for (std::size_t d = 0; d < D; ++d) {
+        lo[d] = std::min(lo[d], points[i][d]);
+        hi[d] = std::max(hi[d], points[i][d]);
+      }
+    }
+  }
+}
+
 #define KG_INSTANTIATE_BUILD(T, D)                                                           \
   template void build_kdtree<T, D>(const KdPoint<T, D>*, std::uint32_t,                      \
                                    std::vector<KdPoint<T, D>>&, std::vector<std::uint32_t>&, \
-                                   std::vector<typename KdTraits<T>::Node>&, double);
+                                   std::vector<typename KdTraits<T>::Node>&, double);        \
+  template void kdtree_leaf_bounds<T, D>(const KdPoint<T, D>*, std::uint32_t,                \
+                                         std::vector<KdPoint<T, D>>&);
 KG_INSTANTIATE_BUILD(float, kDescriptorSize)
 KG_INSTANTIATE_BUILD(std::int16_t, kDescriptorSize)
 KG_INSTANTIATE_BUILD(std::int8_t, kDescriptorSize)
@@ -108,6 +141,11 @@ struct Frame {
   int level;
   Dist bound;
   Dist offset[kDescriptorSize];
+  // Approximate search only: the order in which cells are visited, `bound`
+  // plus a penalty per attribute offset (attributes do not bound the
+  // distance but do make a match less likely), and those offsets.
+  double priority;
+  double attribute_offset[kSearchDims - kDescriptorSize];
 };
 
 // Pushes the two children of `f`, the far one first so the near one is
@@ -154,6 +192,91 @@ inline void push_children(const Frame<T>& f, const typename KdTraits<T>::Node& n
   }
 }
 
+// Moves `f` to its near child and pushes the far one when it can still hold
+// a match (bound below radius2, within `box` on an attribute split): the
+// radius search walks down without copying the frame it stays in.
+template <class T, std::size_t D>
+inline void descend_near(Frame<T>& f, const typename KdTraits<T>::Node& node,
+                         const KdPoint<T, D>& q, typename KdTraits<T>::Dist radius2,
+                         typename KdTraits<T>::Dist box, Frame<T>* stack, int& top) {
+  using Dist = typename KdTraits<T>::Dist;
+  const std::uint32_t mid = f.begin + (f.end - f.begin) / 2;
+  const std::uint32_t dim = node.dim;
+  const Dist diff = static_cast<Dist>(q[dim]) - static_cast<Dist>(node.split);
+  const bool left = diff <= 0;  // the query's side: near is the left child
+  if (dim >= static_cast<std::uint32_t>(kDescriptorSize)) {
+    if ((left ? -diff : diff) <= box) {
+      Frame<T>& far = stack[top++];
+      far = f;
+      far.level = f.level + 1;
+      far.node = left ? 2 * f.node + 2 : 2 * f.node + 1;
+      (left ? far.begin : far.end) = mid;
+    }
+  } else {
+    const Dist old = f.offset[dim];
+    const Dist far_bound = f.bound - old * old + diff * diff;
+    if (far_bound < radius2) {
+      Frame<T>& far = stack[top++];
+      far = f;
+      far.level = f.level + 1;
+      far.bound = far_bound;
+      far.offset[dim] = diff;
+      far.node = left ? 2 * f.node + 2 : 2 * f.node + 1;
+      (left ? far.begin : far.end) = mid;
+    }
+  }
+  f.level += 1;
+  f.node = left ? 2 * f.node + 1 : 2 * f.node + 2;
+  (left ? f.end : f.begin) = mid;
+}
+
+// descend_near for the approximate search: also ranks the far child, an
+// attribute offset of one box costing as much as the whole radius.
+template <class T, std::size_t D>
+inline void descend_near_ranked(Frame<T>& f, const typename KdTraits<T>::Node& node,
+                                const KdPoint<T, D>& q, typename KdTraits<T>::Dist radius2,
+                                typename KdTraits<T>::Dist box, double attribute_cost,
+                                Frame<T>* stack, int& top) {
+  const int before = top;
+  const std::uint32_t dim = node.dim;
+  const double diff = static_cast<double>(q[dim]) - static_cast<double>(node.split);
+  descend_near<T, D>(f, node, q, radius2, box, stack, top);
+  if (top == before) return;
+  Frame<T>& far = stack[top - 1];
+  if (dim >= static_cast<std::uint32_t>(kDescriptorSize)) {
+    double& offset = far.attribute_offset[dim - kDescriptorSize];
+    far.priority += attribute_cost * (diff * diff - offset * offset);
+    offset = diff;
+  } else {
+    far.priority += static_cast<double>(far.bound) - static_cast<double>(f.bound);
+  }
+}
+
+// Whether a leaf whose points lie in [lo, hi] (bounds[0], bounds[1]) can
+// hold a point within radius2 (descriptor components) and `box`
+// (attributes) of q.
+template <class T, std::size_t D>
+inline bool box_can_match(const std::array<T, D>* bounds, const std::array<T, D>& q,
+                          typename KdTraits<T>::Dist radius2, typename KdTraits<T>::Dist box) {
+  using Dist = typename KdTraits<T>::Dist;
+  const std::array<T, D>& lo = bounds[0];
+  const std::array<T, D>& hi = bounds[1];
+  Dist d2 = 0;
+  for (int d = 0; d < kDescriptorSize; ++d) {
+    const Dist below = static_cast<Dist>(lo[d]) - static_cast<Dist>(q[d]);
+    const Dist above = static_cast<Dist>(q[d]) - static_cast<Dist>(hi[d]);
+    const Dist gap = below > 0 ? below : above > 0 ? above : 0;
+    d2 += gap * gap;
+  }
+  if (!(d2 < radius2)) return false;
+  for (std::size_t d = kDescriptorSize; d < D; ++d) {
+    if (static_cast<Dist>(lo[d]) - static_cast<Dist>(q[d]) > box ||
+        static_cast<Dist>(q[d]) - static_cast<Dist>(hi[d]) > box)
+      return false;
+  }
+  return true;
+}
+
 template <class T, std::size_t D>
 inline bool within_box(const std::array<T, D>& p, const std::array<T, D>& q,
                        typename KdTraits<T>::Dist box) {
@@ -192,29 +315,86 @@ std::uint32_t BasicKdTreeView<T, D>::radius_search(const Point& q, Dist radius2,
   int top = 0;
   stack[top++] = root_frame<T>(n_);
   while (top > 0) {
-    const Frame<T> f = stack[--top];
+    Frame<T> f = stack[--top];
     if (f.bound >= radius2) continue;
-    if (f.level == depth_) {
-      if constexpr (std::is_same_v<T, std::int8_t> && D == kSearchDims) {
-        // The model index's default: the vectorised leaf scan.
-        std::uint16_t hits[kLeafSize];
-        const int n = scan_leaf_i8(points_ + f.begin, static_cast<int>(f.end - f.begin), q, radius2,
-                                   box, hits);
-        for (int h = 0; h < n; ++h) {
-          if (found < capacity) out[found] = id(f.begin + hits[h]);
+    while (f.level < depth_) descend_near<T, D>(f, nodes_[f.node], q, radius2, box, stack, top);
+    if (bounds_ != nullptr &&
+        !box_can_match(bounds_ + 2 * (f.node - ((std::uint32_t{1} << depth_) - 1)), q, radius2,
+                       box))
+      continue;
+    if constexpr (std::is_same_v<T, std::int8_t> && D == kSearchDims) {
+      // The model index's default: the vectorised leaf scan.
+      std::uint16_t hits[kLeafSize];
+      const int n =
+          scan_leaf_i8(points_ + f.begin, static_cast<int>(f.end - f.begin), q, radius2, box, hits);
+      for (int h = 0; h < n; ++h) {
+        if (found < capacity) out[found] = id(f.begin + hits[h]);
+        ++found;
+      }
+    } else {
+      for (std::uint32_t i = f.begin; i < f.end; ++i) {
+        if (kd_distance2(points_[i], q) < radius2 && within_box(points_[i], q, box)) {
+          if (found < capacity) out[found] = id(i);
           ++found;
         }
-      } else {
-        for (std::uint32_t i = f.begin; i < f.end; ++i) {
-          if (kd_distance2(points_[i], q) < radius2 && within_box(points_[i], q, box)) {
-            if (found < capacity) out[found] = id(i);
-            ++found;
-          }
+      }
+    }
+  }
+  return found;
+}
+
+template <class T, std::size_t D>
+std::uint32_t BasicKdTreeView<T, D>::radius_search_approximate(const Point& q, Dist radius2,
+                                                               Dist box, int max_leaves,
+                                                               std::uint32_t* out,
+                                                               std::uint32_t capacity) const {
+  std::uint32_t found = 0;
+  if (n_ == 0 || max_leaves <= 0) return 0;
+  // A min-heap of pending far children by bound; when it is full, further
+  // far children are dropped (the answer is approximate anyway).
+  constexpr int kHeap = 512;
+  Frame<T> heap[kHeap];
+  int size = 0;
+  const auto later = [](const Frame<T>& a, const Frame<T>& b) { return a.priority > b.priority; };
+  // An attribute offset of `box` ranks like a descriptor offset of the radius.
+  const double box_width = std::is_floating_point_v<T> ? std::max(static_cast<double>(box), 1e-6)
+                                                       : static_cast<double>(box) + 1.0;
+  const double attribute_cost = static_cast<double>(radius2) / (box_width * box_width);
+  heap[size++] = root_frame<T>(n_);
+  Frame<T> pending[kMaxTreeDepth + 2];  // far children of one descent
+  int leaves = 0;
+  while (size > 0 && leaves < max_leaves) {
+    std::pop_heap(heap, heap + size, later);
+    Frame<T> f = heap[--size];
+    int n_pending = 0;
+    while (f.level < depth_)
+      descend_near_ranked<T, D>(f, nodes_[f.node], q, radius2, box, attribute_cost, pending,
+                                n_pending);
+    for (int i = 0; i < n_pending && size < kHeap; ++i) {
+      heap[size++] = pending[i];
+      std::push_heap(heap, heap + size, later);
+    }
+    ++leaves;
+    if (bounds_ != nullptr &&
+        !box_can_match(bounds_ + 2 * (f.node - ((std::uint32_t{1} << depth_) - 1)), q, radius2,
+                       box))
+      continue;
+    if constexpr (std::is_same_v<T, std::int8_t> && D == kSearchDims) {
+      std::uint16_t hits[kLeafSize];
+      const int n =
+          scan_leaf_i8(points_ + f.begin, static_cast<int>(f.end - f.begin), q, radius2, box, hits);
+      for (int h = 0; h < n; ++h) {
+        if (found < capacity) out[found] = id(f.begin + hits[h]);
+        ++found;
+      }
+    } else {
+      for (std::uint32_t i = f.begin; i < f.end; ++i) {
+        if (kd_distance2(points_[i], q) < radius2 && within_box(points_[i], q, box)) {
+          if (found < capacity) out[found] = id(i);
+          ++found;
         }
       }
-      continue;
     }
-    push_children<T, D>(f, nodes_[f.node], q, box, stack, top);
   }
   return found;
 }

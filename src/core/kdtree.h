@@ -104,9 +104,12 @@ class BasicKdTreeView {
 
   BasicKdTreeView() = default;
   // `ids` may be null: queries then report tree slots.
+  // `leaf_bounds` (optional): per leaf, left to right, the component-wise
+  // minimum then maximum of its points (kdtree_leaf_bounds()); a radius
+  // query skips leaves whose box cannot hold a match.
   BasicKdTreeView(const Point* points, const std::uint32_t* ids, std::uint32_t n, const Node* nodes,
-                  int depth)
-      : points_(points), ids_(ids), n_(n), nodes_(nodes), depth_(depth) {}
+                  int depth, const Point* leaf_bounds = nullptr)
+      : points_(points), ids_(ids), n_(n), nodes_(nodes), depth_(depth), bounds_(leaf_bounds) {}
 
   std::uint32_t size() const { return n_; }
 
@@ -119,6 +122,11 @@ class BasicKdTreeView {
                               std::uint32_t capacity) const;
   std::uint32_t radius_search(const Point& q, Dist radius2, Dist box, std::uint32_t* out,
                               std::uint32_t capacity) const;
+  // The same, approximately: leaves in order of their distance bound (best
+  // bin first), at most `max_leaves` of them. Finds a subset of the exact
+  // answer, the points in the leaves nearest the query first.
+  std::uint32_t radius_search_approximate(const Point& q, Dist radius2, Dist box, int max_leaves,
+                                          std::uint32_t* out, std::uint32_t capacity) const;
 
   // The k (<= 64) nearest points by descriptor distance (attributes are not
   // compared), closest first (ties: smaller id first): ids and squared
@@ -133,7 +141,15 @@ class BasicKdTreeView {
   std::uint32_t n_ = 0;
   const Node* nodes_ = nullptr;
   int depth_ = 0;
+  const Point* bounds_ = nullptr;
 };
+
+// The leaf bounds of a tree over points[0..n) (tree order) of depth
+// kdtree_depth(n): 2 * 2^depth points, per leaf its minimum and maximum per
+// component (an empty leaf gets minimum > maximum, never matching).
+template <class T, std::size_t D>
+void kdtree_leaf_bounds(const KdPoint<T, D>* points, std::uint32_t n,
+                        std::vector<KdPoint<T, D>>& out);
 
 using KdTreeView = BasicKdTreeView<float>;
 using KdTreeView16 = BasicKdTreeView<std::int16_t>;

@@ -47,7 +47,7 @@ void scene_keygraphs(const Delaunay& dt, const Point2f* points, Structure struct
   switch (structure) {
     case Structure::kArc:
       for (int e = 0; e < edges; ++e) {
-        if (half[e] < 0 || e < half[e]) out.push_back({{e, -1, -1, -1}});
+        if (half[e] < 0 || e < half[e]) out.push_back({{e, Delaunay::next(e), -1, -1}});
       }
       break;
     case Structure::kCircuit3:
@@ -81,32 +81,33 @@ std::uint64_t count_model_keygraphs(const Point2f* p, int n, const std::uint32_t
   };
   std::uint64_t count = 0;
   const int k = vertex_count(params.structure);
-  for (int a = 0; a < n; ++a) {
+  // A circuit is counted from its smallest vertex only (one of its k
+  // rotations), which also prunes most paths early.
+  for (std::uint32_t a = 0; a < static_cast<std::uint32_t>(n); ++a) {
     for (std::uint32_t i = offsets[a]; i < offsets[a + 1]; ++i) {
       const std::uint32_t b = to[i];
       if (k == 2) {
         ++count;
         continue;
       }
+      if (b < a) continue;
       for (std::uint32_t j = offsets[b]; j < offsets[b + 1]; ++j) {
         const std::uint32_t c = to[j];
-        if (c == static_cast<std::uint32_t>(a) || !(orient(p[a], p[b], p[c]) > 0.f)) continue;
+        if (c <= a || !(orient(p[a], p[b], p[c]) > 0.f)) continue;
         if (k == 3) {
-          if (has_arc(c, static_cast<std::uint32_t>(a))) ++count;
+          if (has_arc(c, a)) ++count;
           continue;
         }
         for (std::uint32_t l = offsets[c]; l < offsets[c + 1]; ++l) {
           const std::uint32_t d = to[l];
-          if (d == static_cast<std::uint32_t>(a) || d == b) continue;
-          if (!has_arc(d, static_cast<std::uint32_t>(a))) continue;
-          const Point2f q[4] = {p[a], p[b], p[c], p[d]};
-          if (is_clockwise_circuit(q, 4)) ++count;
+          if (d <= a || d == b || !(orient(p[b], p[c], p[d]) > 0.f)) continue;
+          if (!(orient(p[c], p[d], p[a]) > 0.f) || !(orient(p[d], p[a], p[b]) > 0.f)) continue;
+          if (has_arc(d, a)) ++count;
         }
       }
     }
   }
-  // Every circuit was counted once per rotation (its k keytuples).
-  return k == 2 ? count : count / static_cast<std::uint64_t>(k);
+  return count;
 }
 
 }  // namespace kg

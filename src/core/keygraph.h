@@ -48,7 +48,8 @@ bool is_keytuple(const int* order, int k, const std::uint8_t* sigma, const int* 
 
 // A scene keygraph as one keytuple of Delaunay half-edges: vertex i is the
 // origin of half-edge edges[i] and the keytuple's arc (v_i, v_{i+1}) is that
-// half-edge. For arcs only edges[0] is used.
+// half-edge. For arcs edges[1] is next(edges[0]), only for its origin (the
+// arc's target): the one looked-up arc is edges[0].
 struct SceneKeygraph {
   std::int32_t edges[kMaxVertices];
 };

@@ -90,36 +90,43 @@ int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, st
   // the sum and compared with the box instead.
   const __m128i descriptor_lanes = _mm_set_epi16(0, 0, -1, -1, -1, -1, -1, -1);
   const __m128i limit = _mm_set1_epi16(static_cast<short>(box > 32767 ? 32767 : box));
+  const __m128i r2 = _mm_set1_epi32(radius2);
+  const __m128i zero = _mm_setzero_si128();
   int found = 0;
-  int i = 0;
-  for (; i + 1 < n; i += 2) {  // two points per 16 bytes
-    const __m128i both = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p[i].data()));
-    const __m128i d0 = _mm_sub_epi16(widen_low(both), query);
-    const __m128i d1 = _mm_sub_epi16(widen_high(both), query);
-    const __m128i m0 = _mm_and_si128(d0, descriptor_lanes);
-    const __m128i m1 = _mm_and_si128(d1, descriptor_lanes);
-    // madd: lanes (d0^2 + d1^2, d2^2 + d3^2, d4^2 + d5^2, 0) per point.
-    const __m128i s0 = _mm_madd_epi16(m0, m0);
-    const __m128i s1 = _mm_madd_epi16(m1, m1);
-    // Horizontal sums: [a0 + a2, a1 + a3, b0 + b2, b1 + b3], then pairs.
-    const __m128i t = _mm_add_epi32(_mm_unpacklo_epi64(s0, s1), _mm_unpackhi_epi64(s0, s1));
-    const __m128i u = _mm_add_epi32(t, _mm_shuffle_epi32(t, _MM_SHUFFLE(2, 3, 0, 1)));
-    const std::int32_t d2_0 = _mm_cvtsi128_si32(u);
-    const std::int32_t d2_1 = _mm_cvtsi128_si32(_mm_unpackhi_epi64(u, u));
-    // |d| <= box on the attribute lanes 6, 7: max(d, -d) compared.
-    const __m128i a0 = _mm_max_epi16(d0, _mm_sub_epi16(_mm_setzero_si128(), d0));
-    const __m128i a1 = _mm_max_epi16(d1, _mm_sub_epi16(_mm_setzero_si128(), d1));
-    const int over0 = _mm_movemask_epi8(_mm_cmpgt_epi16(a0, limit)) & 0xF000;
-    const int over1 = _mm_movemask_epi8(_mm_cmpgt_epi16(a1, limit)) & 0xF000;
-    hits[found] = static_cast<std::uint16_t>(i);
-    found += (d2_0 < radius2 && over0 == 0) ? 1 : 0;
-    hits[found] = static_cast<std::uint16_t>(i + 1);
-    found += (d2_1 < radius2 && over1 == 0) ? 1 : 0;
-  }
-  if (i < n) {
-    std::uint16_t last;
-    if (scan_leaf_i8_scalar(p + i, 1, q, radius2, box, &last) == 1)
-      hits[found++] = static_cast<std::uint16_t>(i);
+  for (int i = 0; i < n; i += 4) {  // four points: 32 bytes, one 8-lane difference each
+    // The last group may hold 1 to 3 points: load only those (8-byte loads
+    // for a lone point), never past the leaf.
+    const int left = n - i;
+    const auto* bytes = reinterpret_cast<const __m128i*>(p[i].data());
+    const __m128i x0 = left >= 2 ? _mm_loadu_si128(bytes) : _mm_loadl_epi64(bytes);
+    const __m128i x1 = left >= 4   ? _mm_loadu_si128(bytes + 1)
+                       : left == 3 ? _mm_loadl_epi64(bytes + 1)
+                                   : zero;
+    const __m128i a = _mm_sub_epi16(widen_low(x0), query);
+    const __m128i b = _mm_sub_epi16(widen_high(x0), query);
+    const __m128i c = _mm_sub_epi16(widen_low(x1), query);
+    const __m128i d = _mm_sub_epi16(widen_high(x1), query);
+    // madd of the descriptor lanes: (d0^2 + d1^2, d2^2 + d3^2, d4^2 + d5^2, 0).
+    const __m128i ma = _mm_and_si128(a, descriptor_lanes), mb = _mm_and_si128(b, descriptor_lanes);
+    const __m128i mc = _mm_and_si128(c, descriptor_lanes), md = _mm_and_si128(d, descriptor_lanes);
+    const __m128i sa = _mm_madd_epi16(ma, ma), sb = _mm_madd_epi16(mb, mb);
+    const __m128i sc = _mm_madd_epi16(mc, mc), sd = _mm_madd_epi16(md, md);
+    // Transpose-and-add to [|a|^2, |b|^2, |c|^2, |d|^2].
+    const __m128i ab = _mm_add_epi32(_mm_unpacklo_epi32(sa, sb), _mm_unpackhi_epi32(sa, sb));
+    const __m128i cd = _mm_add_epi32(_mm_unpacklo_epi32(sc, sd), _mm_unpackhi_epi32(sc, sd));
+    const __m128i d2 = _mm_add_epi32(_mm_unpacklo_epi64(ab, cd), _mm_unpackhi_epi64(ab, cd));
+    const __m128i ball = _mm_cmpgt_epi32(r2, d2);
+    // The attribute lanes of all four: [a6 a7 b6 b7 c6 c7 d6 d7]; a point is
+    // inside when neither of its two |differences| exceeds the box.
+    const __m128i attr = _mm_unpackhi_epi64(_mm_unpackhi_epi32(a, b), _mm_unpackhi_epi32(c, d));
+    const __m128i magnitude = _mm_max_epi16(attr, _mm_sub_epi16(zero, attr));
+    const __m128i within = _mm_cmpeq_epi32(_mm_cmpgt_epi16(magnitude, limit), zero);
+    int bits = _mm_movemask_ps(_mm_castsi128_ps(_mm_and_si128(ball, within)));
+    if (left < 4) bits &= (1 << left) - 1;
+    while (bits != 0) {
+      hits[found++] = static_cast<std::uint16_t>(i + __builtin_ctz(static_cast<unsigned>(bits)));
+      bits &= bits - 1;
+    }
   }
   return found;
 }

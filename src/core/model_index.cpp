@@ -251,12 +251,13 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   const Section& keypoints = sections[kSectionKeypoints];
   const Section& arcs = sections[kSectionTreeArcs];
   const Section& targets = sections[kSectionTreeArcTargets];
+  const Section& bounds = sections[kSectionLeafBounds];
   const Section& descriptors = sections[kSectionDescriptors];
   const Section& nodes = sections[kSectionTreeNodes];
   const Section& vertex = sections[kSectionVertexDescriptors];
   const Section& scales = sections[kSectionKeypointScales];
-  // The descriptor and node sections name the encoding the parameters name.
-  for (const std::uint32_t id : {kSectionDescriptors, kSectionTreeNodes}) {
+  // The point, node and bound sections name the encoding the parameters name.
+  for (const std::uint32_t id : {kSectionDescriptors, kSectionTreeNodes, kSectionLeafBounds}) {
     if (sections[id].encoding != static_cast<std::uint32_t>(encoding))
       return corrupt(std::string(section_name(id)) + " section: encoding " +
                      std::to_string(sections[id].encoding) + " differs from parameter encoding " +
@@ -290,6 +291,10 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
     return corrupt("descriptors section: " + std::to_string(descriptors.count) +
                    " descriptors for " + std::to_string(arcs.count) + " tree arcs");
   const int depth = kdtree_depth(arcs.count);
+  if (!(s = expect_size(kSectionLeafBounds, encoded_point_size(encoding)))) return s;
+  if (bounds.count != 2 * (1ULL << depth))
+    return corrupt("leaf bounds section: " + std::to_string(bounds.count) + " points, expected " +
+                   std::to_string(2 * (1ULL << depth)) + " (two per leaf)");
   if (nodes.count != (1ULL << depth) - 1)
     return corrupt("tree nodes section: " + std::to_string(nodes.count) + " nodes, expected " +
                    std::to_string((1ULL << depth) - 1) + " for " + std::to_string(arcs.count) +
@@ -436,6 +441,7 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   tree_descriptors_ = desc;
   tree_nodes_ = node;
   tree_node_count_ = nodes.count;
+  leaf_bounds_ = d + bounds.offset;
   tree_depth_ = depth;
   vertex_descriptors_ = vertex.count > 0 ? d + vertex.offset : nullptr;
   keypoint_scales_ = kp_scales;
@@ -490,6 +496,21 @@ const ArcSearchPointI16* ModelIndex::tree_points_i16() const {
 const ArcSearchPointI8* ModelIndex::tree_points_i8() const {
   return descriptor_encoding() == DescriptorEncoding::kInt8
              ? reinterpret_cast<const ArcSearchPointI8*>(tree_descriptors_)
+             : nullptr;
+}
+const ArcSearchPoint* ModelIndex::leaf_bounds_f32() const {
+  return descriptor_encoding() == DescriptorEncoding::kFloat32
+             ? reinterpret_cast<const ArcSearchPoint*>(leaf_bounds_)
+             : nullptr;
+}
+const ArcSearchPointI16* ModelIndex::leaf_bounds_i16() const {
+  return descriptor_encoding() == DescriptorEncoding::kInt16
+             ? reinterpret_cast<const ArcSearchPointI16*>(leaf_bounds_)
+             : nullptr;
+}
+const ArcSearchPointI8* ModelIndex::leaf_bounds_i8() const {
+  return descriptor_encoding() == DescriptorEncoding::kInt8
+             ? reinterpret_cast<const ArcSearchPointI8*>(leaf_bounds_)
              : nullptr;
 }
 const KdNode* ModelIndex::tree_nodes_f32() const {

@@ -71,26 +71,33 @@ bool plausible_local_map(const Point2f* m, const Point2f* s, int k, const Params
 
 }  // namespace
 
-ArcSearch::ArcSearch(const ModelIndex& index) {
+ArcSearch::ArcSearch(const ModelIndex& index)
+    : ArcSearch(index, index.params().descriptor.max_search_leaves) {}
+
+ArcSearch::ArcSearch(const ModelIndex& index, int max_leaves) {
   const Params& params = index.params();
   encoding_ = params.descriptor.encoding;
   const float radius = params.descriptor.similarity_threshold;
   radius2_ = radius * radius;
   box_ = attribute_box(params.graph);
+  max_leaves_ = max_leaves;
   const std::uint32_t n = index.arc_count();
   const int depth = index.tree_depth();
   switch (encoding_) {
     case DescriptorEncoding::kFloat32:
-      f32_ = ArcTreeView(index.tree_points_f32(), nullptr, n, index.tree_nodes_f32(), depth);
+      f32_ = ArcTreeView(index.tree_points_f32(), nullptr, n, index.tree_nodes_f32(), depth,
+                         index.leaf_bounds_f32());
       break;
     case DescriptorEncoding::kInt16:
-      i16_ = ArcTreeView16(index.tree_points_i16(), nullptr, n, index.tree_nodes_int(), depth);
+      i16_ = ArcTreeView16(index.tree_points_i16(), nullptr, n, index.tree_nodes_int(), depth,
+                           index.leaf_bounds_i16());
       if (!scaled_radius2(radius, encoding_, std::numeric_limits<ArcTreeView16::Dist>::max(),
                           radius2_scaled_))
         radius2_scaled_ = 0;  // unreachable: validate_params checked the scaled radius
       break;
     case DescriptorEncoding::kInt8:
-      i8_ = ArcTreeView8(index.tree_points_i8(), nullptr, n, index.tree_nodes_int(), depth);
+      i8_ = ArcTreeView8(index.tree_points_i8(), nullptr, n, index.tree_nodes_int(), depth,
+                         index.leaf_bounds_i8());
       if (!scaled_radius2(radius, encoding_, std::numeric_limits<ArcTreeView8::Dist>::max(),
                           radius2_scaled_))
         radius2_scaled_ = 0;
@@ -104,9 +111,12 @@ std::uint32_t ArcSearch::radius_search(const ArcDescriptor& q, const float* attr
   const ArcSearchPoint p = search_point(q, attributes != nullptr ? attributes : none);
   const bool box = box_ > 0 && attributes != nullptr;
   switch (encoding_) {
-    case DescriptorEncoding::kFloat32:
-      return box ? f32_.radius_search(p, radius2_, static_cast<float>(box_), out, capacity)
-                 : f32_.radius_search(p, radius2_, out, capacity);
+    case DescriptorEncoding::kFloat32: {
+      const float b = box ? static_cast<float>(box_) : std::numeric_limits<float>::max();
+      return max_leaves_ > 0
+                 ? f32_.radius_search_approximate(p, radius2_, b, max_leaves_, out, capacity)
+                 : f32_.radius_search(p, radius2_, b, out, capacity);
+    }
     case DescriptorEncoding::kInt16:
       return search_encoded(encode_point<std::int16_t>(p), box, out, capacity);
     case DescriptorEncoding::kInt8:
@@ -140,15 +150,18 @@ std::uint32_t ArcSearch::radius_search_quantised(const std::int32_t* q, const fl
 
 std::uint32_t ArcSearch::search_encoded(const ArcSearchPointI16& p, bool box, std::uint32_t* out,
                                         std::uint32_t capacity) const {
-  return box ? i16_.radius_search(p, radius2_scaled_, box_, out, capacity)
-             : i16_.radius_search(p, radius2_scaled_, out, capacity);
+  const std::int64_t b = box ? box_ : std::numeric_limits<std::int64_t>::max();
+  return max_leaves_ > 0
+             ? i16_.radius_search_approximate(p, radius2_scaled_, b, max_leaves_, out, capacity)
+             : i16_.radius_search(p, radius2_scaled_, b, out, capacity);
 }
 
 std::uint32_t ArcSearch::search_encoded(const ArcSearchPointI8& p, bool box, std::uint32_t* out,
                                         std::uint32_t capacity) const {
   const auto r2 = static_cast<ArcTreeView8::Dist>(radius2_scaled_);
-  return box ? i8_.radius_search(p, r2, box_, out, capacity)
-             : i8_.radius_search(p, r2, out, capacity);
+  const std::int32_t b = box ? box_ : std::numeric_limits<std::int32_t>::max();
+  return max_leaves_ > 0 ? i8_.radius_search_approximate(p, r2, b, max_leaves_, out, capacity)
+                         : i8_.radius_search(p, r2, b, out, capacity);
 }
 
 void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, const Limits& limits,
@@ -246,6 +259,8 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   pool_.clear();
   const Structure structure = in.index->params().graph.structure;
   const int k = vertex_count(structure);
+  // An arc keygraph has one arc; a circuit has as many arcs as vertices.
+  const int looked_up_arcs = structure == Structure::kArc ? 1 : k;
   const Point2f* model_points = in.index->keypoints();
   const WorkVector<int>& tri = in.triangulation->triangles();
   const auto cap = static_cast<std::size_t>(limits.max_correspondences);
@@ -293,13 +308,13 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     std::uint32_t n[kMaxVertices] = {0, 0, 0, 0};
     const std::uint64_t* r[kMaxVertices] = {nullptr, nullptr, nullptr, nullptr};
     bool empty = false;
-    for (int i = 0; i < k && !empty; ++i) {
+    for (int i = 0; i < looked_up_arcs && !empty; ++i) {
       lookup(in, g.edges[i], n[i], limits, stats);
       empty = n[i] == 0;
     }
     if (empty) continue;
     // Resolve after all lookups: a lookup may grow (move) the pool.
-    for (int i = 0; i < k; ++i) r[i] = pool_.data() + begin_[g.edges[i]];
+    for (int i = 0; i < looked_up_arcs; ++i) r[i] = pool_.data() + begin_[g.edges[i]];
     bool room = true;
     for (std::uint32_t i0 = 0; i0 < n[0] && room; ++i0) {
       std::uint32_t v[kMaxVertices] = {from_of(r[0][i0]), to_of(r[0][i0]), 0, 0};

@@ -31,7 +31,10 @@ namespace kg {
 class ArcSearch {
  public:
   ArcSearch() = default;
+  // max_leaves: at most that many tree leaves per query (0: exact), by
+  // default the index's descriptor.max_search_leaves.
   explicit ArcSearch(const ModelIndex& index);
+  ArcSearch(const ModelIndex& index, int max_leaves);
 
   DescriptorEncoding encoding() const { return encoding_; }
   // Slots of the model arcs whose descriptor is within
@@ -59,6 +62,7 @@ class ArcSearch {
   float radius2_ = 0.f;              // float32
   std::int64_t radius2_scaled_ = 0;  // int16, int8
   std::int32_t box_ = 0;             // attribute box, grid steps (0: none)
+  int max_leaves_ = 0;               // approximate search (0: exact)
 };
 
 struct SelectionInput {

@@ -51,6 +51,8 @@ TEST(OxfordEval, CurvesOfKeygraphsAndKeypointsOnGraf) {
   // float32, as the curve selection: the curve at the index's threshold is
   // then exactly the detector's own selection.
   options.params.descriptor.encoding = DescriptorEncoding::kFloat32;
+  // and exact search: the curve sweeps the threshold over every model arc.
+  options.params.descriptor.max_search_leaves = 0;
   std::vector<OxfordCase> cases;
   const Status s = evaluate_oxford(options, cases);
   ASSERT_TRUE(s.is_ok()) << s.message();

@@ -249,6 +249,77 @@ TYPED_TEST(KdTreeTyped, RadiusAndBoxSearchEqualsBruteForce) {
   }
 }
 
+// Leaf bounds only skip leaves that cannot match (exact answers unchanged);
+// the best-bin-first search returns a subset of the exact answer, all of it
+// when it may visit every leaf, and most of it within 32 leaves.
+TYPED_TEST(KdTreeTyped, LeafBoundsExactAndApproximateSearch) {
+  using T = TypeParam;
+  using Dist = typename KdTraits<T>::Dist;
+  using Point = KdPoint<T, kSearchDims>;
+  Rng rng(9);
+  auto attributed = [&](const ArcDescriptor& d) {
+    ArcSearchPoint p{};
+    for (int i = 0; i < kDescriptorSize; ++i) p[i] = d[i];
+    p[kDescriptorSize] = static_cast<float>(rng.uniform01() * 0.5 - 0.1);
+    p[kDescriptorSize + 1] = static_cast<float>(rng.uniform01() * 0.5 - 0.1);
+    if constexpr (std::is_same_v<T, float>) {
+      return p;
+    } else {
+      return quantise<T>(p);
+    }
+  };
+  const std::uint32_t n = 20000;
+  std::vector<Point> data;
+  for (const ArcDescriptor& d : random_descriptors(rng, n)) data.push_back(attributed(d));
+  std::vector<Point> points, bounds;
+  std::vector<std::uint32_t> ids;
+  std::vector<typename KdTraits<T>::Node> nodes;
+  build_kdtree<T, kSearchDims>(data.data(), n, points, ids, nodes, 4.0);
+  const int depth = kdtree_depth(n);
+  kdtree_leaf_bounds<T, kSearchDims>(points.data(), n, bounds);
+  ASSERT_EQ(bounds.size(), 2u << depth);
+  const BasicKdTreeView<T, kSearchDims> plain(points.data(), ids.data(), n, nodes.data(), depth);
+  const BasicKdTreeView<T, kSearchDims> bounded(points.data(), ids.data(), n, nodes.data(), depth,
+                                                bounds.data());
+  const auto r2 = radius2_of<T>(0.7f);
+  const auto box =
+      static_cast<Dist>(std::is_same_v<T, float> ? 0.2 : 0.2 * encoding_scale(encoding_of<T>()));
+  std::vector<std::uint32_t> a(n + 1), b(n + 1);
+  const auto cap = static_cast<std::uint32_t>(a.size());
+  auto sorted = [](std::vector<std::uint32_t>& v, std::uint32_t count) {
+    std::vector<std::uint32_t> out(v.begin(), v.begin() + count);
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  std::size_t exact_total = 0, approximate_total = 0;
+  for (int q = 0; q < 60; ++q) {
+    const Point query = attributed(random_descriptors(rng, 1)[0]);
+    const auto exact = sorted(a, plain.radius_search(query, r2, box, a.data(), cap));
+    ASSERT_EQ(sorted(b, bounded.radius_search(query, r2, box, b.data(), cap)), exact) << q;
+    const int all_leaves = 1 << depth;
+    ASSERT_EQ(
+        sorted(b, bounded.radius_search_approximate(query, r2, box, all_leaves, b.data(), cap)),
+        exact)
+        << q;
+    const auto some =
+        sorted(b, bounded.radius_search_approximate(query, r2, box, 8, b.data(), cap));
+    EXPECT_TRUE(std::includes(exact.begin(), exact.end(), some.begin(), some.end())) << q;
+    const auto more = bounded.radius_search_approximate(query, r2, box, 32, b.data(), cap);
+    EXPECT_GE(more, some.size()) << q;  // more leaves, more matches
+    EXPECT_LE(more, exact.size()) << q;
+    exact_total += exact.size();
+    approximate_total += some.size();
+  }
+  ASSERT_GT(exact_total, 0u);
+  std::printf("approximate search, 8 leaves: %zu of %zu exact matches\n", approximate_total,
+              exact_total);
+  EXPECT_LT(approximate_total, exact_total);  // approximate indeed
+  const Point query = attributed(random_descriptors(rng, 1)[0]);
+  const test::AllocationCounter allocations;
+  EXPECT_GE(bounded.radius_search_approximate(query, r2, box, 32, b.data(), cap), 0u);
+  EXPECT_EQ(allocations.count(), 0);
+}
+
 TYPED_TEST(KdTreeTyped, KnnEqualsBruteForce) {
   using T = TypeParam;
   using Dist = typename KdTraits<T>::Dist;

@@ -205,6 +205,13 @@ TEST(SceneKeygraphs, FromDelaunayEdgesFacesAndInternalEdges) {
   for (std::size_t e = 0; e < half.size(); ++e)
     undirected += (half[e] < 0 || static_cast<int>(e) < half[e]);
   EXPECT_EQ(static_cast<int>(g.size()), undirected);
+  // Both vertices of an arc keygraph are origins of real half-edges: the arc
+  // goes from the origin of edges[0] to the origin of edges[1].
+  for (const SceneKeygraph& s : g) {
+    ASSERT_GE(s.edges[1], 0);
+    EXPECT_EQ(s.edges[1], Delaunay::next(s.edges[0]));
+    EXPECT_NE(tri[s.edges[0]], tri[s.edges[1]]);
+  }
 
   scene_keygraphs(dt, pts.data(), Structure::kCircuit3, g);
   ASSERT_EQ(static_cast<int>(g.size()), dt.triangle_count());

@@ -411,7 +411,7 @@ TEST_F(ModelIndexTest, ArcSearchEqualsBruteForceOnStoredDescriptors) {
     AlignedBytes buffer(encoded(e));
     ModelIndex index;
     ASSERT_TRUE(ModelIndex::view(buffer.data(), buffer.size(), index));
-    const ArcSearch search(index);
+    const ArcSearch search(index, 0);  // exact (no leaf limit)
     const std::uint32_t n = index.arc_count();
     const float r = index.params().descriptor.similarity_threshold;
     std::int64_t r2 = 0;
@@ -695,6 +695,21 @@ TEST_F(ModelIndexTest, RejectsVertexDescriptorCountMismatch) {
   b = sc.bytes;
   b[section_offset(b, id) + 17] ^= 0x01;
   EXPECT_TRUE(rejected(b, "vertex descriptors section: checksum mismatch"));
+}
+
+TEST_F(ModelIndexTest, RejectsLeafBoundCountMismatch) {
+  const std::uint32_t id = format::kSectionLeafBounds;
+  const std::uint32_t n = section_count_field(bytes(), id);
+  ASSERT_GE(n, 2u);
+  ASSERT_EQ(n % 2, 0u);
+  // Two bounds short (size and count agree, CRCs right): one leaf unbounded.
+  Bytes b = bytes();
+  const std::uint64_t point = section_size(b, id) / n;
+  store<std::uint32_t>(b.data() + entry(b, id) + format::kEntCount, n - 2);
+  store<std::uint64_t>(b.data() + entry(b, id) + format::kEntSize, (n - 2) * point);
+  reseal_section(b, id);
+  EXPECT_TRUE(rejected(b, "leaf bounds section: " + std::to_string(n - 2) + " points, expected " +
+                              std::to_string(n) + " (two per leaf)"));
 }
 
 TEST_F(ModelIndexTest, RejectsBadVertexDescriptorParameters) {
@@ -1083,7 +1098,7 @@ TEST_F(ModelIndexTest, RejectsTruncation) {
 
 TEST_F(ModelIndexTest, RejectsOtherMajorVersion) {
   for (std::uint16_t major : {std::uint16_t{0}, std::uint16_t{1}, std::uint16_t{2},
-                              std::uint16_t{4}, std::uint16_t{0xFFFF}}) {
+                              std::uint16_t{3}, std::uint16_t{5}, std::uint16_t{0xFFFF}}) {
     Bytes b = bytes();
     store<std::uint16_t>(b.data() + format::kOffMajor, major);
     fix_header_crc(b);
@@ -1093,14 +1108,12 @@ TEST_F(ModelIndexTest, RejectsOtherMajorVersion) {
     EXPECT_TRUE(rejected(b, major < format::kVersionMajor ? "rebuild the index" : "newer keygraph",
                          StatusCode::kUnsupportedVersion));
   }
-  // A 2.0 header (as keygraph 2.0 wrote it: its tree has no scale
-  // attributes) says which version it is.
-  Bytes old = bytes();
-  store<std::uint16_t>(old.data() + format::kOffMajor, 2);
-  store<std::uint16_t>(old.data() + format::kOffMinor, 0);
-  fix_header_crc(old);
+  // A real 3.0 file (as keygraph 3.0 wrote it: scale attributes on another
+  // scale, no leaf bounds) says which version it is and what to do.
+  const Bytes old = read_file(golden_dir() / "format-3.0-int8.kgi");
+  ASSERT_FALSE(old.empty());
   EXPECT_TRUE(rejected(old,
-                       "index format version 2.0 is not supported (this reader reads 3.x): "
+                       "index format version 3.0 is not supported (this reader reads 4.x): "
                        "rebuild the index",
                        StatusCode::kUnsupportedVersion));
   // A newer minor version of the same major is readable (new sections and
@@ -1147,23 +1160,11 @@ TEST_F(ModelIndexTest, RejectsHeaderDamage) {
   EXPECT_TRUE(rejected(b, "section table out of bounds"));
 }
 
-// Index i: the name of section id i.
-const char* const kSectionNames[] = {"",
-                                     "models",
-                                     "strings",
-                                     "keypoints",
-                                     "tree arcs",
-                                     "descriptors",
-                                     "tree nodes",
-                                     "vertex descriptors",
-                                     "keypoint scales",
-                                     "tree arc targets"};
-
 TEST_F(ModelIndexTest, RejectsFlippedByteInEachSection) {
   for (std::uint32_t id = 1; id <= format::kSectionCount; ++id) {
     // The vertex descriptor section is empty here (SIFT tests cover it).
     if (id == format::kSectionVertexDescriptors) continue;
-    const char* name = kSectionNames[id];
+    const char* name = format::section_name(id);
     ASSERT_GT(section_size(bytes(), id), 0u) << name;
     for (std::size_t where :
          {std::size_t{0}, section_size(bytes(), id) / 2, section_size(bytes(), id) - 1}) {
@@ -1217,14 +1218,15 @@ TEST_F(ModelIndexTest, RejectsBadSectionTable) {
   store<std::uint32_t>(b.data() + entry(b, format::kSectionVertexDescriptors) + format::kEntId, 99);
   fix_header_crc(b);
   EXPECT_TRUE(rejected(b, "vertex descriptors section missing"));
-  // Descriptor and node sections name the parameters' encoding.
-  for (std::uint32_t id : {format::kSectionDescriptors, format::kSectionTreeNodes}) {
+  // Descriptor, node and leaf-bound sections name the parameters' encoding.
+  for (std::uint32_t id :
+       {format::kSectionDescriptors, format::kSectionTreeNodes, format::kSectionLeafBounds}) {
     for (std::uint32_t bad : {0u, 1u, 2u, 3u, 0xFFFFFFFFu}) {
       if (bad == static_cast<std::uint32_t>(Params{}.descriptor.encoding)) continue;
       b = bytes();
       store<std::uint32_t>(b.data() + entry(b, id) + format::kEntEncoding, bad);
       fix_header_crc(b);
-      EXPECT_TRUE(rejected(b, std::string(kSectionNames[id]) + " section: encoding " +
+      EXPECT_TRUE(rejected(b, std::string(format::section_name(id)) + " section: encoding " +
                                   std::to_string(bad) + " differs from parameter encoding"));
     }
   }
