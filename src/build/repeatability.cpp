@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 
 #include <opencv2/features2d.hpp>
@@ -152,10 +153,20 @@ PairRepeatability measure_repeatability(const std::vector<Keypoint>& model, cv::
   // shifted.
   PointGrid scene_grid;
   scene_grid.build(scene.data(), r.scene_keypoints, scene_size.width, scene_size.height, cell);
-  std::vector<Keypoint> projected(model.size());
+  // Projections near the scene (where a scene keypoint, shifted or not,
+  // can be within the tolerance), and their model keypoints: the grid
+  // takes no far or non-finite positions.
+  const float margin = std::abs(params.chance_shift) + tolerance + 1.f;
+  std::vector<Keypoint> projected;
+  std::vector<int> projected_model;
   for (std::size_t i = 0; i < model.size(); ++i) {
     const Point2f p = apply(model_to_scene, Point2f{model[i].x, model[i].y});
-    projected[i] = {p.x, p.y, model[i].scale, model[i].response};
+    if (p.x >= -margin && p.y >= -margin &&
+        p.x <= static_cast<float>(scene_size.width - 1) + margin &&
+        p.y <= static_cast<float>(scene_size.height - 1) + margin) {
+      projected.push_back({p.x, p.y, model[i].scale, model[i].response});
+      projected_model.push_back(static_cast<int>(i));
+    }
     if (inside(p, scene_size)) {
       ++r.model_inside;
       r.model_repeated += scene_grid.nearest(p, tolerance) >= 0;
@@ -187,8 +198,11 @@ PairRepeatability measure_repeatability(const std::vector<Keypoint>& model, cv::
     const Point2f q{p.x + params.chance_shift, p.y + params.chance_shift};
     points.push_back(p);
     in_view.push_back(inside(apply(scene_to_model, p), model_size));
-    counterpart.push_back(in_view.back() ? model_grid.nearest(p, tolerance) : -1);
-    shifted.push_back(in_view.back() ? model_grid.nearest(q, tolerance) : -1);
+    const int near = in_view.back() ? model_grid.nearest(p, tolerance) : -1;
+    const int near_shifted = in_view.back() ? model_grid.nearest(q, tolerance) : -1;
+    counterpart.push_back(near >= 0 ? projected_model[static_cast<std::size_t>(near)] : -1);
+    shifted.push_back(near_shifted >= 0 ? projected_model[static_cast<std::size_t>(near_shifted)]
+                                        : -1);
     r.sampled_inside += in_view.back();
     r.sampled_repeated += counterpart.back() >= 0;
     r.sampled_repeated_shifted += shifted.back() >= 0;

@@ -79,6 +79,20 @@ TEST(MeasureRepeatability, ChanceShiftLandsOnTheDiagonalNeighbour) {
   EXPECT_EQ(r.model_repeated_shifted, 24 * 19);
 }
 
+TEST(MeasureRepeatability, PerspectiveSendingPointsBehindTheCameraCountsThemOutside) {
+  // w = 1 - x / 150: x' = x / w and y' = y / w for x < 150, behind the
+  // camera (w <= 0) beyond. Inside the 300 x 240 scene: x <= 99.9 and
+  // y <= 239 (1 - x / 150), i.e. 19, 18, 16, 14, 13, 11, 10 and 8 grid
+  // points in the columns x = 6, 18, ..., 90.
+  const std::vector<Keypoint> model = grid(25, 20);
+  const Homography h = {1, 0, 0, 0, 1, 0, -1.0 / 150, 0, 1};
+  const PairRepeatability r =
+      measure_repeatability(model, {300, 240}, model, {300, 240}, h, RepeatabilityParams{});
+  EXPECT_EQ(r.model_inside, 19 + 18 + 16 + 14 + 13 + 11 + 10 + 8);
+  EXPECT_LE(r.model_repeated, r.model_inside);
+  EXPECT_EQ(r.sampled_inside, 500);  // the inverse maps the whole scene into the model
+}
+
 TEST(MeasureRepeatability, TrianglesNeedThreeRepeatedVerticesAndModelArcs) {
   const std::vector<Keypoint> model = grid(25, 20);
   RepeatabilityParams params;  // sampling at 10 px keeps every 12 px grid point
