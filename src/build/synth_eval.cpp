@@ -7,7 +7,10 @@
 #include <memory>
 #include <sstream>
 
+#include <opencv2/imgproc.hpp>
+
 #include "build/baselines.h"
+#include "build/correspondence_pr.h"
 #include "build/desktop_detect.h"
 #include "build/eval_index.h"
 #include "build/image_io.h"
@@ -35,6 +38,21 @@ double scale_of(const SynthFrameInfo& info, const SynthSign* sign) {
   }
   return std::sqrt(std::abs(area) / 2 /
                    (static_cast<double>(sign->width - 1) * (sign->height - 1)));
+}
+
+// SynthCase::sign_keypoints and repeated_keypoints.
+void count_sign_keypoints(ConstSpan<Keypoint> scene, const BuiltModel& model,
+                          const SynthFrameInfo& truth, SynthCase& c) {
+  std::vector<cv::Point2f> outline;
+  for (const Point2f& p : truth.corners) outline.emplace_back(p.x, p.y);
+  CorrespondenceTruth pairs;
+  pairs.build(model.keypoints, scene.data(), static_cast<int>(scene.size()), truth.homography, 3.0);
+  c.sign_keypoints = c.repeated_keypoints = 0;
+  for (std::size_t i = 0; i < scene.size(); ++i) {
+    if (cv::pointPolygonTest(outline, cv::Point2f(scene[i].x, scene[i].y), false) < 0) continue;
+    ++c.sign_keypoints;
+    c.repeated_keypoints += pairs.scene_repeated(static_cast<std::int32_t>(i));
+  }
 }
 
 struct KeygraphMethod {
@@ -178,6 +196,11 @@ Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& c
             c.time_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
             if (!s) return {s.code(), entry.file + ": " + s.message()};
             for (const Detection& d : list) found.push_back({d.model_id, d.homography});
+            if (sign != nullptr) {
+              count_sign_keypoints(detectors[m]->core().last_keypoints(),
+                                   keygraphs[m].models[static_cast<std::size_t>(entry.info.sign)],
+                                   entry.info, c);
+            }
           } else {
             const std::size_t b = m - keygraphs.size();
             c.method = baseline_methods[b];
@@ -253,13 +276,30 @@ std::vector<SynthScaleRow> synth_by_scale(const std::vector<SynthCase>& cases,
   for (const SynthCase& c : cases) smallest = std::min(smallest, c.index_size);
   const std::vector<double>& b = synth_scale_buckets();
   for (const std::string& method : options.methods) {
-    SynthScaleRow r{method, smallest, std::vector<int>(b.size(), 0), std::vector<int>(b.size(), 0)};
+    SynthScaleRow r{method,
+                    smallest,
+                    std::vector<int>(b.size(), 0),
+                    std::vector<int>(b.size(), 0),
+                    std::vector<double>(b.size(), 0.0),
+                    std::vector<double>(b.size(), 0.0)};
+    std::vector<int> measured(b.size(), 0);
     for (const SynthCase& c : cases) {
       if (c.method != method || c.index_size != smallest || c.sign < 0) continue;
       const auto k =
           static_cast<std::size_t>(std::lower_bound(b.begin(), b.end(), c.scale) - b.begin());
-      ++r.frames[std::min(k, b.size() - 1)];
-      r.found[std::min(k, b.size() - 1)] += c.found;
+      const std::size_t bucket = std::min(k, b.size() - 1);
+      ++r.frames[bucket];
+      r.found[bucket] += c.found;
+      if (c.sign_keypoints >= 0) {
+        ++measured[bucket];
+        r.keypoints[bucket] += c.sign_keypoints;
+        r.repeated[bucket] += c.repeated_keypoints;
+      }
+    }
+    for (std::size_t k = 0; k < b.size(); ++k) {
+      const double n = measured[k];
+      r.keypoints[k] = n > 0 ? r.keypoints[k] / n : std::nan("");
+      r.repeated[k] = n > 0 ? r.repeated[k] / n : std::nan("");
     }
     rows.push_back(r);
   }
@@ -305,6 +345,21 @@ std::string synth_text(const std::vector<SynthRow>& rows,
     }
     out += "\n";
   }
+  bool any = false;
+  for (const SynthScaleRow& r : by_scale) any = any || !std::isnan(r.keypoints.back());
+  if (!any) return out;
+  out +=
+      "\nSampled keypoints on the sign, of them repeated (within 3 px of a model keypoint), mean\n";
+  for (const SynthScaleRow& r : by_scale) {
+    if (std::isnan(r.keypoints.back()) && std::isnan(r.keypoints.front())) continue;
+    std::snprintf(line, sizeof(line), "%-13s", r.method.c_str());
+    out += line;
+    for (std::size_t k = 0; k < b.size(); ++k) {
+      std::snprintf(line, sizeof(line), " %5.1f %5.1f  ", r.keypoints[k], r.repeated[k]);
+      out += line;
+    }
+    out += "\n";
+  }
   return out;
 }
 
@@ -313,13 +368,15 @@ Status write_synth_report(const std::string& dir, const SynthEvalOptions& option
   Status s = ensure_directory(dir);
   if (!s) return s;
   std::ostringstream csv;
-  csv << "method,index_size,group,frame,sign,found,corner_error,detections,false_detections,time_"
-         "ms\n";
+  csv << "method,index_size,group,frame,sign,found,corner_error,detections,false_detections,"
+         "time_ms,scale,occluded,blur_sigma,motion_blur,noise_sigma,sign_keypoints,"
+         "repeated_keypoints\n";
   for (const SynthCase& c : cases) {
     csv << c.method << ',' << c.index_size << ',' << c.group << ',' << c.frame << ',' << c.sign
         << ',' << c.found << ',' << c.corner_error << ',' << c.detections << ','
         << c.false_detections << ',' << c.time_ms << ',' << c.scale << ',' << c.occluded << ','
-        << c.blur_sigma << ',' << c.motion_blur << ',' << c.noise_sigma << '\n';
+        << c.blur_sigma << ',' << c.motion_blur << ',' << c.noise_sigma << ',' << c.sign_keypoints
+        << ',' << c.repeated_keypoints << '\n';
   }
   if (s = write_text_file(dir + "/synth-cases.csv", csv.str()); !s) return s;
   const std::vector<SynthRow> rows = synth_tallies(cases, options);

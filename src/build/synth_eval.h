@@ -44,6 +44,10 @@ struct SynthCase {
   // of its outline's area over the sign image's), hidden fraction, blur, noise.
   double scale = 0, occluded = 0, blur_sigma = 0, noise_sigma = 0;
   int motion_blur = 0;
+  // Keygraph methods, frames with a sign: the detector's sampled keypoints
+  // inside the sign's outline, and of those the ones within 3 px of a
+  // model keypoint of the sign under the ground truth (-1: not measured).
+  int sign_keypoints = -1, repeated_keypoints = -1;
 };
 
 // A detection of model `model` (an id within the searched index).
@@ -81,6 +85,8 @@ struct SynthScaleRow {
   std::string method;
   int index_size = 0;
   std::vector<int> frames, found;  // per bucket
+  // Mean sign_keypoints and repeated_keypoints per bucket (NaN: none measured).
+  std::vector<double> keypoints, repeated;
 };
 const std::vector<double>& synth_scale_buckets();  // upper bounds, last is infinity
 std::vector<SynthScaleRow> synth_by_scale(const std::vector<SynthCase>& cases,

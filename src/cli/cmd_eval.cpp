@@ -1,13 +1,15 @@
 // keygraph eval --dataset DIR [--subsets a,b] [--crops N] [--size S] [--centre]
 //               [--seed N] [--set NAME=VALUE]... [--methods m1,m2|all] [--negatives]
 //               [--curves] [--out DIR] [--csv FILE]
-// keygraph eval --synth DIR [--sizes 1,10,50] [--methods ...] [--set ...] [--out DIR]
+// keygraph eval --synth DIR [--sizes 1,10,50] [--frames N] [--methods ...] [--set ...]
+//               [--out DIR]
 //
 // --dataset: the paper's second experiment on the Oxford layout: crops of
 // img1 as models, img2..img6 as scenes; a detection succeeds when all four
 // crop corners are within 3 (or 10) px of the ground truth. --curves adds
 // the precision-recall of correspondences and the RANSAC iterations.
-// --synth: the sign benchmark written by `keygraph synth`.
+// --synth: the sign benchmark written by `keygraph synth` (--frames: the
+// first N frames only).
 #include <cstdio>
 #include <sstream>
 

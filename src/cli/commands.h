@@ -19,6 +19,7 @@ int cmd_detect(const Args& args);
 int cmd_demo(const Args& args);
 int cmd_eval(const Args& args);
 int cmd_synth(const Args& args);
+int cmd_repeatability(const Args& args);
 
 // load_gray() with image decoders' own stderr output held back when the
 // load fails, so the failure is reported as one line.

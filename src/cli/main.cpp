@@ -38,7 +38,12 @@ void usage(std::FILE* out) {
       "  eval --synth DIR [--sizes 1,10,50] [--methods M,...|all] [--set ...] [--out DIR]\n"
       "                                    the sign benchmark of keygraph synth\n"
       "  synth -o DIR [--seed N] [--signs N] [--frames N] [--sign-free F]\n"
-      "                                    generate a labelled indoor-sign benchmark\n");
+      "                                    generate a labelled indoor-sign benchmark\n"
+      "  repeatability --dataset DIR [--subsets a,b] [--detectors D,...]\n"
+      "       [--set NAME=VALUE]... [--max-keypoints N] [--tolerance PX] [--csv FILE]\n"
+      "                                    keypoint repeatability img1 -> img2..6 (Oxford\n"
+      "                                    layout), density, keygraph triangles, time;\n"
+      "                                    D: hessian|mser[:NAME=VALUE...], sift, orb, akaze\n");
 #else
   std::fprintf(out,
                "  detect --index I.kgi [--json] [--draw OUT.pgm] SCENE.pgm...\n"
@@ -69,9 +74,11 @@ int run(int argc, char** argv) {
   if (command == "demo") return kg::cli::cmd_demo(args);
   if (command == "eval") return kg::cli::cmd_eval(args);
   if (command == "synth") return kg::cli::cmd_synth(args);
+  if (command == "repeatability") return kg::cli::cmd_repeatability(args);
 #else
   if (command == "detect") return kg::cli::cmd_detect_files(args);
-  if (command == "build" || command == "demo" || command == "eval" || command == "synth") {
+  if (command == "build" || command == "demo" || command == "eval" || command == "synth" ||
+      command == "repeatability") {
     return kg::cli::fail(command +
                          ": not in this build of keygraph (a device build, without "
                          "OpenCV); use the desktop keygraph");

@@ -59,6 +59,9 @@ grep -q '^orb-ransac  *2 ' "$WORK/stdout" || bad "no orb-ransac row for the inde
 python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert len(d['results']) == 4" \
   "$WORK/out/synth-summary.json" || bad "synth-summary.json is not the expected JSON"
 [ "$(wc -l <"$WORK/out/synth-cases.csv")" -eq 17 ] || bad "synth-cases.csv: expected 16 rows"
+# Every row has as many fields as the header.
+awk -F, 'NR==1 {n=NF} NF!=n {exit 1}' "$WORK/out/synth-cases.csv" ||
+  bad "synth-cases.csv: rows and header disagree"
 
 if [ $failures -ne 0 ]; then
   echo "$failures failure(s)" >&2

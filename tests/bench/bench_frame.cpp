@@ -1,0 +1,477 @@
+// Time per 640x480 frame of keygraph detection with a 10-model index, of
+// each stage that can be called alone, and of OpenCV's ORB pipeline (2000
+// features, brute-force Hamming 2-NN against each model, Lowe ratio 0.8,
+// findHomography RANSAC per model: build/baselines.h) on the same frames,
+// all on one thread. After the benchmarks, a summary gives per frame the
+// models each pipeline found and the ratio ORB time / keygraph time.
+//
+// Models (opencv-doc): box.png, graf1.png cropped 300x300 at (200, 150),
+// LinuxLogo.jpg, WindowsLogo.jpg, opencv-logo.png, HappyFish.jpg and
+// 300x300 centre crops of starry_night.jpg, baboon.jpg, building.jpg and
+// butterfly.jpg, built in-process with the default parameters. Frames:
+// box_in_scene.png (holds box), graf3.png (holds the graf crop), aero1.jpg,
+// leuvenA.jpg, messi5.jpg and fruits.jpg, resized to 640x480 (INTER_AREA).
+//
+//   cmake -S . -B build/gbench -DCMAKE_BUILD_TYPE=Release -DKG_BUILD_BENCHMARKS=ON
+//   cmake --build build/gbench -j2 --target bench_frame
+//   build/gbench/tests/bench/bench_frame --benchmark_repetitions=3
+//     --benchmark_report_aggregates_only=true
+//
+// Figures: docs/RUNTIME.md, "Frame benchmark".
+#include <benchmark/benchmark.h>
+
+#include <array>
+#include <cstdio>
+#include <iterator>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include <opencv2/core.hpp>
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "build/baselines.h"
+#include "build/eval_index.h"
+#include "build/image_io.h"
+#include "build/model_builder.h"
+#include "core/arc_attributes.h"
+#include "core/arc_descriptor.h"
+#include "core/blur.h"
+#include "core/delaunay.h"
+#include "core/hessian.h"
+#include "core/keygraph.h"
+#include "core/sampling.h"
+#include "core/selection.h"
+#include "keygraph/detector.h"
+
+namespace kg {
+namespace {
+
+constexpr int kFrameWidth = 640, kFrameHeight = 480;
+
+struct ModelSource {
+  const char* file;
+  int crop_x, crop_y;  // top-left of a 300x300 crop; -1: whole image, -2: centre crop
+};
+constexpr ModelSource kModels[] = {{"box.png", -1, -1},          {"graf1.png", 200, 150},
+                                   {"LinuxLogo.jpg", -1, -1},    {"WindowsLogo.jpg", -1, -1},
+                                   {"opencv-logo.png", -1, -1},  {"HappyFish.jpg", -1, -1},
+                                   {"starry_night.jpg", -2, -2}, {"baboon.jpg", -2, -2},
+                                   {"building.jpg", -2, -2},     {"butterfly.jpg", -2, -2}};
+constexpr const char* kFrames[] = {"box_in_scene.png", "graf3.png",  "aero1.jpg",
+                                   "leuvenA.jpg",      "messi5.jpg", "fruits.jpg"};
+
+std::string stem(const std::string& file) {
+  return file.substr(0, file.find('.'));
+}
+
+// A frame and the inputs of each stage as the detector computes them.
+struct Frame {
+  std::string name;
+  cv::Mat gray;
+  std::vector<Keypoint> keypoints;  // Hessian, strongest first, at most Limits::max_keypoints
+  std::vector<Point2f> points;      // after strongest-first sampling
+  std::vector<float> scales;
+  Delaunay triangulation;
+  WorkVector<SceneKeygraph> keygraphs;
+  Plane<std::uint8_t> blurred;
+  // Scene arcs (half-edges at least graph.min_distance long) with a descriptor.
+  std::vector<ArcDescriptor> arcs;
+  std::vector<std::array<float, kArcAttributes>> attributes;
+  std::vector<char> has_attributes;
+};
+
+struct Data {
+  std::vector<cv::Mat> models;
+  std::vector<std::string> model_names;
+  Params params;
+  Limits limits;
+  EvalIndex index;
+  std::vector<Frame> frames;
+};
+
+Data& data() {
+  static Data d;
+  return d;
+}
+
+Status load_models(Data& d) {
+  for (const ModelSource& m : kModels) {
+    cv::Mat gray;
+    if (Status s = load_gray(std::string(KG_OPENCV_DATA_DIR) + "/" + m.file, gray); !s) return s;
+    if (m.crop_x != -1) {
+      const int x = m.crop_x >= 0 ? m.crop_x : (gray.cols - 300) / 2;
+      const int y = m.crop_y >= 0 ? m.crop_y : (gray.rows - 300) / 2;
+      gray = gray(cv::Rect(x, y, 300, 300)).clone();
+    }
+    d.models.push_back(gray);
+    d.model_names.push_back(stem(m.file));
+  }
+  std::vector<BuiltModel> built(d.models.size());
+  for (std::size_t i = 0; i < d.models.size(); ++i) {
+    if (Status s = build_model(d.models[i], d.model_names[i], d.params, built[i]); !s) return s;
+  }
+  return d.index.build(built, d.params);
+}
+
+Status prepare_frame(const Data& d, const char* file, Frame& f) {
+  cv::Mat gray;
+  if (Status s = load_gray(std::string(KG_OPENCV_DATA_DIR) + "/" + file, gray); !s) return s;
+  f.name = stem(file);
+  cv::resize(gray, f.gray, cv::Size(kFrameWidth, kFrameHeight), 0, 0, cv::INTER_AREA);
+  HessianDetector hessian;
+  hessian.detect(view_of(f.gray), d.params.keypoints, d.limits.max_keypoints, f.keypoints);
+  SeparatedSampler sampler;
+  std::vector<int> selected;
+  sampler.sample(f.keypoints.data(), static_cast<int>(f.keypoints.size()),
+                 d.params.graph.scene_sample_distance, nullptr, selected);
+  if (static_cast<int>(selected.size()) > d.limits.max_scene_keypoints)
+    selected.resize(static_cast<std::size_t>(d.limits.max_scene_keypoints));
+  for (int i : selected) {
+    f.points.push_back(
+        {f.keypoints[static_cast<std::size_t>(i)].x, f.keypoints[static_cast<std::size_t>(i)].y});
+    f.scales.push_back(f.keypoints[static_cast<std::size_t>(i)].scale);
+  }
+  f.triangulation.triangulate(f.points.data(), static_cast<int>(f.points.size()));
+  scene_keygraphs(f.triangulation, f.points.data(), d.params.graph.structure, f.keygraphs);
+  Plane<float> scratch;
+  gaussian_blur(view_of(f.gray), d.params.descriptor.blur_sigma, f.blurred, scratch);
+  const auto& tri = f.triangulation.triangles();
+  std::vector<float> profile;
+  for (std::size_t e = 0; e < tri.size(); ++e) {
+    const int from = tri[e],
+              to = tri[static_cast<std::size_t>(Delaunay::next(static_cast<int>(e)))];
+    const Point2f a = f.points[static_cast<std::size_t>(from)],
+                  b = f.points[static_cast<std::size_t>(to)];
+    ArcDescriptor desc;
+    if (chebyshev(a, b) < d.params.graph.min_distance ||
+        !arc_descriptor(view_of(f.blurred), a, b, d.params.descriptor, profile, desc))
+      continue;
+    std::array<float, kArcAttributes> attr{};
+    f.has_attributes.push_back(arc_attributes(a, b, f.scales[static_cast<std::size_t>(from)],
+                                              f.scales[static_cast<std::size_t>(to)], attr.data()));
+    f.arcs.push_back(desc);
+    f.attributes.push_back(attr);
+  }
+  return Status::ok();
+}
+
+void set_average(benchmark::State& state, const char* name, double sum) {
+  state.counters[name] = benchmark::Counter(sum, benchmark::Counter::kAvgIterations);
+}
+
+// ------------------------------------------------------------ whole frame
+
+void detect_frame(benchmark::State& state, const Frame* f) {
+  Detector detector(data().index.index(), data().limits);
+  DetectionList found;
+  double ms[5] = {0, 0, 0, 0, 0};
+  for (auto _ : state) {
+    const Status s = detector.detect(view_of(f->gray), found);
+    if (!s) {
+      state.SkipWithError(s.message().c_str());
+      break;
+    }
+    const DetectStats& st = detector.stats();
+    ms[0] += st.ms_keypoints;
+    ms[1] += st.ms_graph;
+    ms[2] += st.ms_describe;
+    ms[3] += st.ms_select;
+    ms[4] += st.ms_pose;
+    benchmark::DoNotOptimize(found.size());
+  }
+  set_average(state, "ms_keypoints", ms[0]);
+  set_average(state, "ms_graph", ms[1]);
+  set_average(state, "ms_describe", ms[2]);
+  set_average(state, "ms_select", ms[3]);
+  set_average(state, "ms_pose", ms[4]);
+  const DetectStats& st = detector.stats();
+  state.counters["keypoints"] = st.keypoints;
+  state.counters["sampled"] = st.sampled_keypoints;
+  state.counters["correspondences"] = st.correspondences;
+  state.counters["detections"] = static_cast<double>(found.size());
+}
+
+void orb_pipeline(benchmark::State& state, const Frame* f) {
+  BaselineOptions options;
+  options.features = BaselineFeatures::kOrb;
+  options.estimator = BaselineEstimator::kRansac;
+  options.ratio = 0.8f;
+  BaselineDetector orb(options);
+  orb.set_models(data().models);
+  std::vector<BaselineDetection> found;
+  double ms[3] = {0, 0, 0};
+  for (auto _ : state) {
+    orb.detect(f->gray, found);
+    ms[0] += orb.stats().ms_features;
+    ms[1] += orb.stats().ms_match;
+    ms[2] += orb.stats().ms_homography;
+    benchmark::DoNotOptimize(found.size());
+  }
+  set_average(state, "ms_features", ms[0]);
+  set_average(state, "ms_match", ms[1]);
+  set_average(state, "ms_homography", ms[2]);
+  state.counters["keypoints"] = orb.stats().scene_keypoints;
+  state.counters["detections"] = static_cast<double>(found.size());
+}
+
+// ------------------------------------------------------------ stages alone
+
+void hessian_stage(benchmark::State& state, const Frame* f) {
+  HessianDetector hessian;
+  std::vector<Keypoint> out;
+  for (auto _ : state) {
+    hessian.detect(view_of(f->gray), data().params.keypoints, data().limits.max_keypoints, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.counters["keypoints"] = static_cast<double>(out.size());
+}
+
+void sampling_stage(benchmark::State& state, const Frame* f) {
+  SeparatedSampler sampler;
+  std::vector<int> selected;
+  for (auto _ : state) {
+    sampler.sample(f->keypoints.data(), static_cast<int>(f->keypoints.size()),
+                   data().params.graph.scene_sample_distance, nullptr, selected);
+    benchmark::DoNotOptimize(selected.data());
+  }
+  state.counters["sampled"] = static_cast<double>(selected.size());
+}
+
+void delaunay_stage(benchmark::State& state, const Frame* f) {
+  Delaunay triangulation;
+  for (auto _ : state) {
+    triangulation.triangulate(f->points.data(), static_cast<int>(f->points.size()));
+    benchmark::DoNotOptimize(triangulation.triangles().data());
+  }
+  state.counters["triangles"] = triangulation.triangle_count();
+}
+
+void keygraph_stage(benchmark::State& state, const Frame* f) {
+  WorkVector<SceneKeygraph> keygraphs;
+  for (auto _ : state) {
+    scene_keygraphs(f->triangulation, f->points.data(), data().params.graph.structure, keygraphs);
+    benchmark::DoNotOptimize(keygraphs.data());
+  }
+  state.counters["keygraphs"] = static_cast<double>(keygraphs.size());
+}
+
+void blur_stage(benchmark::State& state, const Frame* f) {
+  Plane<std::uint8_t> blurred;
+  Plane<float> scratch;
+  for (auto _ : state) {
+    gaussian_blur(view_of(f->gray), data().params.descriptor.blur_sigma, blurred, scratch);
+    benchmark::DoNotOptimize(blurred.data());
+  }
+}
+
+// Every scene arc of the triangulation described once (the selection
+// describes each on first use, and reuses the reverse arc's look-up).
+void arc_descriptor_stage(benchmark::State& state, const Frame* f) {
+  const auto& tri = f->triangulation.triangles();
+  std::vector<float> profile;
+  int described = 0;
+  for (auto _ : state) {
+    described = 0;
+    for (std::size_t e = 0; e < tri.size(); ++e) {
+      const Point2f a = f->points[static_cast<std::size_t>(tri[e])];
+      const Point2f b = f->points[static_cast<std::size_t>(
+          tri[static_cast<std::size_t>(Delaunay::next(static_cast<int>(e)))])];
+      if (chebyshev(a, b) < data().params.graph.min_distance) continue;
+      ArcDescriptor d;
+      described += arc_descriptor(view_of(f->blurred), a, b, data().params.descriptor, profile, d);
+      benchmark::DoNotOptimize(d.data());
+    }
+  }
+  state.counters["arcs"] = described;
+}
+
+// One radius query (descriptor and scale attributes) per described scene arc.
+void arc_search_stage(benchmark::State& state, const Frame* f) {
+  const ArcSearch search(data().index.index());
+  std::vector<std::uint32_t> found(static_cast<std::size_t>(data().limits.max_arc_matches));
+  long long matches = 0;
+  for (auto _ : state) {
+    matches = 0;
+    for (std::size_t i = 0; i < f->arcs.size(); ++i) {
+      matches +=
+          search.radius_search(f->arcs[i], f->has_attributes[i] ? f->attributes[i].data() : nullptr,
+                               found.data(), static_cast<std::uint32_t>(found.size()));
+    }
+    benchmark::DoNotOptimize(found.data());
+  }
+  state.counters["queries"] = static_cast<double>(f->arcs.size());
+  state.counters["matches"] = static_cast<double>(matches);
+}
+
+// Keytuple selection with its lazy descriptors and look-ups (ms_select).
+void selection_stage(benchmark::State& state, const Frame* f) {
+  const ArcSearch search(data().index.index());
+  Selector selector;
+  selector.reserve(data().limits);
+  SelectionInput in;
+  in.index = &data().index.index();
+  in.search = &search;
+  in.blurred = view_of(f->blurred);
+  in.scene_points = f->points.data();
+  in.scene_scales = f->scales.data();
+  in.triangulation = &f->triangulation;
+  in.keygraphs = &f->keygraphs;
+  WorkVector<KeygraphMatch> matches;
+  matches.reserve(static_cast<std::size_t>(data().limits.max_correspondences));
+  DetectStats stats;
+  for (auto _ : state) {
+    stats = DetectStats{};
+    selector.select(in, data().limits, matches, stats);
+    benchmark::DoNotOptimize(matches.data());
+  }
+  state.counters["correspondences"] = static_cast<double>(matches.size());
+  state.counters["arc_matches"] = static_cast<double>(stats.arc_matches);
+}
+
+// ------------------------------------------------------------ summary
+
+// The console output, keeping the real and CPU time per run name (the
+// median when repetitions are aggregated, else the last run).
+class SummaryReporter : public benchmark::ConsoleReporter {
+ public:
+  // Colours only on a terminal (a reporter made here does not read
+  // --benchmark_color).
+  SummaryReporter() : ConsoleReporter(isatty(fileno(stdout)) ? OO_ColorTabular : OO_Tabular) {}
+  void ReportRuns(const std::vector<Run>& runs) override {
+    ConsoleReporter::ReportRuns(runs);
+    for (const Run& r : runs) {
+      if (r.error_occurred) continue;
+      const bool median = r.run_type == Run::RT_Aggregate && r.aggregate_name == "median";
+      if (r.run_type == Run::RT_Aggregate && !median) continue;
+      const std::string name = r.run_name.function_name;
+      if (median || !medians_.count(name))
+        ms_[name] = {r.GetAdjustedRealTime(), r.GetAdjustedCPUTime()};
+      if (median) medians_[name] = true;
+    }
+  }
+  // Real and CPU milliseconds (every benchmark reports in ms), or -1 when
+  // not run.
+  std::pair<double, double> ms(const std::string& name) const {
+    const auto it = ms_.find(name);
+    return it == ms_.end() ? std::pair{-1.0, -1.0} : it->second;
+  }
+
+ private:
+  std::map<std::string, std::pair<double, double>> ms_;
+  std::map<std::string, bool> medians_;
+};
+
+std::string found_by_keygraph(const Frame& f) {
+  Detector detector(data().index.index(), data().limits);
+  DetectionList found;
+  std::string names;
+  if (!detector.detect(view_of(f.gray), found)) return "(error)";
+  for (const Detection& d : found) {
+    if (!names.empty()) names += ',';
+    names += d.model_name;
+  }
+  return names.empty() ? "-" : names;
+}
+
+std::string found_by_orb(const Frame& f) {
+  BaselineOptions options;
+  options.features = BaselineFeatures::kOrb;
+  BaselineDetector orb(options);
+  orb.set_models(data().models);
+  std::vector<BaselineDetection> found;
+  orb.detect(f.gray, found);
+  std::string names;
+  for (const BaselineDetection& d : found) {
+    if (!names.empty()) names += ',';
+    names += data().model_names[static_cast<std::size_t>(d.model_id)];
+  }
+  return names.empty() ? "-" : names;
+}
+
+void print_summary(const SummaryReporter& reporter) {
+  std::printf("\nSummary: time per frame, real (CPU) ms; medians of repetitions when aggregated\n");
+  std::printf("workspace: %zu bytes for Limits{} at %dx%d, %d models, %u model arcs\n",
+              Detector::workspace_bytes(data().index.index(), data().limits), kFrameWidth,
+              kFrameHeight, data().index.index().model_count(),
+              static_cast<unsigned>(data().index.index().arc_count()));
+  std::printf("%-14s %18s %18s %14s  %-12s %-12s\n", "frame", "keygraph", "ORB pipeline",
+              "ORB/keygraph", "keygraph found", "ORB found");
+  std::pair<double, double> kg_total{0, 0}, orb_total{0, 0};
+  bool complete = true;
+  const auto cell = [](std::pair<double, double> ms) {
+    char buf[48];
+    std::snprintf(buf, sizeof buf, "%.2f (%.2f)", ms.first, ms.second);
+    return std::string(buf);
+  };
+  for (const Frame& f : data().frames) {
+    const auto kg = reporter.ms("detect/" + f.name), orb = reporter.ms("orb_pipeline/" + f.name);
+    if (kg.first <= 0 || orb.first <= 0) {
+      complete = false;
+      continue;
+    }
+    kg_total = {kg_total.first + kg.first, kg_total.second + kg.second};
+    orb_total = {orb_total.first + orb.first, orb_total.second + orb.second};
+    const std::pair<double, double> ratio{orb.first / kg.first, orb.second / kg.second};
+    std::printf("%-14s %18s %18s %14s  %-12s %-12s\n", f.name.c_str(), cell(kg).c_str(),
+                cell(orb).c_str(), cell(ratio).c_str(), found_by_keygraph(f).c_str(),
+                found_by_orb(f).c_str());
+  }
+  if (kg_total.first > 0 && complete) {
+    const std::pair<double, double> ratio{orb_total.first / kg_total.first,
+                                          orb_total.second / kg_total.second};
+    std::printf("%-14s %18s %18s %14s\n", "all frames", cell(kg_total).c_str(),
+                cell(orb_total).c_str(), cell(ratio).c_str());
+    std::printf("ratio ORB pipeline / keygraph over all frames: %.2f real, %.2f CPU\n", ratio.first,
+                ratio.second);
+  } else {
+    std::printf(
+        "(the ratio needs detect/ and orb_pipeline/ of every frame: run without a filter)\n");
+  }
+}
+
+void register_benchmarks() {
+  using Fn = void (*)(benchmark::State&, const Frame*);
+  const std::pair<const char*, Fn> kinds[] = {
+      {"detect/", detect_frame},         {"orb_pipeline/", orb_pipeline},
+      {"hessian/", hessian_stage},       {"blur/", blur_stage},
+      {"sampling/", sampling_stage},     {"delaunay/", delaunay_stage},
+      {"keygraphs/", keygraph_stage},    {"arc_descriptors/", arc_descriptor_stage},
+      {"arc_search/", arc_search_stage}, {"selection/", selection_stage}};
+  for (const auto& [prefix, fn] : kinds) {
+    for (const Frame& f : data().frames) {
+      benchmark::RegisterBenchmark((prefix + f.name).c_str(), fn, &f)
+          ->Unit(benchmark::kMillisecond);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace kg
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  cv::setNumThreads(1);  // every pipeline on one thread
+  kg::Data& d = kg::data();
+  if (kg::Status s = kg::load_models(d); !s) {
+    std::fprintf(stderr, "bench_frame: %s\n", s.message().c_str());
+    return 1;
+  }
+  d.frames.resize(std::size(kg::kFrames));
+  for (std::size_t i = 0; i < d.frames.size(); ++i) {
+    if (kg::Status s = kg::prepare_frame(d, kg::kFrames[i], d.frames[i]); !s) {
+      std::fprintf(stderr, "bench_frame: %s\n", s.message().c_str());
+      return 1;
+    }
+  }
+  kg::register_benchmarks();
+  kg::SummaryReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  kg::print_summary(reporter);
+  benchmark::Shutdown();
+  return 0;
+}
