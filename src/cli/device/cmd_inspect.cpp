@@ -98,7 +98,8 @@ bool print_layout(const std::vector<std::uint8_t>& b) {
     // Names and encodings as this version defines them.
     const char* name = major == kVersionMajor ? section_name(id) : "-";
     std::string enc = "-";
-    if (major == kVersionMajor && (id == kSectionDescriptors || id == kSectionTreeNodes))
+    if (major == kVersionMajor &&
+        (id == kSectionDescriptors || id == kSectionTreeNodes || id == kSectionLeafBounds))
       enc = encoding <= 2 ? encoding_name(static_cast<DescriptorEncoding>(encoding))
                           : std::to_string(encoding);
     std::printf("  %2u  %-18s %8s %10" PRIu64 " %10" PRIu64 " %8u  crc %s\n", id, name, enc.c_str(),
@@ -117,12 +118,17 @@ void print_index(const ModelIndex& index) {
   const double descriptor_bytes = static_cast<double>(encoded_point_size(encoding));
   const double node_bytes =
       static_cast<double>(index.tree_node_count()) * static_cast<double>(tree_node_size(encoding));
+  // Two points per leaf (section 10).
+  const double bound_bytes =
+      2.0 * static_cast<double>(std::uint64_t{1} << index.tree_depth()) * descriptor_bytes;
+  // A tree arc: u32 source (section 4) and i16 offset to its target (section 9).
+  constexpr double kTreeArcBytes = 6.0;
   const double arcs = index.arc_count();
   const bool sift = index.vertex_descriptors() != nullptr;
   const double per_keypoint = 12.0 + (sift ? kVertexDescriptorSize : 0);  // position, scale
   std::printf(
       "\nmodels (bytes: record, name, keypoints%s, arcs with descriptors, share of the "
-      "tree nodes):\n",
+      "tree nodes and leaf bounds):\n",
       sift ? " with vertex descriptors" : "");
   std::printf("  %3s  %-20s %9s %9s %12s %12s %9s\n", "#", "name", "keypoints", "arcs", "keygraphs",
               "bytes", "bytes/arc");
@@ -130,8 +136,8 @@ void print_index(const ModelIndex& index) {
     const ModelInfo info = index.model(m);
     const double bytes = static_cast<double>(kModelRecordSize + info.name.size()) +
                          per_keypoint * info.keypoint_count +
-                         (8.0 + descriptor_bytes) * info.arc_count +
-                         (arcs > 0 ? node_bytes * info.arc_count / arcs : 0.0);
+                         (kTreeArcBytes + descriptor_bytes) * info.arc_count +
+                         (arcs > 0 ? (node_bytes + bound_bytes) * info.arc_count / arcs : 0.0);
     std::printf("  %3d  %-20.*s %9u %9u %12" PRIu64 " %12.0f %9.2f\n", m,
                 static_cast<int>(info.name.size()), info.name.data(), info.keypoint_count,
                 info.arc_count, info.keygraph_count, bytes,
@@ -145,11 +151,11 @@ void print_index(const ModelIndex& index) {
       index.tree_depth(), encoding_name(encoding));
   if (arcs > 0) {
     std::printf(
-        "bytes per arc: %.2f (file %zu bytes / %u arcs): tree arcs 8, descriptors %.0f, "
-        "tree nodes %.2f, keypoints %.2f, the rest %.2f\n",
-        size / arcs, index.byte_size(), index.arc_count(), descriptor_bytes, node_bytes / arcs,
-        per_keypoint * index.keypoint_count() / arcs,
-        (size - node_bytes - (8.0 + descriptor_bytes) * arcs -
+        "bytes per arc: %.2f (file %zu bytes / %u arcs): tree arcs %.0f, descriptors %.0f, "
+        "tree nodes %.2f, leaf bounds %.2f, keypoints %.2f, the rest %.2f\n",
+        size / arcs, index.byte_size(), index.arc_count(), kTreeArcBytes, descriptor_bytes,
+        node_bytes / arcs, bound_bytes / arcs, per_keypoint * index.keypoint_count() / arcs,
+        (size - node_bytes - bound_bytes - (kTreeArcBytes + descriptor_bytes) * arcs -
          per_keypoint * index.keypoint_count()) /
             arcs);
   }
