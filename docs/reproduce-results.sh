@@ -1,6 +1,8 @@
 #!/bin/sh
 # Reproduces every table and figure of the Oxford and sign-benchmark
-# sections of docs/RESULTS.md, in one run (about 2 hours on 2 cores):
+# sections of docs/RESULTS.md, in one run (about 1.5 hours on 2 busy
+# cores: the 400-crop run with every method took 36 min, the centre crops
+# 6 min, the sign benchmark 10 min):
 #
 #   docs/reproduce-results.sh [KEYGRAPH_BINARY] [OUT_DIR] [OXFORD_DIR]
 #
@@ -10,7 +12,10 @@
 #   oxford          10 seeded random crops per subset, every method, negatives, curves
 #   oxford-centre   one centred crop per subset, every method, negatives
 #   signs           the generated sign set (keygraph synth --seed 1, 300 frames)
-#   synth           the sign benchmark, indexes of 1, 10 and 50 signs, every method
+#   synth           the sign benchmark (first 100 frames), indexes of 1, 10 and 50 signs,
+#                   keygraph and the MAGSAC baselines
+#   ablation-*      one default changed at a time, centre crops
+#   oxford-ENC      the 400 crops with float32 and int16 descriptors
 # Copy OUT_DIR/oxford/*.png to docs/figures/ to refresh the committed plots.
 set -eu
 KG=${1:-build/release/src/cli/keygraph}
@@ -33,4 +38,19 @@ run oxford eval --dataset "$OXFORD" --crops 10 --seed 1 --methods all,keygraph-m
 run oxford-centre eval --dataset "$OXFORD" --centre --methods all --negatives --out "$OUT/oxford-centre"
 rm -rf "$OUT/signs"
 run signs synth -o "$OUT/signs" --seed 1 --signs 50 --frames 300
-run synth eval --synth "$OUT/signs" --sizes 1,10,50 --methods all,keygraph-mser --out "$OUT/synth"
+run synth eval --synth "$OUT/signs" --sizes 1,10,50 --frames 100 \
+  --methods keygraph,sift-magsac,orb-magsac,akaze-magsac --out "$OUT/synth"
+# Ablation and encodings (RESULTS.md, "Why the defaults differ" and "Model index size").
+run ablation-defaults eval --dataset "$OXFORD" --centre --methods keygraph
+for set in descriptor.similarity_threshold=0.5 graph.scene_sampling=random graph.max_anisotropy=0 \
+  ransac.min_verification_z=0 descriptor.max_search_leaves=0 descriptor.encoding=float32 \
+  descriptor.encoding=int16; do
+  run "ablation-$set" eval --dataset "$OXFORD" --centre --methods keygraph --set "$set"
+done
+run ablation-paper eval --dataset "$OXFORD" --centre --methods keygraph \
+  --set descriptor.similarity_threshold=0.5 --set graph.scene_sampling=random \
+  --set graph.max_anisotropy=0 --set ransac.min_verification_z=0
+for enc in float32 int16; do
+  run "oxford-$enc" eval --dataset "$OXFORD" --crops 10 --seed 1 --methods keygraph \
+    --set descriptor.encoding=$enc
+done
