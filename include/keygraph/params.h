@@ -133,18 +133,19 @@ struct DescriptorParams {
   // its vertices similar (tests/unit/test_vertex_descriptor.cpp).
   float vertex_threshold = 1.0f;
   // Storage and comparison of arc descriptors (see DescriptorEncoding).
-  // int8 (not in the paper, which compares floats): 14.2 bytes per model arc
-  // against 32.4 in float32, and detection as good. Oxford, 10 seeded crops per
-  // subset (400 cases): 54.8 % within 3 px, 63.8 % within 10 px, 7 wrong
-  // poses, against float32's 54.2 %, 63.2 % and 8 (int16: 54.0 %, 63.0 %,
-  // 9); centre crops (40): 60.0 %, 70.0 %, none wrong against 62.5 %,
-  // 70.0 %, none (docs/RESULTS.md, "Model index size").
+  // int8 (not in the paper, which compares floats): 15 bytes per model arc
+  // against 41 in float32, and detection as good. Oxford, 10 seeded crops per
+  // subset (400 cases): 57.2 % within 3 px, 67.0 % within 10 px, 3 wrong
+  // poses, against float32's 56.8 %, 66.8 % and 6 (int16: 56.5 %, 67.0 %,
+  // 3); centre crops (40): 70.0 %, 72.5 %, none wrong, as float32
+  // (docs/RESULTS.md, "Model index size").
   DescriptorEncoding encoding = DescriptorEncoding::kInt8;
   // Not in the paper: the search visits at most this many leaves of the
-  // tree (32 arcs each), nearest first, and so finds the most similar model
-  // arcs but not all of them; 0 searches exactly. 32 halves the selection's
-  // work on a 10-model index and loses no Oxford centre-crop case
-  // (docs/RESULTS.md, "Approximate search").
+  // tree (up to 32 arcs each), nearest first, and so finds the most similar
+  // model arcs but not all of them; 0 searches exactly. 32 halves the
+  // selection's work on a 10-model index; Oxford 400 crops 57.2 % / 67.0 %,
+  // 3 wrong, against 56.5 % / 66.5 %, 5 wrong, exact (docs/RESULTS.md,
+  // "Detection on the Oxford set"; docs/RUNTIME.md, "Frame benchmark").
   int max_search_leaves = 32;
 };
 

@@ -393,7 +393,7 @@ TEST_F(ModelIndexTest, RoundTripInEachEncoding) {
       EXPECT_EQ(load<std::uint32_t>(b.data() + entry(b, id) + format::kEntEncoding),
                 static_cast<std::uint32_t>(e));
   }
-  // Smaller encodings make smaller files (int8: about 14.3 bytes per arc).
+  // Smaller encodings make smaller files (int8: about 15 bytes per arc).
   EXPECT_LT(encoded(DescriptorEncoding::kInt16).size(),
             encoded(DescriptorEncoding::kFloat32).size());
   EXPECT_LT(encoded(DescriptorEncoding::kInt8).size(), encoded(DescriptorEncoding::kInt16).size());
