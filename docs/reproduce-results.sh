@@ -13,7 +13,7 @@
 #   oxford-centre   one centred crop per subset, every method, negatives
 #   signs           the generated sign set (keygraph synth --seed 1, 300 frames)
 #   synth           the sign benchmark (first 100 frames), indexes of 1, 10 and 50 signs,
-#                   keygraph and the MAGSAC baselines
+#                   keygraph and the MAGSAC baselines; synth-ransac the RANSAC ones
 #   ablation-*      one default changed at a time, centre crops
 #   oxford-ENC      the 400 crops with float32 and int16 descriptors
 # Copy OUT_DIR/oxford/*.png to docs/figures/ to refresh the committed plots.
@@ -40,6 +40,8 @@ rm -rf "$OUT/signs"
 run signs synth -o "$OUT/signs" --seed 1 --signs 50 --frames 300
 run synth eval --synth "$OUT/signs" --sizes 1,10,50 --frames 100 \
   --methods keygraph,sift-magsac,orb-magsac,akaze-magsac --out "$OUT/synth"
+run synth-ransac eval --synth "$OUT/signs" --sizes 1,10,50 --frames 100 \
+  --methods keygraph,sift-ransac,orb-ransac,akaze-ransac --out "$OUT/synth-ransac"
 # Ablation and encodings (RESULTS.md, "Why the defaults differ" and "Model index size").
 run ablation-defaults eval --dataset "$OXFORD" --centre --methods keygraph
 for set in descriptor.similarity_threshold=0.5 graph.scene_sampling=random graph.max_anisotropy=0 \
