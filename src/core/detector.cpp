@@ -17,6 +17,7 @@
 #include "core/rng.h"
 #include "core/sampling.h"
 #include "core/selection.h"
+#include "core/strongest.h"
 #include "core/vertex_descriptor.h"
 #include "core/workspace.h"
 
@@ -363,16 +364,8 @@ void Detector::Impl::keep_strongest(const Keypoint* keypoints, int count,
   order.clear();
   WorkVector<int>& heap = descriptors != nullptr ? order : selected;
   heap.clear();
-  for (int i = 0; i < count; ++i) {
-    if (static_cast<int>(heap.size()) < keep) {
-      heap.push_back(i);
-      std::push_heap(heap.begin(), heap.end(), stronger);
-    } else if (stronger(i, heap.front())) {
-      std::pop_heap(heap.begin(), heap.end(), stronger);
-      heap.back() = i;
-      std::push_heap(heap.begin(), heap.end(), stronger);
-    }
-  }
+  for (int i = 0; i < count; ++i)
+    offer_strongest(heap, i, static_cast<std::size_t>(std::max(0, keep)), stronger);
   std::sort_heap(heap.begin(), heap.end(), stronger);
   detected.clear();
   for (int i : heap) detected.push_back(keypoints[i]);

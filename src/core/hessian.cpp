@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "core/blur.h"
+#include "core/strongest.h"
 
 namespace kg {
 namespace {
@@ -23,19 +24,6 @@ bool stronger(const Keypoint& a, const Keypoint& b) {
   if (a.y != b.y) return a.y < b.y;
   if (a.x != b.x) return a.x < b.x;
   return a.scale < b.scale;
-}
-
-// Keeps the `max_keypoints` strongest in `out`, a heap whose front is the
-// weakest kept, so memory stays bounded however many extrema there are.
-void offer(const Keypoint& kp, int max_keypoints, WorkVector<Keypoint>& out) {
-  if (static_cast<int>(out.size()) < max_keypoints) {
-    out.push_back(kp);
-    std::push_heap(out.begin(), out.end(), stronger);
-  } else if (stronger(kp, out.front())) {
-    std::pop_heap(out.begin(), out.end(), stronger);
-    out.back() = kp;
-    std::push_heap(out.begin(), out.end(), stronger);
-  }
 }
 
 void to_unit_float(ImageView image, Plane<float>& dst) {
@@ -212,7 +200,8 @@ void scan_level(const WorkVector<std::int32_t>& cand, const Plane<float>& lo,
     kp.scale = static_cast<float>(info.sigma0 * std::exp((info.level + o[2]) * info.log_k) *
                                   info.octave_scale);
     kp.response = static_cast<float>(c + 0.5 * (g[0] * o[0] + g[1] * o[1] + g[2] * o[2]));
-    offer(kp, max_keypoints, out);
+    // Bounded memory however many extrema there are.
+    offer_strongest(out, kp, static_cast<std::size_t>(std::max(0, max_keypoints)), stronger);
   }
 }
 

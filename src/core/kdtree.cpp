@@ -298,6 +298,32 @@ inline Frame<T> root_frame(std::uint32_t n) {
 }  // namespace
 
 template <class T, std::size_t D>
+void BasicKdTreeView<T, D>::scan_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end,
+                                      const Point& q, Dist radius2, Dist box, std::uint32_t* out,
+                                      std::uint32_t capacity, std::uint32_t& found) const {
+  if (bounds_ != nullptr &&
+      !box_can_match(bounds_ + 2 * (node - ((std::uint32_t{1} << depth_) - 1)), q, radius2, box))
+    return;
+  if constexpr (std::is_same_v<T, std::int8_t> && D == kSearchDims) {
+    // The model index's default: the vectorised leaf scan.
+    std::uint16_t hits[kLeafSize];
+    const int n =
+        scan_leaf_i8(points_ + begin, static_cast<int>(end - begin), q, radius2, box, hits);
+    for (int h = 0; h < n; ++h) {
+      if (found < capacity) out[found] = id(begin + hits[h]);
+      ++found;
+    }
+  } else {
+    for (std::uint32_t i = begin; i < end; ++i) {
+      if (kd_distance2(points_[i], q) < radius2 && within_box(points_[i], q, box)) {
+        if (found < capacity) out[found] = id(i);
+        ++found;
+      }
+    }
+  }
+}
+
+template <class T, std::size_t D>
 std::uint32_t BasicKdTreeView<T, D>::radius_search(const Point& q, Dist radius2, std::uint32_t* out,
                                                    std::uint32_t capacity) const {
   return radius_search(q, radius2, std::numeric_limits<Dist>::max(), out, capacity);
@@ -318,27 +344,7 @@ std::uint32_t BasicKdTreeView<T, D>::radius_search(const Point& q, Dist radius2,
     Frame<T> f = stack[--top];
     if (f.bound >= radius2) continue;
     while (f.level < depth_) descend_near<T, D>(f, nodes_[f.node], q, radius2, box, stack, top);
-    if (bounds_ != nullptr &&
-        !box_can_match(bounds_ + 2 * (f.node - ((std::uint32_t{1} << depth_) - 1)), q, radius2,
-                       box))
-      continue;
-    if constexpr (std::is_same_v<T, std::int8_t> && D == kSearchDims) {
-      // The model index's default: the vectorised leaf scan.
-      std::uint16_t hits[kLeafSize];
-      const int n =
-          scan_leaf_i8(points_ + f.begin, static_cast<int>(f.end - f.begin), q, radius2, box, hits);
-      for (int h = 0; h < n; ++h) {
-        if (found < capacity) out[found] = id(f.begin + hits[h]);
-        ++found;
-      }
-    } else {
-      for (std::uint32_t i = f.begin; i < f.end; ++i) {
-        if (kd_distance2(points_[i], q) < radius2 && within_box(points_[i], q, box)) {
-          if (found < capacity) out[found] = id(i);
-          ++found;
-        }
-      }
-    }
+    scan_leaf(f.node, f.begin, f.end, q, radius2, box, out, capacity, found);
   }
   return found;
 }
@@ -375,26 +381,7 @@ std::uint32_t BasicKdTreeView<T, D>::radius_search_approximate(const Point& q, D
       std::push_heap(heap, heap + size, later);
     }
     ++leaves;
-    if (bounds_ != nullptr &&
-        !box_can_match(bounds_ + 2 * (f.node - ((std::uint32_t{1} << depth_) - 1)), q, radius2,
-                       box))
-      continue;
-    if constexpr (std::is_same_v<T, std::int8_t> && D == kSearchDims) {
-      std::uint16_t hits[kLeafSize];
-      const int n =
-          scan_leaf_i8(points_ + f.begin, static_cast<int>(f.end - f.begin), q, radius2, box, hits);
-      for (int h = 0; h < n; ++h) {
-        if (found < capacity) out[found] = id(f.begin + hits[h]);
-        ++found;
-      }
-    } else {
-      for (std::uint32_t i = f.begin; i < f.end; ++i) {
-        if (kd_distance2(points_[i], q) < radius2 && within_box(points_[i], q, box)) {
-          if (found < capacity) out[found] = id(i);
-          ++found;
-        }
-      }
-    }
+    scan_leaf(f.node, f.begin, f.end, q, radius2, box, out, capacity, found);
   }
   return found;
 }

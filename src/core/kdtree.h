@@ -135,6 +135,12 @@ class BasicKdTreeView {
 
  private:
   std::uint32_t id(std::uint32_t slot) const { return ids_ != nullptr ? ids_[slot] : slot; }
+  // Appends to out (up to capacity; `found` counts all) the points of the
+  // leaf `node`, slots [begin, end), within radius2 and box of q; skips the
+  // leaf when its bounds rule it out.
+  void scan_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end, const Point& q,
+                 Dist radius2, Dist box, std::uint32_t* out, std::uint32_t capacity,
+                 std::uint32_t& found) const;
 
   const Point* points_ = nullptr;
   const std::uint32_t* ids_ = nullptr;

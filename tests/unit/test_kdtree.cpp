@@ -60,6 +60,21 @@ std::vector<KdPoint<T>> encode_all(const std::vector<ArcDescriptor>& data) {
   return out;
 }
 
+// A search point in T's domain: the descriptor and two random scale
+// attributes in [-0.1, 0.4).
+template <class T>
+KdPoint<T, kSearchDims> with_attributes(Rng& rng, const ArcDescriptor& d) {
+  ArcSearchPoint p{};
+  for (int i = 0; i < kDescriptorSize; ++i) p[i] = d[i];
+  p[kDescriptorSize] = static_cast<float>(rng.uniform01() * 0.5 - 0.1);
+  p[kDescriptorSize + 1] = static_cast<float>(rng.uniform01() * 0.5 - 0.1);
+  if constexpr (std::is_same_v<T, float>) {
+    return p;
+  } else {
+    return quantise<T>(p);
+  }
+}
+
 template <class T>
 constexpr DescriptorEncoding encoding_of() {
   if constexpr (std::is_same_v<T, std::int16_t>) {
@@ -194,17 +209,7 @@ TYPED_TEST(KdTreeTyped, RadiusAndBoxSearchEqualsBruteForce) {
   using Dist = typename KdTraits<T>::Dist;
   using Point = KdPoint<T, kSearchDims>;
   Rng rng(5);
-  auto attributed = [&](const ArcDescriptor& d) {
-    ArcSearchPoint p{};
-    for (int i = 0; i < kDescriptorSize; ++i) p[i] = d[i];
-    p[kDescriptorSize] = static_cast<float>(rng.uniform01() * 0.5 - 0.1);
-    p[kDescriptorSize + 1] = static_cast<float>(rng.uniform01() * 0.5 - 0.1);
-    if constexpr (std::is_same_v<T, float>) {
-      return p;
-    } else {
-      return quantise<T>(p);
-    }
-  };
+  auto attributed = [&](const ArcDescriptor& d) { return with_attributes<T>(rng, d); };
   for (std::uint32_t n : {1u, 70u, 5000u, 20000u}) {
     std::vector<Point> data;
     for (const ArcDescriptor& d : random_descriptors(rng, n)) data.push_back(attributed(d));
@@ -257,17 +262,7 @@ TYPED_TEST(KdTreeTyped, LeafBoundsExactAndApproximateSearch) {
   using Dist = typename KdTraits<T>::Dist;
   using Point = KdPoint<T, kSearchDims>;
   Rng rng(9);
-  auto attributed = [&](const ArcDescriptor& d) {
-    ArcSearchPoint p{};
-    for (int i = 0; i < kDescriptorSize; ++i) p[i] = d[i];
-    p[kDescriptorSize] = static_cast<float>(rng.uniform01() * 0.5 - 0.1);
-    p[kDescriptorSize + 1] = static_cast<float>(rng.uniform01() * 0.5 - 0.1);
-    if constexpr (std::is_same_v<T, float>) {
-      return p;
-    } else {
-      return quantise<T>(p);
-    }
-  };
+  auto attributed = [&](const ArcDescriptor& d) { return with_attributes<T>(rng, d); };
   const std::uint32_t n = 20000;
   std::vector<Point> data;
   for (const ArcDescriptor& d : random_descriptors(rng, n)) data.push_back(attributed(d));
