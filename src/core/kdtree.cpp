@@ -301,11 +301,11 @@ template <class T, std::size_t D>
 void BasicKdTreeView<T, D>::scan_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end,
                                       const Point& q, Dist radius2, Dist box, std::uint32_t* out,
                                       std::uint32_t capacity, std::uint32_t& found) const {
-  if (bounds_ != nullptr &&
-      !box_can_match(bounds_ + 2 * (node - ((std::uint32_t{1} << depth_) - 1)), q, radius2, box))
-    return;
+  const Point* bounds =
+      bounds_ != nullptr ? bounds_ + 2 * (node - ((std::uint32_t{1} << depth_) - 1)) : nullptr;
   if constexpr (std::is_same_v<T, std::int8_t> && D == kSearchDims) {
-    // The model index's default: the vectorised leaf scan.
+    // The model index's default: the vectorised bounds test and leaf scan.
+    if (bounds != nullptr && !leaf_may_match_i8(bounds, q, radius2, box)) return;
     std::uint16_t hits[kLeafSize];
     const int n =
         scan_leaf_i8(points_ + begin, static_cast<int>(end - begin), q, radius2, box, hits);
@@ -314,6 +314,7 @@ void BasicKdTreeView<T, D>::scan_leaf(std::uint32_t node, std::uint32_t begin, s
       ++found;
     }
   } else {
+    if (bounds != nullptr && !box_can_match(bounds, q, radius2, box)) return;
     for (std::uint32_t i = begin; i < end; ++i) {
       if (kd_distance2(points_[i], q) < radius2 && within_box(points_[i], q, box)) {
         if (found < capacity) out[found] = id(i);
@@ -356,28 +357,41 @@ std::uint32_t BasicKdTreeView<T, D>::radius_search_approximate(const Point& q, D
                                                                std::uint32_t capacity) const {
   std::uint32_t found = 0;
   if (n_ == 0 || max_leaves <= 0) return 0;
-  // A min-heap of pending far children by bound; when it is full, further
-  // far children are dropped (the answer is approximate anyway).
-  constexpr int kHeap = 512;
-  Frame<T> heap[kHeap];
-  int size = 0;
-  const auto later = [](const Frame<T>& a, const Frame<T>& b) { return a.priority > b.priority; };
+  // Pending far children live in `cells`; the min-heap orders small
+  // (priority, cell) entries so sifting moves 16 bytes, not whole cells.
+  // When all cells are taken, further far children are dropped (the answer
+  // is approximate anyway).
+  constexpr int kCells = 512;
+  struct Pending {
+    double priority;
+    int cell;
+  };
+  Frame<T> cells[kCells];
+  Pending heap[kCells];
+  int free_cells[kCells];
+  int n_free = 0, n_used = 0, size = 0;
+  const auto later = [](const Pending& a, const Pending& b) { return a.priority > b.priority; };
   // An attribute offset of `box` ranks like a descriptor offset of the radius.
   const double box_width = std::is_floating_point_v<T> ? std::max(static_cast<double>(box), 1e-6)
                                                        : static_cast<double>(box) + 1.0;
   const double attribute_cost = static_cast<double>(radius2) / (box_width * box_width);
-  heap[size++] = root_frame<T>(n_);
-  Frame<T> pending[kMaxTreeDepth + 2];  // far children of one descent
+  cells[n_used] = root_frame<T>(n_);
+  heap[size++] = {0.0, n_used++};
   int leaves = 0;
   while (size > 0 && leaves < max_leaves) {
     std::pop_heap(heap, heap + size, later);
-    Frame<T> f = heap[--size];
-    int n_pending = 0;
-    while (f.level < depth_)
-      descend_near_ranked<T, D>(f, nodes_[f.node], q, radius2, box, attribute_cost, pending,
-                                n_pending);
-    for (int i = 0; i < n_pending && size < kHeap; ++i) {
-      heap[size++] = pending[i];
+    const int cell = heap[--size].cell;
+    Frame<T> f = cells[cell];
+    free_cells[n_free++] = cell;
+    while (f.level < depth_) {
+      Frame<T> far[1];
+      int n_far = 0;
+      descend_near_ranked<T, D>(f, nodes_[f.node], q, radius2, box, attribute_cost, far, n_far);
+      if (n_far == 0) continue;
+      const int slot = n_free > 0 ? free_cells[--n_free] : n_used < kCells ? n_used++ : -1;
+      if (slot < 0) continue;
+      cells[slot] = far[0];
+      heap[size++] = {far[0].priority, slot};
       std::push_heap(heap, heap + size, later);
     }
     ++leaves;

@@ -32,6 +32,23 @@ int scan_leaf_i8_scalar(const ArcSearchPointI8* p, int n, const ArcSearchPointI8
   return found;
 }
 
+bool leaf_may_match_i8_scalar(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
+                              std::int32_t radius2, std::int32_t box) {
+  std::int32_t d2 = 0;
+  bool inside = true;
+  for (int c = 0; c < kSearchDims; ++c) {
+    const std::int32_t below = std::int32_t{bounds[0][c]} - std::int32_t{q[c]};
+    const std::int32_t above = std::int32_t{q[c]} - std::int32_t{bounds[1][c]};
+    const std::int32_t gap = below > 0 ? below : above > 0 ? above : 0;
+    if (c < kDescriptorSize) {
+      d2 += gap * gap;
+    } else {
+      inside = inside && gap <= box;
+    }
+  }
+  return inside && d2 < radius2;
+}
+
 #if defined(KG_LEAF_NEON)
 
 const char* leaf_scan_isa() {
@@ -61,6 +78,25 @@ int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, st
     found += inside ? 1 : 0;
   }
   return found;
+}
+
+bool leaf_may_match_i8(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
+                       std::int32_t radius2, std::int32_t box) {
+  const int16x8_t query = vmovl_s8(vld1_s8(q.data()));
+  const int16x8_t below = vsubq_s16(vmovl_s8(vld1_s8(bounds[0].data())), query);
+  const int16x8_t above = vsubq_s16(query, vmovl_s8(vld1_s8(bounds[1].data())));
+  const int16x8_t zero = vdupq_n_s16(0);
+  // below where it is positive, else max(above, 0).
+  const int16x8_t gap = vbslq_s16(vcgtq_s16(below, zero), below, vmaxq_s16(above, zero));
+  const int16x4_t lo = vget_low_s16(gap), hi = vget_high_s16(gap);
+  const int32x4_t sq_lo = vmull_s16(lo, lo);
+  const int32x4_t sq_hi = vmull_s16(hi, hi);
+  const int32x2_t pairs = vadd_s32(vget_low_s32(sq_lo), vget_high_s32(sq_lo));
+  const std::int32_t d2 = vget_lane_s32(pairs, 0) + vget_lane_s32(pairs, 1) +
+                          vgetq_lane_s32(sq_hi, 0) + vgetq_lane_s32(sq_hi, 1);
+  const uint16x4_t within =
+      vcle_s16(hi, vdup_n_s16(static_cast<std::int16_t>(box > 32767 ? 32767 : box)));
+  return d2 < radius2 && vget_lane_u16(within, 2) != 0 && vget_lane_u16(within, 3) != 0;
 }
 
 #elif defined(KG_LEAF_SSE2)
@@ -131,6 +167,32 @@ int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, st
   return found;
 }
 
+bool leaf_may_match_i8(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
+                       std::int32_t radius2, std::int32_t box) {
+  std::int64_t q64, lo64, hi64;
+  __builtin_memcpy(&q64, q.data(), sizeof q64);
+  __builtin_memcpy(&lo64, bounds[0].data(), sizeof lo64);
+  __builtin_memcpy(&hi64, bounds[1].data(), sizeof hi64);
+  const __m128i query = widen_low(_mm_set1_epi64x(q64));
+  const __m128i below = _mm_sub_epi16(widen_low(_mm_set1_epi64x(lo64)), query);
+  const __m128i above = _mm_sub_epi16(query, widen_low(_mm_set1_epi64x(hi64)));
+  const __m128i zero = _mm_setzero_si128();
+  // below where it is positive, else max(above, 0).
+  const __m128i positive = _mm_cmpgt_epi16(below, zero);
+  const __m128i gap = _mm_or_si128(_mm_and_si128(positive, below),
+                                   _mm_andnot_si128(positive, _mm_max_epi16(above, zero)));
+  const __m128i descriptor_lanes = _mm_set_epi16(0, 0, -1, -1, -1, -1, -1, -1);
+  const __m128i masked = _mm_and_si128(gap, descriptor_lanes);
+  const __m128i sums =
+      _mm_madd_epi16(masked, masked);  // (g0^2 + g1^2, g2^2 + g3^2, g4^2 + g5^2, 0)
+  const __m128i pair = _mm_add_epi32(sums, _mm_shuffle_epi32(sums, _MM_SHUFFLE(1, 0, 3, 2)));
+  const __m128i total = _mm_add_epi32(pair, _mm_shuffle_epi32(pair, _MM_SHUFFLE(2, 3, 0, 1)));
+  const std::int32_t d2 = _mm_cvtsi128_si32(total);
+  const __m128i limit = _mm_set1_epi16(static_cast<short>(box > 32767 ? 32767 : box));
+  const int outside = _mm_movemask_epi8(_mm_cmpgt_epi16(gap, limit)) & 0xF000;  // lanes 6, 7
+  return outside == 0 && d2 < radius2;
+}
+
 #else
 
 const char* leaf_scan_isa() {
@@ -140,6 +202,11 @@ const char* leaf_scan_isa() {
 int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, std::int32_t radius2,
                  std::int32_t box, std::uint16_t* hits) {
   return scan_leaf_i8_scalar(p, n, q, radius2, box, hits);
+}
+
+bool leaf_may_match_i8(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
+                       std::int32_t radius2, std::int32_t box) {
+  return leaf_may_match_i8_scalar(bounds, q, radius2, box);
 }
 
 #endif

@@ -20,6 +20,16 @@ int scan_leaf_i8_scalar(const ArcSearchPointI8* p, int n, const ArcSearchPointI8
 // The same, vectorised where the target has NEON or SSE2 (else the scalar code).
 int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, std::int32_t radius2,
                  std::int32_t box, std::uint16_t* hits);
+// Whether a leaf whose points lie in [bounds[0], bounds[1]] (component-wise)
+// can hold a point within radius2 and box of q as scan_leaf_i8 tests them:
+// the squared distance from q to the bounds' box over the descriptor
+// components, each component's gap being lo - q when positive, else
+// max(q - hi, 0), and each attribute's gap within `box`.
+bool leaf_may_match_i8_scalar(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
+                              std::int32_t radius2, std::int32_t box);
+// The same, vectorised like scan_leaf_i8.
+bool leaf_may_match_i8(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
+                       std::int32_t radius2, std::int32_t box);
 // Which implementation scan_leaf_i8 is: "neon", "sse2" or "scalar".
 const char* leaf_scan_isa();
 

@@ -236,6 +236,57 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
   count = n;
 }
 
+template <class Emit>
+bool Selector::join_triangle(const SelectionInput& in, const SceneKeygraph& g, int r,
+                             const Limits& limits, DetectStats& stats, Emit& emit) {
+  // Scene triangle (a, b, c) rotated so that a -> b is edge r: model arcs
+  // b_m -> a_m (the reverse of those similar to a -> b), b_m -> c_m and
+  // c_m -> a_m, each list sorted by (source, target).
+  const int e_bc = g.edges[(r + 1) % 3];
+  const int e_ca = g.edges[(r + 2) % 3];
+  const int e_ba = in.triangulation->halfedges()[g.edges[r]];
+  std::uint32_t n_ba = 0, n_bc = 0, n_ca = 0;
+  lookup(in, e_ba, n_ba, limits, stats);
+  if (n_ba == 0) return true;
+  lookup(in, e_bc, n_bc, limits, stats);
+  if (n_bc == 0) return true;
+  lookup(in, e_ca, n_ca, limits, stats);
+  if (n_ca == 0) return true;
+  // Resolved after all lookups: a lookup may grow (move) the pool.
+  const std::uint64_t* ba = pool_.data() + begin_[e_ba];
+  const std::uint64_t* bc = pool_.data() + begin_[e_bc];
+  const std::uint64_t* ca = pool_.data() + begin_[e_ca];
+  const Point2f* model_points = in.index->keypoints();
+  std::uint32_t v[kMaxVertices] = {0, 0, 0, 0};
+  std::uint32_t i = 0, j = 0;
+  while (i < n_ba && j < n_bc) {
+    const std::uint32_t b_of_ba = from_of(ba[i]), b_of_bc = from_of(bc[j]);
+    if (b_of_ba != b_of_bc) {
+      (b_of_ba < b_of_bc ? i : j) += 1;
+      continue;
+    }
+    std::uint32_t i_end = i + 1, j_end = j + 1;
+    while (i_end < n_ba && from_of(ba[i_end]) == b_of_ba) ++i_end;
+    while (j_end < n_bc && from_of(bc[j_end]) == b_of_ba) ++j_end;
+    for (std::uint32_t x = i; x < i_end; ++x) {
+      const std::uint32_t a_m = to_of(ba[x]);
+      for (std::uint32_t y = j; y < j_end; ++y) {
+        const std::uint32_t c_m = to_of(bc[y]);
+        if (c_m == a_m || !contains(ca, n_ca, key(c_m, a_m))) continue;
+        v[r] = a_m;
+        v[(r + 1) % 3] = b_of_ba;
+        v[(r + 2) % 3] = c_m;
+        // In vertex order, as the other structures test it.
+        if (!(orient(model_points[v[0]], model_points[v[1]], model_points[v[2]]) > 0.f)) continue;
+        if (!emit(v, g)) return false;
+      }
+    }
+    i = i_end;
+    j = j_end;
+  }
+  return true;
+}
+
 void Selector::reserve(const Limits& limits) {
   const auto half_edges = 6 * static_cast<std::size_t>(std::max(0, limits.max_scene_keypoints));
   state_.reserve(half_edges);
@@ -304,7 +355,19 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     return true;
   };
 
+  const WorkVector<int>& opposite = in.triangulation->halfedges();
   for (const SceneKeygraph& g : *in.keygraphs) {
+    if (k == 3) {
+      // Rotated so that edge r has an opposite half-edge: a merge join needs
+      // edge r's model arcs ordered by their target, which is the opposite's
+      // list (sorted by source).
+      int r = 0;
+      while (r < 3 && opposite[g.edges[r]] < 0) ++r;
+      if (r < 3) {
+        if (!join_triangle(in, g, r, limits, stats, emit)) break;
+        continue;
+      }
+    }
     std::uint32_t n[kMaxVertices] = {0, 0, 0, 0};
     const std::uint64_t* r[kMaxVertices] = {nullptr, nullptr, nullptr, nullptr};
     bool empty = false;

@@ -114,6 +114,14 @@ class Selector {
   void lookup(const SelectionInput& in, int e, std::uint32_t& count, const Limits& limits,
               DetectStats& stats);
 
+  // The 3-circuit correspondences of scene keygraph g whose edge r has an
+  // opposite half-edge, by a merge join of that opposite's model arcs with
+  // the next edge's on their shared vertex; passes each to emit (false:
+  // stop, returned).
+  template <class Emit>
+  bool join_triangle(const SelectionInput& in, const SceneKeygraph& g, int r, const Limits& limits,
+                     DetectStats& stats, Emit& emit);
+
   enum : std::uint8_t { kUnseen = 0, kLooked = 1 };
   WorkVector<std::uint8_t> state_;
   WorkVector<std::uint32_t> begin_;

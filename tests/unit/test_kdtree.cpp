@@ -451,6 +451,64 @@ TEST(LeafScan, VectorisedEqualsScalar) {
   EXPECT_GT(total, 10000);  // the cases were not all empty
 }
 
+TEST(LeafScan, VectorisedBoundsTestEqualsScalar) {
+  Rng rng(12);
+  auto component = [&](int spread) {
+    return static_cast<int>(rng.uniform(2 * spread + 1)) - spread;
+  };
+  long may = 0, may_not = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const int spread = trial % 4 == 0 ? 127 : 40;
+    ArcSearchPointI8 bounds[2], q;
+    for (int c = 0; c < kSearchDims; ++c) {
+      int lo = component(spread), hi = component(spread);
+      // Mostly valid boxes, sometimes empty ones (minimum above maximum).
+      if (trial % 7 != 0 && lo > hi) std::swap(lo, hi);
+      bounds[0][c] = static_cast<std::int8_t>(lo);
+      bounds[1][c] = static_cast<std::int8_t>(hi);
+      q[c] = static_cast<std::int8_t>(component(spread));
+    }
+    const std::int32_t radius2 = static_cast<std::int32_t>(rng.uniform(4 * 80 * 80 + 2));
+    const std::int32_t box = trial % 5 == 0 ? std::numeric_limits<std::int32_t>::max()
+                                            : static_cast<std::int32_t>(rng.uniform(64));
+    const bool s = leaf_may_match_i8_scalar(bounds, q, radius2, box);
+    ASSERT_EQ(s, leaf_may_match_i8(bounds, q, radius2, box)) << "trial " << trial;
+    (s ? may : may_not) += 1;
+  }
+  // Both answers were exercised.
+  EXPECT_GT(may, 2000);
+  EXPECT_GT(may_not, 2000);
+}
+
+TEST(LeafScan, BoundsTestNeverRejectsAMatch) {
+  // A leaf's bounds hold its points, so any point the scan finds must pass.
+  Rng rng(13);
+  std::vector<ArcSearchPointI8> points(kLeafSize);
+  std::uint16_t hits[kLeafSize];
+  long checked = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    ArcSearchPointI8 bounds[2], q;
+    bounds[0].fill(127);
+    bounds[1].fill(-128);
+    for (auto& p : points) {
+      for (int c = 0; c < kSearchDims; ++c) {
+        p[c] = static_cast<std::int8_t>(static_cast<int>(rng.uniform(81)) - 40);
+        bounds[0][c] = std::min(bounds[0][c], p[c]);
+        bounds[1][c] = std::max(bounds[1][c], p[c]);
+      }
+    }
+    for (auto& v : q) v = static_cast<std::int8_t>(static_cast<int>(rng.uniform(121)) - 60);
+    const std::int32_t radius2 = static_cast<std::int32_t>(rng.uniform(3 * 40 * 40));
+    const std::int32_t box = static_cast<std::int32_t>(rng.uniform(40));
+    const int n = scan_leaf_i8(points.data(), kLeafSize, q, radius2, box, hits);
+    if (n > 0) {
+      ++checked;
+      ASSERT_TRUE(leaf_may_match_i8(bounds, q, radius2, box)) << "trial " << trial;
+    }
+  }
+  EXPECT_GT(checked, 100);
+}
+
 TEST(DescriptorEncoding, QuantiseRoundsAndSaturates) {
   EXPECT_EQ(quantise_component<std::int8_t>(1.f), 127);
   EXPECT_EQ(quantise_component<std::int8_t>(-1.f), -127);

@@ -1,0 +1,165 @@
+// Keytuple selection (core/selection.cpp) against a brute-force reading of
+// its definition, on a real model and frame: for every scene 3-circuit
+// (a, b, c), every model triple (a_m, b_m, c_m), clockwise, whose arcs
+// a_m -> b_m, b_m -> c_m and c_m -> a_m are each among the model arcs the
+// search finds for the corresponding scene arc. The selector reuses one
+// direction's look-up for the other and joins lists by merging; the
+// reference searches every directed scene arc on its own and joins sets.
+// With the float32 encoding and the exact search both directions of an arc
+// find the same model arcs (reversing a profile is an isometry of
+// descriptors), so the two must agree exactly.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <memory>
+#include <set>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+#include "build/model_builder.h"
+#include "core/arc_attributes.h"
+#include "core/arc_descriptor.h"
+#include "core/blur.h"
+#include "core/delaunay.h"
+#include "core/hessian.h"
+#include "core/keygraph.h"
+#include "core/sampling.h"
+#include "core/selection.h"
+#include "test_data.h"
+
+namespace kg {
+namespace {
+
+using Match = std::array<std::int64_t, 6>;  // model a, b, c, scene a, b, c
+
+struct Scene {
+  cv::Mat gray;
+  std::vector<Point2f> points;
+  std::vector<float> scales;
+  Delaunay triangulation;
+  WorkVector<SceneKeygraph> keygraphs;
+  Plane<std::uint8_t> blurred;
+};
+
+void prepare_scene(const cv::Mat& gray, const Params& params, const Limits& limits, Scene& s) {
+  s.gray = gray;
+  HessianDetector hessian;
+  std::vector<Keypoint> keypoints;
+  hessian.detect(ImageView(gray.data, gray.cols, gray.rows, static_cast<int>(gray.step)),
+                 params.keypoints, limits.max_keypoints, keypoints);
+  SeparatedSampler sampler;
+  std::vector<int> selected;
+  sampler.sample(keypoints.data(), static_cast<int>(keypoints.size()),
+                 params.graph.scene_sample_distance, nullptr, selected);
+  for (int i : selected) {
+    const Keypoint& k = keypoints[static_cast<std::size_t>(i)];
+    s.points.push_back({k.x, k.y});
+    s.scales.push_back(k.scale);
+  }
+  s.triangulation.triangulate(s.points.data(), static_cast<int>(s.points.size()));
+  scene_keygraphs(s.triangulation, s.points.data(), Structure::kCircuit3, s.keygraphs);
+  Plane<float> scratch;
+  gaussian_blur(ImageView(gray.data, gray.cols, gray.rows, static_cast<int>(gray.step)),
+                params.descriptor.blur_sigma, s.blurred, scratch);
+}
+
+TEST(Selection, EqualsBruteForceJoinOnRealImages) {
+  Params params;
+  params.descriptor.encoding = DescriptorEncoding::kFloat32;
+  params.descriptor.max_search_leaves = 0;  // exact
+  params.graph.max_anisotropy = 0.f;        // no local shape check: the bare definition
+  BuiltModel model;
+  ASSERT_TRUE(
+      build_model(test::load_gray(test::opencv_data("box.png")), "box", params, model).is_ok());
+  std::vector<std::uint8_t> bytes;
+  ASSERT_TRUE(serialize_index({model}, params, bytes).is_ok());
+  std::unique_ptr<std::uint8_t[]> storage(new std::uint8_t[bytes.size() + 64]);
+  const auto addr = reinterpret_cast<std::uintptr_t>(storage.get());
+  std::uint8_t* aligned = storage.get() + ((64 - addr % 64) % 64);
+  std::memcpy(aligned, bytes.data(), bytes.size());
+  ModelIndex index;
+  ASSERT_TRUE(ModelIndex::view(aligned, bytes.size(), index).is_ok());
+
+  const Limits limits;
+  Scene scene;
+  prepare_scene(test::load_gray(test::opencv_data("box_in_scene.png")), params, limits, scene);
+  ASSERT_GT(scene.keygraphs.size(), 300u);
+
+  const ArcSearch search(index);
+  Selector selector;
+  selector.reserve(limits);
+  SelectionInput in;
+  in.index = &index;
+  in.search = &search;
+  in.blurred = view_of(scene.blurred);
+  in.scene_points = scene.points.data();
+  in.scene_scales = scene.scales.data();
+  in.triangulation = &scene.triangulation;
+  in.keygraphs = &scene.keygraphs;
+  WorkVector<KeygraphMatch> matches;
+  matches.reserve(static_cast<std::size_t>(limits.max_correspondences));
+  DetectStats stats;
+  selector.select(in, limits, matches, stats);
+  ASSERT_FALSE(stats.truncated_arc_matches);
+  ASSERT_FALSE(stats.truncated_correspondences);
+
+  // Reference: each directed scene arc searched on its own.
+  const WorkVector<int>& tri = scene.triangulation.triangles();
+  std::vector<std::set<std::pair<std::uint32_t, std::uint32_t>>> similar(tri.size());
+  std::vector<float> profile;
+  std::vector<std::uint32_t> found(static_cast<std::size_t>(limits.max_arc_matches));
+  for (std::size_t e = 0; e < tri.size(); ++e) {
+    const int from = tri[e],
+              to = tri[static_cast<std::size_t>(Delaunay::next(static_cast<int>(e)))];
+    const Point2f a = scene.points[static_cast<std::size_t>(from)];
+    const Point2f b = scene.points[static_cast<std::size_t>(to)];
+    ArcDescriptor d;
+    if (chebyshev(a, b) < params.graph.min_distance ||
+        !arc_descriptor(in.blurred, a, b, params.descriptor, profile, d))
+      continue;
+    float attributes[kArcAttributes];
+    const bool scaled = arc_attributes(a, b, scene.scales[static_cast<std::size_t>(from)],
+                                       scene.scales[static_cast<std::size_t>(to)], attributes);
+    const std::uint32_t n = search.radius_search(d, scaled ? attributes : nullptr, found.data(),
+                                                 static_cast<std::uint32_t>(found.size()));
+    ASSERT_LE(n, found.size());
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const ModelArc arc = index.arc(found[i]);
+      similar[e].insert({arc.from, arc.to});
+    }
+  }
+  const Point2f* model_points = index.keypoints();
+  std::set<Match> expected;
+  for (const SceneKeygraph& g : scene.keygraphs) {
+    const auto& ab = similar[static_cast<std::size_t>(g.edges[0])];
+    const auto& bc = similar[static_cast<std::size_t>(g.edges[1])];
+    const auto& ca = similar[static_cast<std::size_t>(g.edges[2])];
+    for (const auto& [am, bm] : ab) {
+      for (auto it = bc.lower_bound({bm, 0}); it != bc.end() && it->first == bm; ++it) {
+        const std::uint32_t cm = it->second;
+        if (cm == am || ca.count({cm, am}) == 0) continue;
+        if (!(orient(model_points[am], model_points[bm], model_points[cm]) > 0.f)) continue;
+        expected.insert({am, bm, cm, tri[static_cast<std::size_t>(g.edges[0])],
+                         tri[static_cast<std::size_t>(g.edges[1])],
+                         tri[static_cast<std::size_t>(g.edges[2])]});
+      }
+    }
+  }
+  std::set<Match> selected;
+  for (const KeygraphMatch& m : matches) {
+    EXPECT_EQ(m.model_id, 0);
+    const bool fresh = selected
+                           .insert({m.model_vertices[0], m.model_vertices[1], m.model_vertices[2],
+                                    m.scene_vertices[0], m.scene_vertices[1], m.scene_vertices[2]})
+                           .second;
+    EXPECT_TRUE(fresh) << "a correspondence selected twice";
+  }
+  EXPECT_GT(expected.size(), 50u);  // the frame holds the box: many correspondences
+  EXPECT_EQ(selected, expected);
+}
+
+}  // namespace
+}  // namespace kg
