@@ -140,12 +140,12 @@ struct Frame {
   std::uint32_t end;
   int level;
   Dist bound;
-  Dist offset[kDescriptorSize];
+  typename KdTraits<T>::Offset offset[kDescriptorSize];
   // Approximate search only: the order in which cells are visited, `bound`
   // plus a penalty per attribute offset (attributes do not bound the
   // distance but do make a match less likely), and those offsets.
   double priority;
-  double attribute_offset[kSearchDims - kDescriptorSize];
+  typename KdTraits<T>::Offset attribute_offset[kSearchDims - kDescriptorSize];
 };
 
 // Pushes the two children of `f`, the far one first so the near one is
@@ -169,7 +169,7 @@ inline void push_children(const Frame<T>& f, const typename KdTraits<T>::Node& n
     if (!attribute) {
       const Dist old = f.offset[dim];
       far->bound = f.bound - old * old + diff * diff;
-      far->offset[dim] = diff;
+      far->offset[dim] = static_cast<typename KdTraits<T>::Offset>(diff);
     }
   }
   Frame<T>& near = stack[top++];
@@ -220,7 +220,7 @@ inline void descend_near(Frame<T>& f, const typename KdTraits<T>::Node& node,
       far = f;
       far.level = f.level + 1;
       far.bound = far_bound;
-      far.offset[dim] = diff;
+      far.offset[dim] = static_cast<typename KdTraits<T>::Offset>(diff);
       far.node = left ? 2 * f.node + 2 : 2 * f.node + 1;
       (left ? far.begin : far.end) = mid;
     }
@@ -244,9 +244,10 @@ inline void descend_near_ranked(Frame<T>& f, const typename KdTraits<T>::Node& n
   if (top == before) return;
   Frame<T>& far = stack[top - 1];
   if (dim >= static_cast<std::uint32_t>(kDescriptorSize)) {
-    double& offset = far.attribute_offset[dim - kDescriptorSize];
-    far.priority += attribute_cost * (diff * diff - offset * offset);
-    offset = diff;
+    auto& offset = far.attribute_offset[dim - kDescriptorSize];
+    const auto old = static_cast<double>(offset);
+    far.priority += attribute_cost * (diff * diff - old * old);
+    offset = static_cast<typename KdTraits<T>::Offset>(diff);
   } else {
     far.priority += static_cast<double>(far.bound) - static_cast<double>(f.bound);
   }
@@ -367,6 +368,7 @@ std::uint32_t BasicKdTreeView<T, D>::radius_search_approximate(const Point& q, D
     int cell;
   };
   Frame<T> cells[kCells];
+  Frame<T> dropped;
   Pending heap[kCells];
   int free_cells[kCells];
   int n_free = 0, n_used = 0, size = 0;
@@ -384,14 +386,19 @@ std::uint32_t BasicKdTreeView<T, D>::radius_search_approximate(const Point& q, D
     Frame<T> f = cells[cell];
     free_cells[n_free++] = cell;
     while (f.level < depth_) {
-      Frame<T> far[1];
+      // The far child, if kept, is written straight into the next free cell
+      // (or into `dropped` when none is left).
+      const int slot = n_free > 0 ? free_cells[n_free - 1] : n_used < kCells ? n_used : -1;
+      Frame<T>* far = slot >= 0 ? &cells[slot] : &dropped;
       int n_far = 0;
       descend_near_ranked<T, D>(f, nodes_[f.node], q, radius2, box, attribute_cost, far, n_far);
-      if (n_far == 0) continue;
-      const int slot = n_free > 0 ? free_cells[--n_free] : n_used < kCells ? n_used++ : -1;
-      if (slot < 0) continue;
-      cells[slot] = far[0];
-      heap[size++] = {far[0].priority, slot};
+      if (n_far == 0 || slot < 0) continue;
+      if (n_free > 0) {
+        --n_free;
+      } else {
+        ++n_used;
+      }
+      heap[size++] = {far->priority, slot};
       std::push_heap(heap, heap + size, later);
     }
     ++leaves;

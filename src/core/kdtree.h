@@ -44,20 +44,25 @@ struct KdNodeInt {
 
 template <class T>
 struct KdTraits;
+// Offset: a difference of two components (int8: within +-254), kept per
+// dimension by a search; small so search frames are cheap to copy.
 template <>
 struct KdTraits<float> {
   using Node = KdNode;
   using Dist = float;
+  using Offset = float;
 };
 template <>
 struct KdTraits<std::int16_t> {
   using Node = KdNodeInt;
   using Dist = std::int64_t;
+  using Offset = std::int32_t;
 };
 template <>
 struct KdTraits<std::int8_t> {
   using Node = KdNodeInt;
   using Dist = std::int32_t;
+  using Offset = std::int16_t;
 };
 
 template <class T, std::size_t D = kDescriptorSize>

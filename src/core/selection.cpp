@@ -6,36 +6,13 @@
 
 #include "core/arc_attributes.h"
 #include "core/arc_descriptor.h"
+#include "core/arc_keys.h"
 #include "core/descriptor_encoding.h"
 #include "core/sampling.h"
 #include "core/vertex_descriptor.h"
 
 namespace kg {
 namespace {
-
-inline std::uint64_t key(std::uint32_t from, std::uint32_t to) {
-  return (static_cast<std::uint64_t>(from) << 32) | to;
-}
-inline std::uint32_t from_of(std::uint64_t k) {
-  return static_cast<std::uint32_t>(k >> 32);
-}
-inline std::uint32_t to_of(std::uint64_t k) {
-  return static_cast<std::uint32_t>(k);
-}
-
-// Keys of `list` whose arc starts at `from`.
-inline std::pair<const std::uint64_t*, const std::uint64_t*> starting_at(const std::uint64_t* list,
-                                                                         std::uint32_t n,
-                                                                         std::uint32_t from) {
-  const std::uint64_t* lo = std::lower_bound(list, list + n, key(from, 0));
-  const std::uint64_t* hi = std::lower_bound(lo, list + n, key(from + 1, 0));
-  if (from == 0xFFFFFFFFu) hi = list + n;
-  return {lo, hi};
-}
-
-inline bool contains(const std::uint64_t* list, std::uint32_t n, std::uint64_t k) {
-  return std::binary_search(list, list + n, k);
-}
 
 // Whether the model -> scene map of a correspondence is a plausible local
 // distortion (GraphParams::max_anisotropy): the affine map through the
@@ -191,9 +168,9 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
     }
     for (std::uint32_t i = 0; i < n; ++i) {
       const std::uint64_t k = pool_[from + i];
-      pool_.push_back(key(to_of(k), from_of(k)));
+      pool_.push_back(arc_key(key_to(k), key_from(k)));
     }
-    std::sort(pool_.begin() + begin_[e], pool_.end());
+    sort_arc_keys(pool_.data() + begin_[e], sort_scratch_.data(), n, id_bits_);
     count_[e] = n;
     count = n;
     return;
@@ -229,9 +206,9 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
   if (n < total) stats.truncated_arc_matches = true;
   for (std::uint32_t i = 0; i < n; ++i) {
     const ModelArc arc = in.index->arc(found_[i]);
-    pool_.push_back(key(arc.from, arc.to));
+    pool_.push_back(arc_key(arc.from, arc.to));
   }
-  std::sort(pool_.begin() + begin_[e], pool_.end());
+  sort_arc_keys(pool_.data() + begin_[e], sort_scratch_.data(), n, id_bits_);
   count_[e] = n;
   count = n;
 }
@@ -260,19 +237,19 @@ bool Selector::join_triangle(const SelectionInput& in, const SceneKeygraph& g, i
   std::uint32_t v[kMaxVertices] = {0, 0, 0, 0};
   std::uint32_t i = 0, j = 0;
   while (i < n_ba && j < n_bc) {
-    const std::uint32_t b_of_ba = from_of(ba[i]), b_of_bc = from_of(bc[j]);
+    const std::uint32_t b_of_ba = key_from(ba[i]), b_of_bc = key_from(bc[j]);
     if (b_of_ba != b_of_bc) {
       (b_of_ba < b_of_bc ? i : j) += 1;
       continue;
     }
     std::uint32_t i_end = i + 1, j_end = j + 1;
-    while (i_end < n_ba && from_of(ba[i_end]) == b_of_ba) ++i_end;
-    while (j_end < n_bc && from_of(bc[j_end]) == b_of_ba) ++j_end;
+    while (i_end < n_ba && key_from(ba[i_end]) == b_of_ba) ++i_end;
+    while (j_end < n_bc && key_from(bc[j_end]) == b_of_ba) ++j_end;
     for (std::uint32_t x = i; x < i_end; ++x) {
-      const std::uint32_t a_m = to_of(ba[x]);
+      const std::uint32_t a_m = key_to(ba[x]);
       for (std::uint32_t y = j; y < j_end; ++y) {
-        const std::uint32_t c_m = to_of(bc[y]);
-        if (c_m == a_m || !contains(ca, n_ca, key(c_m, a_m))) continue;
+        const std::uint32_t c_m = key_to(bc[y]);
+        if (c_m == a_m || !contains_key(ca, n_ca, arc_key(c_m, a_m))) continue;
         v[r] = a_m;
         v[(r + 1) % 3] = b_of_ba;
         v[(r + 2) % 3] = c_m;
@@ -295,6 +272,7 @@ void Selector::reserve(const Limits& limits) {
   pool_limit_ = static_cast<std::size_t>(std::max(0, limits.max_arc_pool));
   pool_.reserve(pool_limit_);
   found_.reserve(static_cast<std::size_t>(std::max(0, limits.max_arc_matches)));
+  sort_scratch_.reserve(static_cast<std::size_t>(std::max(0, limits.max_arc_matches)));
   // A profile has at most the frame's longer side plus one samples.
   profile_.reserve(static_cast<std::size_t>(std::max(limits.max_width, limits.max_height)) + 1);
   sums_.reserve(profile_.capacity() + 30);
@@ -308,6 +286,10 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   begin_.resize(edges);
   count_.resize(edges);
   pool_.clear();
+  id_bits_ = id_bits(in.index->keypoint_count());
+  // Within what reserve() sized (the Detector's limits), this never allocates.
+  if (sort_scratch_.size() < static_cast<std::size_t>(std::max(0, limits.max_arc_matches)))
+    sort_scratch_.resize(static_cast<std::size_t>(limits.max_arc_matches));
   const Structure structure = in.index->params().graph.structure;
   const int k = vertex_count(structure);
   // An arc keygraph has one arc; a circuit has as many arcs as vertices.
@@ -380,28 +362,30 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     for (int i = 0; i < looked_up_arcs; ++i) r[i] = pool_.data() + begin_[g.edges[i]];
     bool room = true;
     for (std::uint32_t i0 = 0; i0 < n[0] && room; ++i0) {
-      std::uint32_t v[kMaxVertices] = {from_of(r[0][i0]), to_of(r[0][i0]), 0, 0};
+      std::uint32_t v[kMaxVertices] = {key_from(r[0][i0]), key_to(r[0][i0]), 0, 0};
       if (k == 2) {
         room = emit(v, g);
         continue;
       }
       // Join (a_m, b_m) with the similar arcs leaving b_m.
-      auto [b_lo, b_hi] = starting_at(r[1], n[1], v[1]);
+      const std::uint64_t *b_lo, *b_hi;
+      keys_from(r[1], n[1], v[1], b_lo, b_hi);
       for (const std::uint64_t* p1 = b_lo; p1 != b_hi && room; ++p1) {
-        v[2] = to_of(*p1);
+        v[2] = key_to(*p1);
         if (v[2] == v[0]) continue;
         if (k == 3) {
           // (c_m, a_m) must be similar to (c_s, a_s), and the triple clockwise.
-          if (!contains(r[2], n[2], key(v[2], v[0]))) continue;
+          if (!contains_key(r[2], n[2], arc_key(v[2], v[0]))) continue;
           if (!(orient(model_points[v[0]], model_points[v[1]], model_points[v[2]]) > 0.f)) continue;
           room = emit(v, g);
           continue;
         }
-        auto [c_lo, c_hi] = starting_at(r[2], n[2], v[2]);
+        const std::uint64_t *c_lo, *c_hi;
+        keys_from(r[2], n[2], v[2], c_lo, c_hi);
         for (const std::uint64_t* p2 = c_lo; p2 != c_hi && room; ++p2) {
-          v[3] = to_of(*p2);
+          v[3] = key_to(*p2);
           if (v[3] == v[0] || v[3] == v[1]) continue;
-          if (!contains(r[3], n[3], key(v[3], v[0]))) continue;
+          if (!contains_key(r[3], n[3], arc_key(v[3], v[0]))) continue;
           const Point2f q[4] = {model_points[v[0]], model_points[v[1]], model_points[v[2]],
                                 model_points[v[3]]};
           if (!is_clockwise_circuit(q, 4)) continue;

@@ -94,6 +94,7 @@ class Selector {
         count_(memory),
         pool_(memory),
         found_(memory),
+        sort_scratch_(memory),
         profile_(memory),
         sums_(memory) {}
 
@@ -128,6 +129,8 @@ class Selector {
   WorkVector<std::uint32_t> count_;
   WorkVector<std::uint64_t> pool_;  // model-arc keys of all lookups of the frame
   WorkVector<std::uint32_t> found_;
+  WorkVector<std::uint64_t> sort_scratch_;  // one look-up's keys (core/arc_keys.h)
+  int id_bits_ = 32;                        // bits of the index's keypoint ids
   WorkVector<float> profile_;
   WorkVector<std::int32_t> sums_;  // fixed-point profiles
   std::size_t pool_limit_ = static_cast<std::size_t>(-1);
