@@ -34,8 +34,10 @@ inline int id_bits(std::uint32_t ids) {
 // significant digit radix sort over `to` then `from`, each field in as few
 // digits of at most 8 bits as hold it (12-bit ids: two 6-bit digits).
 // `scratch` holds n keys. Stable, no comparisons; short lists are
-// insertion-sorted.
-inline void sort_arc_keys(std::uint64_t* keys, std::uint64_t* scratch, std::uint32_t n, int bits) {
+// insertion-sorted. With `sorted_by_to`, keys are already in order of `to`
+// (a reversed sorted list): only the `from` digits are sorted.
+inline void sort_arc_keys(std::uint64_t* keys, std::uint64_t* scratch, std::uint32_t n, int bits,
+                          bool sorted_by_to = false) {
   if (n <= 16) {
     for (std::uint32_t i = 1; i < n; ++i) {
       const std::uint64_t k = keys[i];
@@ -50,7 +52,7 @@ inline void sort_arc_keys(std::uint64_t* keys, std::uint64_t* scratch, std::uint
   const std::uint64_t mask = (std::uint64_t{1} << width) - 1;
   std::uint64_t* src = keys;
   std::uint64_t* dst = scratch;
-  for (int field = 0; field < 64; field += 32) {
+  for (int field = sorted_by_to ? 32 : 0; field < 64; field += 32) {
     for (int d = 0; d < digits; ++d) {
       const int shift = field + d * width;
       std::uint32_t count[257] = {};

@@ -170,7 +170,9 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
       const std::uint64_t k = pool_[from + i];
       pool_.push_back(arc_key(key_to(k), key_from(k)));
     }
-    sort_arc_keys(pool_.data() + begin_[e], sort_scratch_.data(), n, id_bits_);
+    // The opposite's list is sorted by source: the reversed keys are in
+    // order of target already.
+    sort_arc_keys(pool_.data() + begin_[e], sort_scratch_.data(), n, id_bits_, true);
     count_[e] = n;
     count = n;
     return;

@@ -50,6 +50,22 @@ TEST(ArcKeys, RadixSortEqualsStdSort) {
   }
 }
 
+TEST(ArcKeys, SortsReversedSortedListsByTheSourceAlone) {
+  Rng rng(7);
+  for (int bits : {3, 12, 17}) {
+    for (std::uint32_t n : {0u, 5u, 17u, 190u, 2000u}) {
+      std::vector<std::uint64_t> keys = random_keys(rng, n, bits);
+      std::sort(keys.begin(), keys.end());
+      for (auto& k : keys) k = arc_key(key_to(k), key_from(k));  // in order of `to` now
+      std::vector<std::uint64_t> expected = keys;
+      std::sort(expected.begin(), expected.end());
+      std::vector<std::uint64_t> scratch(n);
+      sort_arc_keys(keys.data(), scratch.data(), n, bits, true);
+      ASSERT_EQ(keys, expected) << "bits " << bits << " n " << n;
+    }
+  }
+}
+
 TEST(ArcKeys, SearchesEqualStdLowerBound) {
   Rng rng(6);
   for (std::uint32_t n : {0u, 1u, 2u, 5u, 64u, 190u, 777u}) {
