@@ -214,7 +214,8 @@ TEST(RuntimeMemory, WorkspaceForDefaultLimitsAt640x480) {
   ASSERT_EQ(limits.max_width, 640);
   ASSERT_EQ(limits.max_height, 480);
   const std::size_t bytes = Detector::workspace_bytes(f.index, limits);
-  constexpr std::size_t kRecorded = 21'300'000;  // measured 21 199 896 (x86-64)
+  // measured 21 235 408 (x86-64; 21 199 896 before the selection's 32 KB sort scratch)
+  constexpr std::size_t kRecorded = 21'300'000;
   std::printf("workspace for default limits at 640x480: %zu bytes\n", bytes);
   EXPECT_LE(bytes, kRecorded) << "the workspace grew past the recorded figure";
   // The figure is the layout itself: a detector hands out exactly that.
