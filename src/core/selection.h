@@ -6,7 +6,10 @@
 //
 // Scene arcs are Delaunay half-edges; each is described and looked up in
 // the model search tree at most once per frame, on first use. Each lookup's
-// model arcs are kept sorted by (from, to) so the joins are binary searches.
+// model arcs are kept sorted by (from, to) (radix sort, core/arc_keys.h): a
+// 3-circuit merges the reverse of one edge's list with the next edge's on
+// their shared vertex and looks the closing arc up by a branch-free binary
+// search; arcs and 4-circuits use those searches throughout.
 // With vertex descriptors, each vertex pair of a joined correspondence must
 // be similar too.
 #pragma once
