@@ -1,10 +1,11 @@
 // Model-arc keys of the selection (from << 32 | to, both model keypoint
 // ids) and the two operations it runs on lists of them: sorting and
-// searching. Both are written without data-dependent branches: a frame
-// sorts a few thousand lists of ~200 random keys and searches them tens of
-// thousands of times, and with std::sort and std::lower_bound the branch
-// mispredictions alone were about a third of a frame's time (callgrind
-// --branch-sim on graf3, 10-model index).
+// searching. The radix passes and the searches have no data-dependent
+// branches (only the insertion sort of lists of at most 16 keys has): a
+// frame sorts a few thousand lists of ~200 random keys and searches them
+// tens of thousands of times, and with std::sort and std::lower_bound the
+// branch mispredictions alone were about a third of a frame's time
+// (callgrind --branch-sim on graf3, 10-model index).
 #pragma once
 
 #include <cstddef>
@@ -55,7 +56,8 @@ inline void sort_arc_keys(std::uint64_t* keys, std::uint64_t* scratch, std::uint
   for (int field = sorted_by_to ? 32 : 0; field < 64; field += 32) {
     for (int d = 0; d < digits; ++d) {
       const int shift = field + d * width;
-      std::uint32_t count[257] = {};
+      std::uint32_t count[257];
+      std::memset(count, 0, static_cast<std::size_t>(mask + 2) * sizeof count[0]);
       for (std::uint32_t i = 0; i < n; ++i) ++count[((src[i] >> shift) & mask) + 1];
       for (std::uint64_t b = 0; b < mask + 1; ++b) count[b + 1] += count[b];
       for (std::uint32_t i = 0; i < n; ++i) dst[count[(src[i] >> shift) & mask]++] = src[i];

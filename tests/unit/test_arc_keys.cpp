@@ -15,9 +15,12 @@ namespace {
 std::vector<std::uint64_t> random_keys(Rng& rng, std::uint32_t n, int bits) {
   std::vector<std::uint64_t> keys(n);
   const std::uint32_t ids = bits >= 32 ? 0xFFFFFFFFu : (std::uint32_t{1} << bits);
+  // Sources from a small pool, so lists repeat them as a look-up's model
+  // arcs do (several arcs leave one keypoint).
+  std::vector<std::uint32_t> sources(std::max<std::uint32_t>(1, n / 4));
+  for (auto& v : sources) v = static_cast<std::uint32_t>(rng.uniform(ids));
   for (auto& k : keys) {
-    const auto from = static_cast<std::uint32_t>(rng.uniform(ids));
-    // Repeated sources, as a look-up's model arcs often share one.
+    const std::uint32_t from = sources[rng.uniform(static_cast<std::uint32_t>(sources.size()))];
     const auto to = static_cast<std::uint32_t>(rng.uniform(ids));
     k = arc_key(from, to);
   }
