@@ -13,6 +13,18 @@ namespace kg {
 static_assert(kSearchDims == 8 && kDescriptorSize == 6,
               "the vector code holds one point in 8 lanes: 6 descriptor, 2 attributes");
 
+#if defined(KG_LEAF_NEON) || defined(KG_LEAF_SSE2)
+namespace {
+
+// The box as an int16 lane limit. Differences are at most 254 in magnitude,
+// so |d| <= box saturates correctly at int16 for any box >= 254.
+inline std::int16_t box_limit(std::int32_t box) {
+  return static_cast<std::int16_t>(box > 32767 ? 32767 : box);
+}
+
+}  // namespace
+#endif
+
 int scan_leaf_i8_scalar(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q,
                         std::int32_t radius2, std::int32_t box, std::uint16_t* hits) {
   int found = 0;
@@ -55,27 +67,34 @@ const char* leaf_scan_isa() {
   return "neon";
 }
 
+namespace {
+
+// Whether the 8 int16 lanes of d (differences, or gaps to a box) lie within
+// radius2 over the descriptor lanes 0..5 and within `limit` in magnitude on
+// the attribute lanes 6, 7.
+inline bool inside(int16x8_t d, std::int32_t radius2, int16x4_t limit) {
+  const int16x4_t lo = vget_low_s16(d), hi = vget_high_s16(d);
+  // d0^2 + d1^2 + d2^2 + d3^2 and d4^2 + d5^2 (lanes 0, 1 of the high half).
+  const int32x4_t sq_lo = vmull_s16(lo, lo);
+  const int32x4_t sq_hi = vmull_s16(hi, hi);
+  const int32x2_t pairs = vadd_s32(vget_low_s32(sq_lo), vget_high_s32(sq_lo));
+  const std::int32_t d2 = vget_lane_s32(pairs, 0) + vget_lane_s32(pairs, 1) +
+                          vgetq_lane_s32(sq_hi, 0) + vgetq_lane_s32(sq_hi, 1);
+  const uint16x4_t within = vcle_s16(vabs_s16(hi), limit);  // lanes 2, 3: the attributes
+  return d2 < radius2 && vget_lane_u16(within, 2) != 0 && vget_lane_u16(within, 3) != 0;
+}
+
+}  // namespace
+
 int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, std::int32_t radius2,
                  std::int32_t box, std::uint16_t* hits) {
   const int8x8_t query = vld1_s8(q.data());
-  // Differences are at most 254 in magnitude, so |d| <= box saturates
-  // correctly at int16 for any box >= 254.
-  const int16x4_t limit = vdup_n_s16(static_cast<std::int16_t>(box > 32767 ? 32767 : box));
+  const int16x4_t limit = vdup_n_s16(box_limit(box));
   int found = 0;
   for (int i = 0; i < n; ++i) {
     const int16x8_t d = vsubl_s8(vld1_s8(p[i].data()), query);  // 8 x int16
-    const int16x4_t lo = vget_low_s16(d), hi = vget_high_s16(d);
-    // d0^2 + d1^2 + d2^2 + d3^2 and d4^2 + d5^2 (lanes 0, 1 of the high half).
-    const int32x4_t sq_lo = vmull_s16(lo, lo);
-    const int32x4_t sq_hi = vmull_s16(hi, hi);
-    const int32x2_t pairs = vadd_s32(vget_low_s32(sq_lo), vget_high_s32(sq_lo));
-    const std::int32_t d2 = vget_lane_s32(pairs, 0) + vget_lane_s32(pairs, 1) +
-                            vgetq_lane_s32(sq_hi, 0) + vgetq_lane_s32(sq_hi, 1);
-    const uint16x4_t within = vcle_s16(vabs_s16(hi), limit);  // lanes 2, 3: the attributes
-    const bool inside =
-        d2 < radius2 && vget_lane_u16(within, 2) != 0 && vget_lane_u16(within, 3) != 0;
     hits[found] = static_cast<std::uint16_t>(i);
-    found += inside ? 1 : 0;
+    found += inside(d, radius2, limit) ? 1 : 0;
   }
   return found;
 }
@@ -86,17 +105,10 @@ bool leaf_may_match_i8(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q
   const int16x8_t below = vsubq_s16(vmovl_s8(vld1_s8(bounds[0].data())), query);
   const int16x8_t above = vsubq_s16(query, vmovl_s8(vld1_s8(bounds[1].data())));
   const int16x8_t zero = vdupq_n_s16(0);
-  // below where it is positive, else max(above, 0).
+  // below where it is positive, else max(above, 0): never negative, so the
+  // magnitude test on the attributes is the gap test.
   const int16x8_t gap = vbslq_s16(vcgtq_s16(below, zero), below, vmaxq_s16(above, zero));
-  const int16x4_t lo = vget_low_s16(gap), hi = vget_high_s16(gap);
-  const int32x4_t sq_lo = vmull_s16(lo, lo);
-  const int32x4_t sq_hi = vmull_s16(hi, hi);
-  const int32x2_t pairs = vadd_s32(vget_low_s32(sq_lo), vget_high_s32(sq_lo));
-  const std::int32_t d2 = vget_lane_s32(pairs, 0) + vget_lane_s32(pairs, 1) +
-                          vgetq_lane_s32(sq_hi, 0) + vgetq_lane_s32(sq_hi, 1);
-  const uint16x4_t within =
-      vcle_s16(hi, vdup_n_s16(static_cast<std::int16_t>(box > 32767 ? 32767 : box)));
-  return d2 < radius2 && vget_lane_u16(within, 2) != 0 && vget_lane_u16(within, 3) != 0;
+  return inside(gap, radius2, vdup_n_s16(box_limit(box)));
 }
 
 #elif defined(KG_LEAF_SSE2)
@@ -125,7 +137,7 @@ int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, st
   // Squares of lanes 0..5 only: the attribute lanes 6, 7 are masked out of
   // the sum and compared with the box instead.
   const __m128i descriptor_lanes = _mm_set_epi16(0, 0, -1, -1, -1, -1, -1, -1);
-  const __m128i limit = _mm_set1_epi16(static_cast<short>(box > 32767 ? 32767 : box));
+  const __m128i limit = _mm_set1_epi16(box_limit(box));
   const __m128i r2 = _mm_set1_epi32(radius2);
   const __m128i zero = _mm_setzero_si128();
   int found = 0;
@@ -188,7 +200,7 @@ bool leaf_may_match_i8(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q
   const __m128i pair = _mm_add_epi32(sums, _mm_shuffle_epi32(sums, _MM_SHUFFLE(1, 0, 3, 2)));
   const __m128i total = _mm_add_epi32(pair, _mm_shuffle_epi32(pair, _MM_SHUFFLE(2, 3, 0, 1)));
   const std::int32_t d2 = _mm_cvtsi128_si32(total);
-  const __m128i limit = _mm_set1_epi16(static_cast<short>(box > 32767 ? 32767 : box));
+  const __m128i limit = _mm_set1_epi16(box_limit(box));
   const int outside = _mm_movemask_epi8(_mm_cmpgt_epi16(gap, limit)) & 0xF000;  // lanes 6, 7
   return outside == 0 && d2 < radius2;
 }

@@ -12,13 +12,12 @@
 
 #include <algorithm>
 #include <array>
-#include <cstring>
-#include <memory>
 #include <set>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
 
+#include "build/eval_index.h"
 #include "build/model_builder.h"
 #include "core/arc_attributes.h"
 #include "core/arc_descriptor.h"
@@ -70,8 +69,7 @@ void prepare_scene(const cv::Mat& gray, const Params& params, const Limits& limi
 // built once for every test here.
 struct Case {
   Params params;
-  std::unique_ptr<std::uint8_t[]> storage;
-  ModelIndex index;
+  EvalIndex built;
   Scene scene;
   std::set<Match> expected;
 };
@@ -84,19 +82,14 @@ void build_case(Case& c) {
   BuiltModel model;
   ASSERT_TRUE(
       build_model(test::load_gray(test::opencv_data("box.png")), "box", params, model).is_ok());
-  std::vector<std::uint8_t> bytes;
-  ASSERT_TRUE(serialize_index({model}, params, bytes).is_ok());
-  c.storage.reset(new std::uint8_t[bytes.size() + 64]);
-  const auto addr = reinterpret_cast<std::uintptr_t>(c.storage.get());
-  std::uint8_t* aligned = c.storage.get() + ((64 - addr % 64) % 64);
-  std::memcpy(aligned, bytes.data(), bytes.size());
-  ASSERT_TRUE(ModelIndex::view(aligned, bytes.size(), c.index).is_ok());
+  ASSERT_TRUE(c.built.build({model}, params).is_ok());
+  const ModelIndex& index = c.built.index();
   const Limits limits;
   prepare_scene(test::load_gray(test::opencv_data("box_in_scene.png")), params, limits, c.scene);
   ASSERT_GT(c.scene.keygraphs.size(), 300u);
 
   // Reference: each directed scene arc searched on its own.
-  const ArcSearch search(c.index);
+  const ArcSearch search(index);
   const WorkVector<int>& tri = c.scene.triangulation.triangles();
   std::vector<std::set<std::pair<std::uint32_t, std::uint32_t>>> similar(tri.size());
   std::vector<float> profile;
@@ -117,11 +110,11 @@ void build_case(Case& c) {
                                                  static_cast<std::uint32_t>(found.size()));
     ASSERT_LE(n, found.size());
     for (std::uint32_t i = 0; i < n; ++i) {
-      const ModelArc arc = c.index.arc(found[i]);
+      const ModelArc arc = index.arc(found[i]);
       similar[e].insert({arc.from, arc.to});
     }
   }
-  const Point2f* model_points = c.index.keypoints();
+  const Point2f* model_points = index.keypoints();
   for (const SceneKeygraph& g : c.scene.keygraphs) {
     const auto& ab = similar[static_cast<std::size_t>(g.edges[0])];
     const auto& bc = similar[static_cast<std::size_t>(g.edges[1])];
@@ -151,11 +144,11 @@ const Case& the_case() {
 
 // The selector's correspondences as a set (each must be new).
 std::set<Match> select_all(const Case& c, const Limits& limits, DetectStats& stats) {
-  const ArcSearch search(c.index);
+  const ArcSearch search(c.built.index());
   Selector selector;
   selector.reserve(limits);
   SelectionInput in;
-  in.index = &c.index;
+  in.index = &c.built.index();
   in.search = &search;
   in.blurred = view_of(c.scene.blurred);
   in.scene_points = c.scene.points.data();
