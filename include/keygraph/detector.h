@@ -33,14 +33,14 @@ inline constexpr int kMaxDetections = 64;  // capacity of a DetectionList
 // Capacities of the per-frame work, from which the workspace is sized.
 // Reaching one degrades detection (the stats say what was cut); it never
 // overflows. Detector::workspace_bytes() gives the memory they need (about
-// 21 MB for the defaults at 640x480: tests/integration/test_runtime_memory.cpp).
+// 17 MB for the defaults at 640x480: tests/integration/test_runtime_memory.cpp).
 struct Limits {
   int max_width = 640;  // largest frame, pixels
   int max_height = 480;
   int max_keypoints = 4000;         // detector output, strongest kept
   int max_scene_keypoints = 2000;   // after Chebyshev sampling
   int max_arc_matches = 4096;       // model arcs kept per scene arc query
-  int max_arc_pool = 1 << 20;       // model arcs kept over all queries of a frame
+  int max_arc_pool = 1 << 19;       // model arcs found over all queries of a frame
   int max_correspondences = 20000;  // keygraph correspondences per frame
   int max_detections = 16;          // at most kMaxDetections
   // The same limits for frames up to width x height.

@@ -162,7 +162,7 @@ Detector::Impl::Impl(const ModelIndex& idx, const Limits& l, std::pmr::memory_re
   scene_scales.reserve(scene);
   triangulation.reserve(l.max_scene_keypoints);
   keygraphs.reserve(3 * scene);  // edges, faces (2n) or internal edges (3n)
-  selector.reserve(l);
+  selector.reserve(l, idx.keypoint_count());
   matches.reserve(correspondences);
   grouped.reserve(correspondences);
   model_begin.reserve(static_cast<std::size_t>(idx.model_count()) + 1);

@@ -141,47 +141,30 @@ std::uint32_t ArcSearch::search_encoded(const ArcSearchPointI8& p, bool box, std
                          : i8_.radius_search(p, r2, b, out, capacity);
 }
 
-void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, const Limits& limits,
-                      DetectStats& stats) {
-  if (state_[e] == kLooked) {
-    count = count_[e];
-    return;
-  }
+Selector::ArcList Selector::lookup(const SelectionInput& in, int e, const Limits& limits,
+                                   DetectStats& stats) {
+  if (state_[e] != kUnseen) return {begin_[e], count_[e], state_[e] == kReversed};
   state_[e] = kLooked;
   begin_[e] = static_cast<std::uint32_t>(pool_.size());
   count_[e] = 0;
-  count = 0;
   // The reverse arc b -> a was looked up already: model arcs similar to it
   // are, reversed, the ones similar to a -> b (reversing a profile maps its
   // descriptor by x -> e^{2 pi i x / l} conj(F(x)), a Euclidean isometry,
-  // and the model holds both directions of every arc), so reuse them
-  // instead of describing and searching again. Only arcs within one
-  // quantisation step of the threshold can differ.
+  // and the model holds both directions of every arc), so read its keys
+  // the other way round instead of describing and searching again. Only
+  // arcs within one quantisation step of the threshold can differ.
   const int opposite = in.triangulation->halfedges()[e];
-  const std::size_t room = pool_limit_ - std::min(pool_limit_, pool_.size());
   if (opposite >= 0 && state_[opposite] == kLooked) {
-    const std::uint32_t from = begin_[opposite];
-    std::uint32_t n = count_[opposite];
-    if (n > room) {
-      stats.truncated_arc_matches = true;
-      n = static_cast<std::uint32_t>(room);
-    }
-    for (std::uint32_t i = 0; i < n; ++i) {
-      const std::uint64_t k = pool_[from + i];
-      pool_.push_back(arc_key(key_to(k), key_from(k)));
-    }
-    // The opposite's list is sorted by source: the reversed keys are in
-    // order of target already.
-    sort_arc_keys(pool_.data() + begin_[e], sort_scratch_.data(), n, id_bits_, true);
-    count_[e] = n;
-    count = n;
-    return;
+    state_[e] = kReversed;
+    begin_[e] = begin_[opposite];
+    count_[e] = count_[opposite];
+    return {begin_[e], count_[e], true};
   }
   const WorkVector<int>& tri = in.triangulation->triangles();
   const Point2f a = in.scene_points[tri[e]];
   const Point2f b = in.scene_points[tri[Delaunay::next(e)]];
   const Params& params = in.index->params();
-  if (chebyshev(a, b) < params.graph.min_distance) return;
+  if (chebyshev(a, b) < params.graph.min_distance) return {begin_[e], 0, false};
   // Integer encodings describe in fixed point (already quantised); float32
   // is the float reference.
   const bool fixed = uses_fixed_point(params.descriptor);
@@ -190,7 +173,7 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
   if (fixed ? !arc_descriptor_fixed(in.blurred, a, b, params.descriptor,
                                     encoding_scale(params.descriptor.encoding), sums_, q)
             : !arc_descriptor(in.blurred, a, b, params.descriptor, profile_, d))
-    return;
+    return {begin_[e], 0, false};
   ++stats.arcs_described;
   const auto cap = static_cast<std::uint32_t>(limits.max_arc_matches);
   found_.resize(cap);
@@ -204,69 +187,106 @@ void Selector::lookup(const SelectionInput& in, int e, std::uint32_t& count, con
           : in.search->radius_search(d, scaled ? attributes : nullptr, found_.data(), cap);
   stats.arc_matches += total;
   std::uint32_t n = std::min(total, cap);
+  const std::size_t room = pool_limit_ - std::min(pool_limit_, pool_.size());
   if (n > room) n = static_cast<std::uint32_t>(room);
   if (n < total) stats.truncated_arc_matches = true;
   for (std::uint32_t i = 0; i < n; ++i) {
     const ModelArc arc = in.index->arc(found_[i]);
     pool_.push_back(arc_key(arc.from, arc.to));
   }
-  sort_arc_keys(pool_.data() + begin_[e], sort_scratch_.data(), n, id_bits_);
   count_[e] = n;
-  count = n;
+  return {begin_[e], n, false};
 }
 
-template <class Emit>
-bool Selector::join_triangle(const SelectionInput& in, const SceneKeygraph& g, int r,
-                             const Limits& limits, DetectStats& stats, Emit& emit) {
-  // Scene triangle (a, b, c) rotated so that a -> b is edge r: model arcs
-  // b_m -> a_m (the reverse of those similar to a -> b), b_m -> c_m and
-  // c_m -> a_m, each list sorted by (source, target).
-  const int e_bc = g.edges[(r + 1) % 3];
-  const int e_ca = g.edges[(r + 2) % 3];
-  const int e_ba = in.triangulation->halfedges()[g.edges[r]];
-  std::uint32_t n_ba = 0, n_bc = 0, n_ca = 0;
-  lookup(in, e_ba, n_ba, limits, stats);
-  if (n_ba == 0) return true;
-  lookup(in, e_bc, n_bc, limits, stats);
-  if (n_bc == 0) return true;
-  lookup(in, e_ca, n_ca, limits, stats);
-  if (n_ca == 0) return true;
-  // Resolved after all lookups: a lookup may grow (move) the pool.
-  const std::uint64_t* ba = pool_.data() + begin_[e_ba];
-  const std::uint64_t* bc = pool_.data() + begin_[e_bc];
-  const std::uint64_t* ca = pool_.data() + begin_[e_ca];
-  const Point2f* model_points = in.index->keypoints();
-  std::uint32_t v[kMaxVertices] = {0, 0, 0, 0};
-  std::uint32_t i = 0, j = 0;
-  while (i < n_ba && j < n_bc) {
-    const std::uint32_t b_of_ba = key_from(ba[i]), b_of_bc = key_from(bc[j]);
-    if (b_of_ba != b_of_bc) {
-      (b_of_ba < b_of_bc ? i : j) += 1;
-      continue;
+bool Selector::candidate_lists(const ArcList* lists, int k) {
+  // A semi-join: list i is cut to the arcs u -> v where u is the target of
+  // an arc kept in list i - 1 (of the whole last list, for list 0) and v
+  // the source of one in list i + 1 (whole; of kept list 0, for the last).
+  // Flags per model keypoint say which lists it leaves (bit i) and enters
+  // (bit 4 + i); each pass clears what it no longer needs, so the flags are
+  // all clear again on return.
+  std::uint8_t* const flags = flags_.data();
+  const int last = k - 1;
+  auto leaves = [](int i) { return static_cast<std::uint8_t>(1u << i); };
+  auto enters = [](int i) { return static_cast<std::uint8_t>(16u << i); };
+  // List i's keys and the rotation (0 or 32 bits) that makes them
+  // (from << 32 | to), held in locals: the flag stores may alias anything.
+  const std::uint64_t* keys[kMaxVertices] = {nullptr, nullptr, nullptr, nullptr};
+  std::uint32_t count[kMaxVertices] = {0, 0, 0, 0};
+  int shift[kMaxVertices] = {0, 0, 0, 0};
+  for (int i = 0; i <= last; ++i) {
+    keys[i] = pool_.data() + lists[i].begin;
+    count[i] = lists[i].count;
+    shift[i] = lists[i].reversed ? 32 : 0;
+  }
+  auto arc = [](std::uint64_t key, int s) { return (key >> s) | (key << ((64 - s) & 63)); };
+  auto clear = [flags](const std::uint64_t* list, std::uint32_t n) {
+    for (std::uint32_t x = 0; x < n; ++x) {
+      flags[key_from(list[x])] = 0;  // both ends: the rotation does not matter
+      flags[key_to(list[x])] = 0;
     }
-    std::uint32_t i_end = i + 1, j_end = j + 1;
-    while (i_end < n_ba && key_from(ba[i_end]) == b_of_ba) ++i_end;
-    while (j_end < n_bc && key_from(bc[j_end]) == b_of_ba) ++j_end;
-    for (std::uint32_t x = i; x < i_end; ++x) {
-      const std::uint32_t a_m = key_to(ba[x]);
-      for (std::uint32_t y = j; y < j_end; ++y) {
-        const std::uint32_t c_m = key_to(bc[y]);
-        if (c_m == a_m || !contains_key(ca, n_ca, arc_key(c_m, a_m))) continue;
-        v[r] = a_m;
-        v[(r + 1) % 3] = b_of_ba;
-        v[(r + 2) % 3] = c_m;
-        // In vertex order, as the other structures test it.
-        if (!(orient(model_points[v[0]], model_points[v[1]], model_points[v[2]]) > 0.f)) continue;
-        if (!emit(v, g)) return false;
+  };
+  for (int i = 1; i < last; ++i) {
+    const std::uint64_t* list = keys[i];
+    const std::uint32_t n = count[i];
+    const int s = shift[i];
+    const std::uint8_t bit = leaves(i);
+    for (std::uint32_t x = 0; x < n; ++x) flags[key_from(arc(list[x], s))] |= bit;
+  }
+  {
+    const std::uint64_t* list = keys[last];
+    const std::uint32_t n = count[last];
+    const int s = shift[last];
+    const std::uint8_t from_bit = leaves(last), to_bit = enters(last);
+    for (std::uint32_t x = 0; x < n; ++x) {
+      const std::uint64_t a = arc(list[x], s);
+      flags[key_from(a)] |= from_bit;
+      flags[key_to(a)] |= to_bit;
+    }
+  }
+  for (int i = 0; i <= last; ++i) {
+    const std::uint8_t entered = enters(i == 0 ? last : i - 1);
+    const std::uint8_t left = leaves(i == last ? 0 : i + 1);
+    // List i's own bits, no longer tested once it is cut (list 0 has none yet).
+    const auto keep_at_from = static_cast<std::uint8_t>(i == 0 ? 0xFF : ~leaves(i));
+    const auto keep_at_to = static_cast<std::uint8_t>(i == last ? ~enters(last) : 0xFF);
+    const std::uint64_t* list = keys[i];
+    const std::uint32_t total = count[i];
+    const int s = shift[i];
+    std::uint64_t* const out = kept_[i].data();
+    std::uint32_t n = 0;
+    for (std::uint32_t x = 0; x < total; ++x) {
+      const std::uint64_t a = arc(list[x], s);
+      const std::uint32_t from = key_from(a), to = key_to(a);
+      out[n] = a;
+      // Branch-free: most arcs are dropped.
+      n += static_cast<std::uint32_t>(((flags[from] & entered) != 0) & ((flags[to] & left) != 0));
+      flags[from] &= keep_at_from;
+      flags[to] &= keep_at_to;
+    }
+    kept_count_[i] = n;
+    if (n == 0) {
+      // No circuit: clear the later lists' bits and the kept lists' marks.
+      for (int j = i + 1; j <= last; ++j) clear(keys[j], count[j]);
+      for (int j = 0; j < i; ++j) clear(kept_[j].data(), kept_count_[j]);
+      return false;
+    }
+    // What the next lists test of this one.
+    if (i < last) {
+      const std::uint8_t to_bit = enters(i);
+      for (std::uint32_t x = 0; x < n; ++x) {
+        if (i == 0) flags[key_from(out[x])] |= leaves(0);
+        flags[key_to(out[x])] |= to_bit;
       }
     }
-    i = i_end;
-    j = j_end;
   }
+  for (int j = 0; j < last; ++j) clear(kept_[j].data(), kept_count_[j]);
+  for (int i = 0; i <= last; ++i)
+    sort_arc_keys(kept_[i].data(), sort_scratch_.data(), kept_count_[i], id_bits_);
   return true;
 }
 
-void Selector::reserve(const Limits& limits) {
+void Selector::reserve(const Limits& limits, std::uint32_t model_keypoints) {
   const auto half_edges = 6 * static_cast<std::size_t>(std::max(0, limits.max_scene_keypoints));
   state_.reserve(half_edges);
   begin_.reserve(half_edges);
@@ -274,7 +294,10 @@ void Selector::reserve(const Limits& limits) {
   pool_limit_ = static_cast<std::size_t>(std::max(0, limits.max_arc_pool));
   pool_.reserve(pool_limit_);
   found_.reserve(static_cast<std::size_t>(std::max(0, limits.max_arc_matches)));
-  sort_scratch_.reserve(static_cast<std::size_t>(std::max(0, limits.max_arc_matches)));
+  const auto per_query = static_cast<std::size_t>(std::max(0, limits.max_arc_matches));
+  sort_scratch_.reserve(per_query);
+  for (WorkVector<std::uint64_t>& kept : kept_) kept.reserve(per_query);
+  flags_.reserve(model_keypoints);
   // A profile has at most the frame's longer side plus one samples.
   profile_.reserve(static_cast<std::size_t>(std::max(limits.max_width, limits.max_height)) + 1);
   sums_.reserve(profile_.capacity() + 30);
@@ -289,9 +312,14 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   count_.resize(edges);
   pool_.clear();
   id_bits_ = id_bits(in.index->keypoint_count());
-  // Within what reserve() sized (the Detector's limits), this never allocates.
-  if (sort_scratch_.size() < static_cast<std::size_t>(std::max(0, limits.max_arc_matches)))
-    sort_scratch_.resize(static_cast<std::size_t>(limits.max_arc_matches));
+  // Within what reserve() sized (the Detector's limits and index), this
+  // never allocates.
+  const auto per_query = static_cast<std::size_t>(std::max(0, limits.max_arc_matches));
+  if (sort_scratch_.size() < per_query) sort_scratch_.resize(per_query);
+  for (WorkVector<std::uint64_t>& kept : kept_)
+    if (kept.size() < per_query) kept.resize(per_query);
+  // All clear between keygraphs (candidate_lists() clears what it flags).
+  flags_.assign(in.index->keypoint_count(), 0);
   const Structure structure = in.index->params().graph.structure;
   const int k = vertex_count(structure);
   // An arc keygraph has one arc; a circuit has as many arcs as vertices.
@@ -339,36 +367,33 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     return true;
   };
 
-  const WorkVector<int>& opposite = in.triangulation->halfedges();
   for (const SceneKeygraph& g : *in.keygraphs) {
-    if (k == 3) {
-      // Rotated so that edge r has an opposite half-edge: a merge join needs
-      // edge r's model arcs ordered by their target, which is the opposite's
-      // list (sorted by source).
-      int r = 0;
-      while (r < 3 && opposite[g.edges[r]] < 0) ++r;
-      if (r < 3) {
-        if (!join_triangle(in, g, r, limits, stats, emit)) break;
-        continue;
-      }
-    }
-    std::uint32_t n[kMaxVertices] = {0, 0, 0, 0};
-    const std::uint64_t* r[kMaxVertices] = {nullptr, nullptr, nullptr, nullptr};
+    ArcList lists[kMaxVertices];
     bool empty = false;
     for (int i = 0; i < looked_up_arcs && !empty; ++i) {
-      lookup(in, g.edges[i], n[i], limits, stats);
-      empty = n[i] == 0;
+      lists[i] = lookup(in, g.edges[i], limits, stats);
+      empty = lists[i].count == 0;
     }
     if (empty) continue;
-    // Resolve after all lookups: a lookup may grow (move) the pool.
-    for (int i = 0; i < looked_up_arcs; ++i) r[i] = pool_.data() + begin_[g.edges[i]];
     bool room = true;
+    if (k == 2) {
+      for (std::uint32_t x = 0; x < lists[0].count && room; ++x) {
+        const std::uint64_t key = pool_[lists[0].begin + x];
+        std::uint32_t v[kMaxVertices] = {key_from(key), key_to(key), 0, 0};
+        if (lists[0].reversed) std::swap(v[0], v[1]);
+        room = emit(v, g);
+      }
+      if (!room) break;
+      continue;
+    }
+    // Only the few arcs whose ends are candidates of both their vertices
+    // can close a circuit: join those, sorted by (from, to).
+    if (!candidate_lists(lists, k)) continue;
+    const std::uint64_t* r[kMaxVertices] = {kept_[0].data(), kept_[1].data(), kept_[2].data(),
+                                            kept_[3].data()};
+    const std::uint32_t* n = kept_count_;
     for (std::uint32_t i0 = 0; i0 < n[0] && room; ++i0) {
       std::uint32_t v[kMaxVertices] = {key_from(r[0][i0]), key_to(r[0][i0]), 0, 0};
-      if (k == 2) {
-        room = emit(v, g);
-        continue;
-      }
       // Join (a_m, b_m) with the similar arcs leaving b_m.
       const std::uint64_t *b_lo, *b_hi;
       keys_from(r[1], n[1], v[1], b_lo, b_hi);

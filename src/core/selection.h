@@ -5,11 +5,12 @@
 // keytuple (clockwise). Arcs and 4-circuits follow the same chain.
 //
 // Scene arcs are Delaunay half-edges; each is described and looked up in
-// the model search tree at most once per frame, on first use. Each lookup's
-// model arcs are kept sorted by (from, to) (radix sort, core/arc_keys.h): a
-// 3-circuit merges the reverse of one edge's list with the next edge's on
-// their shared vertex and looks the closing arc up by a branch-free binary
-// search; arcs and 4-circuits use those searches throughout.
+// the model search tree at most once per frame, on first use, and its
+// opposite half-edge reads the same model arcs reversed. A circuit's lists
+// are first cut to the arcs whose ends are candidates of both their scene
+// vertices (a byte of flags per model keypoint: which lists it leaves and
+// enters), which drops nearly all of them; the few left are sorted by
+// (from, to) (core/arc_keys.h) and joined by binary searches.
 // With vertex descriptors, each vertex pair of a joined correspondence must
 // be similar too.
 #pragma once
@@ -98,42 +99,59 @@ class Selector {
         pool_(memory),
         found_(memory),
         sort_scratch_(memory),
+        kept_{WorkVector<std::uint64_t>(memory), WorkVector<std::uint64_t>(memory),
+              WorkVector<std::uint64_t>(memory), WorkVector<std::uint64_t>(memory)},
+        flags_(memory),
         profile_(memory),
         sums_(memory) {}
 
   // Sizes the buffers for `limits` (scene keypoints, arc matches per query
-  // and per frame, frame size for the profiles): select() then allocates
-  // nothing, and stops looking up model arcs once limits.max_arc_pool are
-  // kept in a frame.
-  void reserve(const Limits& limits);
+  // and per frame, frame size for the profiles) and an index of
+  // `model_keypoints` keypoints: select() then allocates nothing, and stops
+  // looking up model arcs once limits.max_arc_pool are kept in a frame.
+  void reserve(const Limits& limits, std::uint32_t model_keypoints);
 
   // Clears and fills `matches` (at most limits.max_correspondences); updates
   // stats.arcs_described, correspondences and the truncation flags.
   void select(const SelectionInput& in, const Limits& limits, WorkVector<KeygraphMatch>& matches,
               DetectStats& stats);
 
+  // Whether every model keypoint's candidate flags are clear, as select()
+  // must leave them (a left-over flag would only cost time; tests check).
+  bool candidate_flags_clear() const {
+    for (std::uint8_t f : flags_)
+      if (f != 0) return false;
+    return true;
+  }
+
  private:
-  // Stores at pool_[begin_[e]..) the sorted model-arc keys (from << 32 | to)
-  // similar to half-edge e (none when the arc has no descriptor).
-  void lookup(const SelectionInput& in, int e, std::uint32_t& count, const Limits& limits,
-              DetectStats& stats);
+  // The model-arc keys (from << 32 | to) similar to one half-edge:
+  // pool_[begin..begin + count), each to be read the other way round when
+  // `reversed`.
+  struct ArcList {
+    std::uint32_t begin = 0;
+    std::uint32_t count = 0;
+    bool reversed = false;
+  };
+  // Half-edge e's list, looked up on first use (empty when the arc has no
+  // descriptor).
+  ArcList lookup(const SelectionInput& in, int e, const Limits& limits, DetectStats& stats);
 
-  // The 3-circuit correspondences of scene keygraph g whose edge r has an
-  // opposite half-edge, by a merge join of that opposite's model arcs with
-  // the next edge's on their shared vertex; passes each to emit (false:
-  // stop, returned).
-  template <class Emit>
-  bool join_triangle(const SelectionInput& in, const SceneKeygraph& g, int r, const Limits& limits,
-                     DetectStats& stats, Emit& emit);
+  // Fills kept_[0..k) with the arcs of lists[0..k) (a k-circuit's, in
+  // order) that can close a circuit, each sorted; false when one is empty.
+  bool candidate_lists(const ArcList* lists, int k);
 
-  enum : std::uint8_t { kUnseen = 0, kLooked = 1 };
+  enum : std::uint8_t { kUnseen = 0, kLooked = 1, kReversed = 2 };
   WorkVector<std::uint8_t> state_;
   WorkVector<std::uint32_t> begin_;
   WorkVector<std::uint32_t> count_;
-  WorkVector<std::uint64_t> pool_;  // model-arc keys of all lookups of the frame
+  WorkVector<std::uint64_t> pool_;  // model-arc keys of all lookups of the frame, unsorted
   WorkVector<std::uint32_t> found_;
-  WorkVector<std::uint64_t> sort_scratch_;  // one look-up's keys (core/arc_keys.h)
-  int id_bits_ = 32;                        // bits of the index's keypoint ids
+  WorkVector<std::uint64_t> sort_scratch_;  // one kept list (core/arc_keys.h)
+  WorkVector<std::uint64_t> kept_[kMaxVertices];
+  std::uint32_t kept_count_[kMaxVertices] = {0, 0, 0, 0};
+  WorkVector<std::uint8_t> flags_;  // per model keypoint: bit 2i leaves, 2i + 1 enters list i
+  int id_bits_ = 32;                // bits of the index's keypoint ids
   WorkVector<float> profile_;
   WorkVector<std::int32_t> sums_;  // fixed-point profiles
   std::size_t pool_limit_ = static_cast<std::size_t>(-1);

@@ -324,7 +324,7 @@ void arc_search_stage(benchmark::State& state, const Frame* f) {
 void selection_stage(benchmark::State& state, const Frame* f) {
   const ArcSearch search(data().index.index());
   Selector selector;
-  selector.reserve(data().limits);
+  selector.reserve(data().limits, data().index.index().keypoint_count());
   SelectionInput in;
   in.index = &data().index.index();
   in.search = &search;

@@ -32,7 +32,7 @@
 namespace kg {
 namespace {
 
-using Match = std::array<std::int64_t, 6>;  // model a, b, c, scene a, b, c
+using Match = std::array<std::int64_t, 8>;  // model vertices, scene vertices (4-circuits: 4 + 4)
 
 struct Scene {
   cv::Mat gray;
@@ -59,7 +59,7 @@ void prepare_scene(const cv::Mat& gray, const Params& params, const Limits& limi
     s.scales.push_back(k.scale);
   }
   s.triangulation.triangulate(s.points.data(), static_cast<int>(s.points.size()));
-  scene_keygraphs(s.triangulation, s.points.data(), Structure::kCircuit3, s.keygraphs);
+  scene_keygraphs(s.triangulation, s.points.data(), params.graph.structure, s.keygraphs);
   Plane<float> scratch;
   gaussian_blur(ImageView(gray.data, gray.cols, gray.rows, static_cast<int>(gray.step)),
                 params.descriptor.blur_sigma, s.blurred, scratch);
@@ -74,7 +74,8 @@ struct Case {
   std::set<Match> expected;
 };
 
-void build_case(Case& c) {
+void build_case(Case& c, Structure structure) {
+  c.params.graph.structure = structure;
   c.params.descriptor.encoding = DescriptorEncoding::kFloat32;
   c.params.descriptor.max_search_leaves = 0;  // exact
   c.params.graph.max_anisotropy = 0.f;        // no local shape check: the bare definition
@@ -115,38 +116,57 @@ void build_case(Case& c) {
     }
   }
   const Point2f* model_points = index.keypoints();
+  const int k = vertex_count(structure);
   for (const SceneKeygraph& g : c.scene.keygraphs) {
     const auto& ab = similar[static_cast<std::size_t>(g.edges[0])];
     const auto& bc = similar[static_cast<std::size_t>(g.edges[1])];
-    const auto& ca = similar[static_cast<std::size_t>(g.edges[2])];
+    const auto& cx = similar[static_cast<std::size_t>(g.edges[2])];
+    Match scene{};
+    for (int i = 0; i < k; ++i) scene[4 + i] = tri[static_cast<std::size_t>(g.edges[i])];
     for (const auto& [am, bm] : ab) {
       for (auto it = bc.lower_bound({bm, 0}); it != bc.end() && it->first == bm; ++it) {
         const std::uint32_t cm = it->second;
-        if (cm == am || ca.count({cm, am}) == 0) continue;
-        if (!(orient(model_points[am], model_points[bm], model_points[cm]) > 0.f)) continue;
-        c.expected.insert({am, bm, cm, tri[static_cast<std::size_t>(g.edges[0])],
-                           tri[static_cast<std::size_t>(g.edges[1])],
-                           tri[static_cast<std::size_t>(g.edges[2])]});
+        if (cm == am) continue;
+        if (k == 3) {
+          if (cx.count({cm, am}) == 0) continue;
+          if (!(orient(model_points[am], model_points[bm], model_points[cm]) > 0.f)) continue;
+          Match m = scene;
+          m[0] = am, m[1] = bm, m[2] = cm;
+          c.expected.insert(m);
+          continue;
+        }
+        const auto& da = similar[static_cast<std::size_t>(g.edges[3])];
+        for (auto jt = cx.lower_bound({cm, 0}); jt != cx.end() && jt->first == cm; ++jt) {
+          const std::uint32_t dm = jt->second;
+          if (dm == am || dm == bm || da.count({dm, am}) == 0) continue;
+          const Point2f q[4] = {model_points[am], model_points[bm], model_points[cm],
+                                model_points[dm]};
+          if (!is_clockwise_circuit(q, 4)) continue;
+          Match m = scene;
+          m[0] = am, m[1] = bm, m[2] = cm, m[3] = dm;
+          c.expected.insert(m);
+        }
       }
     }
   }
 }
 
-const Case& the_case() {
-  static Case c;
-  static bool built = false;
-  if (!built) {
-    build_case(c);
-    built = true;
+const Case& the_case(Structure structure = Structure::kCircuit3) {
+  static Case cases[2];
+  static bool built[2] = {false, false};
+  const int i = structure == Structure::kCircuit3 ? 0 : 1;
+  if (!built[i]) {
+    build_case(cases[i], structure);
+    built[i] = true;
   }
-  return c;
+  return cases[i];
 }
 
 // The selector's correspondences as a set (each must be new).
 std::set<Match> select_all(const Case& c, const Limits& limits, DetectStats& stats) {
   const ArcSearch search(c.built.index());
   Selector selector;
-  selector.reserve(limits);
+  selector.reserve(limits, c.built.index().keypoint_count());
   SelectionInput in;
   in.index = &c.built.index();
   in.search = &search;
@@ -158,13 +178,16 @@ std::set<Match> select_all(const Case& c, const Limits& limits, DetectStats& sta
   WorkVector<KeygraphMatch> matches;
   matches.reserve(static_cast<std::size_t>(limits.max_correspondences));
   selector.select(in, limits, matches, stats);
+  EXPECT_TRUE(selector.candidate_flags_clear());
   std::set<Match> selected;
   for (const KeygraphMatch& m : matches) {
     EXPECT_EQ(m.model_id, 0);
-    const bool fresh = selected
-                           .insert({m.model_vertices[0], m.model_vertices[1], m.model_vertices[2],
-                                    m.scene_vertices[0], m.scene_vertices[1], m.scene_vertices[2]})
-                           .second;
+    Match key{};
+    for (int i = 0; i < vertex_count(c.params.graph.structure); ++i) {
+      key[i] = m.model_vertices[i];
+      key[4 + i] = m.scene_vertices[i];
+    }
+    const bool fresh = selected.insert(key).second;
     EXPECT_TRUE(fresh) << "a correspondence selected twice";
   }
   return selected;
@@ -174,6 +197,19 @@ TEST(Selection, EqualsBruteForceJoinOnRealImages) {
   const Case& c = the_case();
   // The frame holds the box: many correspondences (none: the case failed to build).
   ASSERT_GT(c.expected.size(), 50u);
+  DetectStats stats;
+  const std::set<Match> selected = select_all(c, Limits{}, stats);
+  ASSERT_FALSE(stats.truncated_arc_matches);
+  ASSERT_FALSE(stats.truncated_correspondences);
+  EXPECT_EQ(selected, c.expected);
+}
+
+// The same for 4-circuits, whose middle lists are cut against both
+// neighbours' kept arcs.
+TEST(Selection, FourCircuitsEqualBruteForceJoinOnRealImages) {
+  const Case& c = the_case(Structure::kCircuit4);
+  // Fewer than with triangles: all four arcs must be similar.
+  ASSERT_GE(c.expected.size(), 10u);
   DetectStats stats;
   const std::set<Match> selected = select_all(c, Limits{}, stats);
   ASSERT_FALSE(stats.truncated_arc_matches);
