@@ -19,7 +19,9 @@ inline constexpr std::uint8_t kMagic[8] = {0x89, 'K', 'G', 'I', '\r', '\n', 0x1A
 // 2.0: arcs in tree order (no tree-id section), encoded descriptors.
 // 3.0: keypoint scales (section 8), graph.max_scale_error, and tree points
 // of descriptor plus scale attributes (kSearchDims components).
-inline constexpr std::uint16_t kVersionMajor = 4;
+// 4.0: scale attributes on a 1/16-log grid, leaf bounds.
+// 5.0: search-tree leaves of up to 64 arcs (kLeafSize; 4.x: 32).
+inline constexpr std::uint16_t kVersionMajor = 5;
 inline constexpr std::uint16_t kVersionMinor = 0;
 inline constexpr std::size_t kAlignment = 64;
 

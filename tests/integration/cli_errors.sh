@@ -184,7 +184,7 @@ if "$KG" inspect "$INDEX" >"$LOG/stdout" 2>"$LOG/stderr"; then
   [ "$(grep -Ec '^ +[0-9]+ .* crc ok$' "$LOG/stdout")" -eq 10 ] ||
     bad "inspect: expected 10 'crc ok' sections in: $(cat "$LOG/stdout")"
   grep -q 'crc BAD' "$LOG/stdout" && bad "inspect: a good index shows 'crc BAD'"
-  grep -Eq '^format 4\.[0-9]+, ' "$LOG/stdout" || bad "inspect: no format line"
+  grep -Eq '^format 5\.[0-9]+, ' "$LOG/stdout" || bad "inspect: no format line"
   grep -Eq '^  descriptor\.encoding +(float32|int16|int8)$' "$LOG/stdout" ||
     bad "inspect: parameter descriptor.encoding not shown"
   grep -Eq '^bytes per arc: [0-9.]+ ' "$LOG/stdout" || bad "inspect: no bytes-per-arc line"

@@ -1098,7 +1098,8 @@ TEST_F(ModelIndexTest, RejectsTruncation) {
 
 TEST_F(ModelIndexTest, RejectsOtherMajorVersion) {
   for (std::uint16_t major : {std::uint16_t{0}, std::uint16_t{1}, std::uint16_t{2},
-                              std::uint16_t{3}, std::uint16_t{5}, std::uint16_t{0xFFFF}}) {
+                              std::uint16_t{3}, std::uint16_t{4}, std::uint16_t{6},
+                              std::uint16_t{0xFFFF}}) {
     Bytes b = bytes();
     store<std::uint16_t>(b.data() + format::kOffMajor, major);
     fix_header_crc(b);
@@ -1113,7 +1114,15 @@ TEST_F(ModelIndexTest, RejectsOtherMajorVersion) {
   const Bytes old = read_file(golden_dir() / "format-3.0-int8.kgi");
   ASSERT_FALSE(old.empty());
   EXPECT_TRUE(rejected(old,
-                       "index format version 3.0 is not supported (this reader reads 4.x): "
+                       "index format version 3.0 is not supported (this reader reads 5.x): "
+                       "rebuild the index",
+                       StatusCode::kUnsupportedVersion));
+  // A real 4.0 file (its tree has leaves of up to 32 arcs, so its sections
+  // do not add up at 64): the same.
+  const Bytes v4 = read_file(golden_dir() / "format-4.0-int8.kgi");
+  ASSERT_FALSE(v4.empty());
+  EXPECT_TRUE(rejected(v4,
+                       "index format version 4.0 is not supported (this reader reads 5.x): "
                        "rebuild the index",
                        StatusCode::kUnsupportedVersion));
   // A newer minor version of the same major is readable (new sections and
