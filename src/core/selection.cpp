@@ -190,9 +190,13 @@ Selector::ArcList Selector::lookup(const SelectionInput& in, int e, const Limits
   const std::size_t room = pool_limit_ - std::min(pool_limit_, pool_.size());
   if (n > room) n = static_cast<std::uint32_t>(room);
   if (n < total) stats.truncated_arc_matches = true;
+  // Within the reserved pool (room), so the resize never allocates.
+  pool_.resize(pool_.size() + n);
+  std::uint64_t* keys = pool_.data() + begin_[e];
+  const std::uint32_t* slots = found_.data();
   for (std::uint32_t i = 0; i < n; ++i) {
-    const ModelArc arc = in.index->arc(found_[i]);
-    pool_.push_back(arc_key(arc.from, arc.to));
+    const ModelArc arc = in.index->arc(slots[i]);
+    keys[i] = arc_key(arc.from, arc.to);
   }
   count_[e] = n;
   return {begin_[e], n, false};
