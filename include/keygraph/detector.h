@@ -40,7 +40,7 @@ struct Limits {
   int max_keypoints = 4000;         // detector output, strongest kept
   int max_scene_keypoints = 2000;   // after Chebyshev sampling
   int max_arc_matches = 4096;       // model arcs kept per scene arc query
-  int max_arc_pool = 1 << 19;       // model arcs found over all queries of a frame
+  int max_arc_pool = 1 << 19;       // model arcs kept over all queries of a frame
   int max_correspondences = 20000;  // keygraph correspondences per frame
   int max_detections = 16;          // at most kMaxDetections
   // The same limits for frames up to width x height.

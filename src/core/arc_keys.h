@@ -1,11 +1,12 @@
 // Model-arc keys of the selection (from << 32 | to, both model keypoint
 // ids) and the two operations it runs on lists of them: sorting and
 // searching. The radix passes and the searches have no data-dependent
-// branches (only the insertion sort of lists of at most 16 keys has): a
-// frame sorts a few thousand lists of ~200 random keys and searches them
-// tens of thousands of times, and with std::sort and std::lower_bound the
-// branch mispredictions alone were about a third of a frame's time
-// (callgrind --branch-sim on graf3, 10-model index).
+// branches (only the insertion sort of lists of at most 16 keys has):
+// when the selection sorted every look-up's list (a few thousand lists of
+// ~200 random keys a frame, searched tens of thousands of times), the
+// branch mispredictions of std::sort and std::lower_bound alone were about
+// a third of a frame's time (callgrind --branch-sim on graf3, 10 models).
+// It now sorts only the few arcs its semi-join keeps.
 #pragma once
 
 #include <cstddef>
@@ -36,7 +37,8 @@ inline int id_bits(std::uint32_t ids) {
 // digits of at most 8 bits as hold it (12-bit ids: two 6-bit digits).
 // `scratch` holds n keys. Stable, no comparisons; short lists are
 // insertion-sorted. With `sorted_by_to`, keys are already in order of `to`
-// (a reversed sorted list): only the `from` digits are sorted.
+// (a reversed sorted list): only the `from` digits are sorted (tested, not
+// used by the selection now).
 inline void sort_arc_keys(std::uint64_t* keys, std::uint64_t* scratch, std::uint32_t n, int bits,
                           bool sorted_by_to = false) {
   if (n <= 16) {

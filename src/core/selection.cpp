@@ -222,6 +222,7 @@ bool Selector::candidate_lists(const ArcList* lists, int k) {
     keys[i] = pool_.data() + lists[i].begin;
     count[i] = lists[i].count;
     shift[i] = lists[i].reversed ? 32 : 0;
+    semi_join_in_ += count[i];
   }
   auto arc = [](std::uint64_t key, int s) { return (key >> s) | (key << ((64 - s) & 63)); };
   auto clear = [flags](const std::uint64_t* list, std::uint32_t n) {
@@ -269,6 +270,7 @@ bool Selector::candidate_lists(const ArcList* lists, int k) {
       flags[to] &= keep_at_to;
     }
     kept_count_[i] = n;
+    semi_join_kept_ += n;
     if (n == 0) {
       // No circuit: clear the later lists' bits and the kept lists' marks.
       for (int j = i + 1; j <= last; ++j) clear(keys[j], count[j]);
@@ -324,6 +326,9 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     if (kept.size() < per_query) kept.resize(per_query);
   // All clear between keygraphs (candidate_lists() clears what it flags).
   flags_.assign(in.index->keypoint_count(), 0);
+  flags_left_ = false;
+  semi_join_in_ = 0;
+  semi_join_kept_ = 0;
   const Structure structure = in.index->params().graph.structure;
   const int k = vertex_count(structure);
   // An arc keygraph has one arc; a circuit has as many arcs as vertices.
@@ -392,7 +397,9 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     }
     // Only the few arcs whose ends are candidates of both their vertices
     // can close a circuit: join those, sorted by (from, to).
-    if (!candidate_lists(lists, k)) continue;
+    const bool joinable = candidate_lists(lists, k);
+    if (checking_ && !all_flags_clear()) flags_left_ = true;
+    if (!joinable) continue;
     const std::uint64_t* r[kMaxVertices] = {kept_[0].data(), kept_[1].data(), kept_[2].data(),
                                             kept_[3].data()};
     const std::uint32_t* n = kept_count_;

@@ -116,13 +116,15 @@ class Selector {
   void select(const SelectionInput& in, const Limits& limits, WorkVector<KeygraphMatch>& matches,
               DetectStats& stats);
 
-  // Whether every model keypoint's candidate flags are clear, as select()
-  // must leave them (a left-over flag would only cost time; tests check).
-  bool candidate_flags_clear() const {
-    for (std::uint8_t f : flags_)
-      if (f != 0) return false;
-    return true;
-  }
+  // For tests. A left-over candidate flag would only cost time (the join
+  // checks every arc), so outputs cannot show one: with checking on,
+  // select() looks at every flag after every keygraph, and
+  // candidate_flags_clear() says whether all were clear each time.
+  void set_checking(bool on) { checking_ = on; }
+  bool candidate_flags_clear() const { return !flags_left_ && all_flags_clear(); }
+  // Model arcs the last select() passed to its semi-join, and kept.
+  std::uint64_t semi_join_arcs_in() const { return semi_join_in_; }
+  std::uint64_t semi_join_arcs_kept() const { return semi_join_kept_; }
 
  private:
   // The model-arc keys (from << 32 | to) similar to one half-edge:
@@ -141,6 +143,12 @@ class Selector {
   // order) that can close a circuit, each sorted; false when one is empty.
   bool candidate_lists(const ArcList* lists, int k);
 
+  bool all_flags_clear() const {
+    for (std::uint8_t f : flags_)
+      if (f != 0) return false;
+    return true;
+  }
+
   enum : std::uint8_t { kUnseen = 0, kLooked = 1, kReversed = 2 };
   WorkVector<std::uint8_t> state_;
   WorkVector<std::uint32_t> begin_;
@@ -150,11 +158,15 @@ class Selector {
   WorkVector<std::uint64_t> sort_scratch_;  // one kept list (core/arc_keys.h)
   WorkVector<std::uint64_t> kept_[kMaxVertices];
   std::uint32_t kept_count_[kMaxVertices] = {0, 0, 0, 0};
-  WorkVector<std::uint8_t> flags_;  // per model keypoint: bit 2i leaves, 2i + 1 enters list i
+  WorkVector<std::uint8_t> flags_;  // per model keypoint: bit i leaves, 4 + i enters list i
   int id_bits_ = 32;                // bits of the index's keypoint ids
   WorkVector<float> profile_;
   WorkVector<std::int32_t> sums_;  // fixed-point profiles
   std::size_t pool_limit_ = static_cast<std::size_t>(-1);
+  bool checking_ = false;
+  bool flags_left_ = false;
+  std::uint64_t semi_join_in_ = 0;
+  std::uint64_t semi_join_kept_ = 0;
 };
 
 }  // namespace kg
