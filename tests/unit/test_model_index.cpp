@@ -1097,9 +1097,9 @@ TEST_F(ModelIndexTest, RejectsTruncation) {
 }
 
 TEST_F(ModelIndexTest, RejectsOtherMajorVersion) {
-  for (std::uint16_t major : {std::uint16_t{0}, std::uint16_t{1}, std::uint16_t{2},
-                              std::uint16_t{3}, std::uint16_t{4}, std::uint16_t{6},
-                              std::uint16_t{0xFFFF}}) {
+  for (std::uint16_t major :
+       {std::uint16_t{0}, std::uint16_t{1}, std::uint16_t{2}, std::uint16_t{3}, std::uint16_t{4},
+        std::uint16_t{6}, std::uint16_t{0xFFFF}}) {
     Bytes b = bytes();
     store<std::uint16_t>(b.data() + format::kOffMajor, major);
     fix_header_crc(b);
