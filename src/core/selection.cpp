@@ -231,22 +231,17 @@ bool Selector::candidate_lists(const ArcList* lists, int k) {
       flags[key_to(list[x])] = 0;
     }
   };
-  for (int i = 1; i < last; ++i) {
+  // The sources of lists 1..last, and the targets of the last list.
+  for (int i = 1; i <= last; ++i) {
     const std::uint64_t* list = keys[i];
     const std::uint32_t n = count[i];
     const int s = shift[i];
-    const std::uint8_t bit = leaves(i);
-    for (std::uint32_t x = 0; x < n; ++x) flags[key_from(arc(list[x], s))] |= bit;
-  }
-  {
-    const std::uint64_t* list = keys[last];
-    const std::uint32_t n = count[last];
-    const int s = shift[last];
-    const std::uint8_t from_bit = leaves(last), to_bit = enters(last);
+    const std::uint8_t from_bit = leaves(i);
+    const bool targets = i == last;
     for (std::uint32_t x = 0; x < n; ++x) {
       const std::uint64_t a = arc(list[x], s);
       flags[key_from(a)] |= from_bit;
-      flags[key_to(a)] |= to_bit;
+      if (targets) flags[key_to(a)] |= enters(last);
     }
   }
   for (int i = 0; i <= last; ++i) {

@@ -212,18 +212,25 @@ std::set<Match> select_all(const Case& c, const Limits& limits, DetectStats& sta
   return selected;
 }
 
+// Selects with `limits`, nothing cut, and requires exactly the brute-force
+// set; `kept_share` as select_all().
+void expect_brute_force_set(const Case& c, const Limits& limits, double* kept_share = nullptr) {
+  DetectStats stats;
+  const std::set<Match> selected = select_all(c, limits, stats, kept_share);
+  ASSERT_FALSE(stats.truncated_arc_matches);
+  ASSERT_FALSE(stats.truncated_correspondences);
+  EXPECT_EQ(selected, c.expected);
+  if (kept_share != nullptr)
+    std::printf("semi-join kept %.2f %% of the model arcs it received\n", 100.0 * *kept_share);
+}
+
 TEST(Selection, EqualsBruteForceJoinOnRealImages) {
   const Case& c = the_case();
   // The frame holds the box: many correspondences (none: the case failed to build).
   ASSERT_GT(c.expected.size(), 50u);
-  DetectStats stats;
   double kept = 1.0;
-  const std::set<Match> selected = select_all(c, Limits{}, stats, &kept);
-  ASSERT_FALSE(stats.truncated_arc_matches);
-  ASSERT_FALSE(stats.truncated_correspondences);
-  EXPECT_EQ(selected, c.expected);
+  expect_brute_force_set(c, Limits{}, &kept);
   // The semi-join does cut: a pass-through would give the same output.
-  std::printf("semi-join kept %.2f %% of the model arcs it received\n", 100.0 * kept);
   EXPECT_LT(kept, 0.10);  // measured 2.7 %
 }
 
@@ -233,13 +240,8 @@ TEST(Selection, FourCircuitsEqualBruteForceJoinOnRealImages) {
   const Case& c = the_case(Structure::kCircuit4);
   // Fewer than with triangles: all four arcs must be similar.
   ASSERT_GE(c.expected.size(), 10u);
-  DetectStats stats;
   double kept = 1.0;
-  const std::set<Match> selected = select_all(c, Limits{}, stats, &kept);
-  ASSERT_FALSE(stats.truncated_arc_matches);
-  ASSERT_FALSE(stats.truncated_correspondences);
-  EXPECT_EQ(selected, c.expected);
-  std::printf("semi-join kept %.2f %% of the model arcs it received\n", 100.0 * kept);
+  expect_brute_force_set(c, Limits{}, &kept);
   EXPECT_LT(kept, 0.10);  // measured 2.4 %
 }
 
@@ -249,11 +251,7 @@ TEST(Selection, ArcsEqualBruteForceOnRealImages) {
   ASSERT_GT(c.expected.size(), 1000u);
   Limits limits;
   limits.max_correspondences = 1 << 20;  // one per similar model arc
-  DetectStats stats;
-  const std::set<Match> selected = select_all(c, limits, stats);
-  ASSERT_FALSE(stats.truncated_arc_matches);
-  ASSERT_FALSE(stats.truncated_correspondences);
-  EXPECT_EQ(selected, c.expected);
+  expect_brute_force_set(c, limits);
 }
 
 // When the frame's pool of model arcs fills up, later look-ups are cut
