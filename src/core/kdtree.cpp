@@ -4,6 +4,7 @@
 #include <limits>
 #include <type_traits>
 
+#include "core/cell_queue.h"
 #include "core/leaf_scan.h"
 
 namespace kg {
@@ -130,8 +131,8 @@ namespace {
 // from the query to the subtree's cell along that axis; `bound` is the sum
 // of their squares, a lower bound of the squared distance to any point in
 // the cell (the incremental bound of Arya & Mount).
-// Attributes are not in the bound: their offsets are only compared with the
-// box when a far child is pushed.
+// Attributes (offsets past kDescriptorSize) are not in the bound: they are
+// only compared with the box when a far child is pushed.
 template <class T>
 struct Frame {
   using Dist = typename KdTraits<T>::Dist;
@@ -140,12 +141,11 @@ struct Frame {
   std::uint32_t end;
   int level;
   Dist bound;
-  typename KdTraits<T>::Offset offset[kDescriptorSize];
+  typename KdTraits<T>::Offset offset[kSearchDims];
   // Approximate search only: the order in which cells are visited, `bound`
   // plus a penalty per attribute offset (attributes do not bound the
-  // distance but do make a match less likely), and those offsets.
+  // distance but do make a match less likely).
   double priority;
-  typename KdTraits<T>::Offset attribute_offset[kSearchDims - kDescriptorSize];
 };
 
 // Pushes the two children of `f`, the far one first so the near one is
@@ -230,27 +230,43 @@ inline void descend_near(Frame<T>& f, const typename KdTraits<T>::Node& node,
   (left ? f.end : f.begin) = mid;
 }
 
-// descend_near for the approximate search: also ranks the far child, an
-// attribute offset of one box costing as much as the whole radius.
+// descend_near for the approximate search, without a branch on the data:
+// moves `f` to its near child and writes the far one, ranked (an attribute
+// offset of one box costs as much as the whole radius), to `far`; returns
+// whether the far child can still hold a match. Every choice is a select:
+// the branches of the walk on the query's side and on the kind of split
+// mispredicted about half the time.
 template <class T, std::size_t D>
-inline void descend_near_ranked(Frame<T>& f, const typename KdTraits<T>::Node& node,
-                                const KdPoint<T, D>& q, typename KdTraits<T>::Dist radius2,
-                                typename KdTraits<T>::Dist box, double attribute_cost,
-                                Frame<T>* stack, int& top) {
-  const int before = top;
+inline bool descend_ranked(Frame<T>& f, const typename KdTraits<T>::Node& node,
+                           const KdPoint<T, D>& q, typename KdTraits<T>::Dist radius2,
+                           typename KdTraits<T>::Dist box, const double* cost, Frame<T>& far) {
+  using Dist = typename KdTraits<T>::Dist;
+  const std::uint32_t mid = f.begin + (f.end - f.begin) / 2;
   const std::uint32_t dim = node.dim;
-  const double diff = static_cast<double>(q[dim]) - static_cast<double>(node.split);
-  descend_near<T, D>(f, node, q, radius2, box, stack, top);
-  if (top == before) return;
-  Frame<T>& far = stack[top - 1];
-  if (dim >= static_cast<std::uint32_t>(kDescriptorSize)) {
-    auto& offset = far.attribute_offset[dim - kDescriptorSize];
-    const auto old = static_cast<double>(offset);
-    far.priority += attribute_cost * (diff * diff - old * old);
-    offset = static_cast<typename KdTraits<T>::Offset>(diff);
-  } else {
-    far.priority += static_cast<double>(far.bound) - static_cast<double>(f.bound);
-  }
+  const Dist diff = static_cast<Dist>(q[dim]) - static_cast<Dist>(node.split);
+  // The query's side (1: near is the left child) and the kind of split, as
+  // integers so that the compiler selects instead of branching.
+  const std::uint32_t left = diff <= 0 ? 1u : 0u;
+  const std::uint32_t attribute = dim >= static_cast<std::uint32_t>(kDescriptorSize) ? 1u : 0u;
+  const std::uint32_t left_mask = 0u - left;
+  const Dist old = f.offset[dim];
+  const Dist delta = diff * diff - old * old;
+  far = f;
+  far.level = f.level + 1;
+  far.node = 2 * f.node + 1 + left;
+  far.begin = (mid & left_mask) | (f.begin & ~left_mask);
+  far.end = (f.end & left_mask) | (mid & ~left_mask);
+  far.offset[dim] = static_cast<typename KdTraits<T>::Offset>(diff);
+  far.bound = f.bound + delta * static_cast<Dist>(1 - attribute);
+  far.priority = f.priority + cost[attribute] * static_cast<double>(delta);
+  const Dist magnitude = diff < 0 ? -diff : diff;
+  f.level += 1;
+  f.node = 2 * f.node + 2 - left;
+  f.begin = (f.begin & left_mask) | (mid & ~left_mask);
+  f.end = (mid & left_mask) | (f.end & ~left_mask);
+  const std::uint32_t in_box = magnitude <= box ? 1u : 0u;
+  const std::uint32_t in_ball = far.bound < radius2 ? 1u : 0u;
+  return ((attribute & in_box) | ((1 - attribute) & in_ball)) != 0;
 }
 
 // Whether a leaf whose points lie in [lo, hi] (bounds[0], bounds[1]) can
@@ -326,6 +342,16 @@ void BasicKdTreeView<T, D>::scan_leaf(std::uint32_t node, std::uint32_t begin, s
 }
 
 template <class T, std::size_t D>
+void BasicKdTreeView<T, D>::prefetch_leaf(std::uint32_t node, std::uint32_t begin,
+                                          std::uint32_t end) const {
+  if (bounds_ != nullptr)
+    __builtin_prefetch(bounds_ + 2 * (node - ((std::uint32_t{1} << depth_) - 1)));
+  const char* first = reinterpret_cast<const char*>(points_ + begin);
+  const char* last = reinterpret_cast<const char*>(points_ + end);
+  for (const char* p = first; p < last; p += 64) __builtin_prefetch(p);
+}
+
+template <class T, std::size_t D>
 std::uint32_t BasicKdTreeView<T, D>::radius_search(const Point& q, Dist radius2, std::uint32_t* out,
                                                    std::uint32_t capacity) const {
   return radius_search(q, radius2, std::numeric_limits<Dist>::max(), out, capacity);
@@ -363,47 +389,64 @@ std::uint32_t BasicKdTreeView<T, D>::radius_search_approximate(const Point& q, D
   // When all cells are taken, further far children are dropped (the answer
   // is approximate anyway).
   constexpr int kCells = 512;
-  struct Pending {
-    double priority;
-    int cell;
-  };
-  Frame<T> cells[kCells];
-  Frame<T> dropped;
-  Pending heap[kCells];
+  Frame<T> cells[kCells + 1];  // cells[kCells]: where dropped far children go
+  PendingCell heap[kCells];    // one entry per cell in use, the sink never
   int free_cells[kCells];
   int n_free = 0, n_used = 0, size = 0;
-  const auto later = [](const Pending& a, const Pending& b) { return a.priority > b.priority; };
+  std::uint32_t pushed = 0;
   // An attribute offset of `box` ranks like a descriptor offset of the radius.
   const double box_width = std::is_floating_point_v<T> ? std::max(static_cast<double>(box), 1e-6)
                                                        : static_cast<double>(box) + 1.0;
-  const double attribute_cost = static_cast<double>(radius2) / (box_width * box_width);
+  // Priority per unit of squared offset: descriptor, then attribute.
+  const double cost[2] = {1.0, static_cast<double>(radius2) / (box_width * box_width)};
   cells[n_used] = root_frame<T>(n_);
-  heap[size++] = {0.0, n_used++};
+  push_pending(heap, size, {pending_key(0.0, pushed++), n_used++});
   int leaves = 0;
+  constexpr int kBatch = 8;
+  struct Leaf {
+    std::uint32_t node, begin, end;
+  };
+  Leaf batch[kBatch];
+  int n_batch = 0;
   while (size > 0 && leaves < max_leaves) {
-    std::pop_heap(heap, heap + size, later);
-    const int cell = heap[--size].cell;
+    const int cell = pop_pending(heap, size).cell;
     Frame<T> f = cells[cell];
     free_cells[n_free++] = cell;
+    // The far children of the walk go straight into the next free cells
+    // (into cells[kCells] when none is left) and are queued once it ends:
+    // the cell bookkeeping is arithmetic on whether each is kept.
+    PendingCell kept[kMaxTreeDepth];
+    int n_kept = 0;
     while (f.level < depth_) {
-      // The far child, if kept, is written straight into the next free cell
-      // (or into `dropped` when none is left).
-      const int slot = n_free > 0 ? free_cells[n_free - 1] : n_used < kCells ? n_used : -1;
-      Frame<T>* far = slot >= 0 ? &cells[slot] : &dropped;
-      int n_far = 0;
-      descend_near_ranked<T, D>(f, nodes_[f.node], q, radius2, box, attribute_cost, far, n_far);
-      if (n_far == 0 || slot < 0) continue;
-      if (n_free > 0) {
-        --n_free;
-      } else {
-        ++n_used;
-      }
-      heap[size++] = {far->priority, slot};
-      std::push_heap(heap, heap + size, later);
+      const int reuse = n_free > 0 ? 1 : 0;
+      const int free_slot = free_cells[n_free - reuse];  // index 0 when there is none
+      const int slot = reuse ? free_slot : n_used;       // n_used == kCells: the sink
+      const int room = slot < kCells ? 1 : 0;
+      const int keep =
+          (descend_ranked<T, D>(f, nodes_[f.node], q, radius2, box, cost, cells[slot]) ? 1 : 0) &
+          room;
+      kept[n_kept] = {pending_key(cells[slot].priority, pushed), slot};
+      pushed += static_cast<std::uint32_t>(keep);
+      n_kept += keep;
+      n_free -= keep & reuse;
+      n_used += keep & (1 - reuse);
     }
+    for (int k = 0; k < n_kept; ++k) push_pending(heap, size, kept[k]);
     ++leaves;
-    scan_leaf(f.node, f.begin, f.end, q, radius2, box, out, capacity, found);
+    // The walk never depends on what the leaves hold, so leaves are scanned
+    // in batches after their memory has been requested: the misses of a
+    // batch overlap instead of stalling one after another.
+    batch[n_batch++] = {f.node, f.begin, f.end};
+    prefetch_leaf(f.node, f.begin, f.end);
+    if (n_batch == kBatch) {
+      for (int b = 0; b < n_batch; ++b)
+        scan_leaf(batch[b].node, batch[b].begin, batch[b].end, q, radius2, box, out, capacity,
+                  found);
+      n_batch = 0;
+    }
   }
+  for (int b = 0; b < n_batch; ++b)
+    scan_leaf(batch[b].node, batch[b].begin, batch[b].end, q, radius2, box, out, capacity, found);
   return found;
 }
 

@@ -147,6 +147,8 @@ class BasicKdTreeView {
   // Appends to out (up to capacity; `found` counts all) the points of the
   // leaf `node`, slots [begin, end), within radius2 and box of q; skips the
   // leaf when its bounds rule it out.
+  // Asks the cache for the leaf's bounds and points.
+  void prefetch_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end) const;
   void scan_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end, const Point& q,
                  Dist radius2, Dist box, std::uint32_t* out, std::uint32_t capacity,
                  std::uint32_t& found) const;

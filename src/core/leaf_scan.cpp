@@ -127,6 +127,24 @@ inline __m128i widen_high(__m128i v) {
   return _mm_srai_epi16(_mm_unpackhi_epi8(v, v), 8);
 }
 
+// For each 4-bit mask of matching points in a group: the positions of its
+// set bits as four uint16 lanes, packed low first (unused lanes 0), and how
+// many there are. Writing all four lanes and advancing by the count stores
+// the hits without a branch per hit, which mispredicted on every group
+// holding one (about a quarter of the search's mispredictions).
+constexpr std::uint64_t compacted(int mask) {
+  std::uint64_t lanes = 0;
+  int n = 0;
+  for (int b = 0; b < 4; ++b)
+    if (mask & (1 << b)) lanes |= static_cast<std::uint64_t>(b) << (16 * n++);
+  return lanes;
+}
+constexpr std::uint64_t kCompacted[16] = {
+    compacted(0),  compacted(1),  compacted(2),  compacted(3), compacted(4),  compacted(5),
+    compacted(6),  compacted(7),  compacted(8),  compacted(9), compacted(10), compacted(11),
+    compacted(12), compacted(13), compacted(14), compacted(15)};
+constexpr std::uint8_t kBitCount[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
+
 }  // namespace
 
 int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, std::int32_t radius2,
@@ -171,10 +189,11 @@ int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, st
     const __m128i within = _mm_cmpeq_epi32(_mm_cmpgt_epi16(magnitude, limit), zero);
     int bits = _mm_movemask_ps(_mm_castsi128_ps(_mm_and_si128(ball, within)));
     if (left < 4) bits &= (1 << left) - 1;
-    while (bits != 0) {
-      hits[found++] = static_cast<std::uint16_t>(i + __builtin_ctz(static_cast<unsigned>(bits)));
-      bits &= bits - 1;
-    }
+    // found <= i, so the four lanes end within the group's rounded-up end.
+    const std::uint64_t positions =
+        kCompacted[bits] + 0x0001000100010001ULL * static_cast<std::uint64_t>(i);
+    __builtin_memcpy(hits + found, &positions, sizeof positions);
+    found += kBitCount[bits];
   }
   return found;
 }

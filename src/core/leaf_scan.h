@@ -15,6 +15,8 @@ namespace kg {
 // Writes to hits[] the positions i in [0, n) of the points p[i] whose
 // descriptor components are at squared distance < radius2 from q's and
 // whose attributes are each within `box` of q's; returns how many.
+// hits[] must have room for n rounded up to a multiple of 4: the vector
+// code writes positions four at a time.
 int scan_leaf_i8_scalar(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q,
                         std::int32_t radius2, std::int32_t box, std::uint16_t* hits);
 // The same, vectorised where the target has NEON or SSE2 (else the scalar code).
