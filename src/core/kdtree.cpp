@@ -230,18 +230,30 @@ inline void descend_near(Frame<T>& f, const typename KdTraits<T>::Node& node,
   (left ? f.end : f.begin) = mid;
 }
 
+// Where the approximate search's walk is: a cell's node, slots and level.
+// Walking to the near child changes only these (its offsets, bound and
+// priority are its parent's), so they stay in registers; copying the whole
+// frame each level stalled on forwarding the narrow stores to the wide
+// loads of the copy.
+struct Walk {
+  std::uint32_t node;
+  std::uint32_t begin;
+  std::uint32_t end;
+  int level;
+};
+
 // descend_near for the approximate search, without a branch on the data:
-// moves `f` to its near child and writes the far one, ranked (an attribute
-// offset of one box costs as much as the whole radius), to `far`; returns
-// whether the far child can still hold a match. Every choice is a select:
-// the branches of the walk on the query's side and on the kind of split
-// mispredicted about half the time.
+// moves `w` (inside the popped cell `cell`) to its near child and writes
+// the far one, ranked (an attribute offset of one box costs as much as the
+// whole radius), to `far`; returns whether the far child can still hold a
+// match. Every choice is a select: the branches on the query's side and on
+// the kind of split mispredicted about half the time.
 template <class T, std::size_t D>
-inline bool descend_ranked(Frame<T>& f, const typename KdTraits<T>::Node& node,
+inline bool descend_ranked(Walk& w, const Frame<T>& cell, const typename KdTraits<T>::Node& node,
                            const KdPoint<T, D>& q, typename KdTraits<T>::Dist radius2,
                            typename KdTraits<T>::Dist box, const double* cost, Frame<T>& far) {
   using Dist = typename KdTraits<T>::Dist;
-  const std::uint32_t mid = f.begin + (f.end - f.begin) / 2;
+  const std::uint32_t mid = w.begin + (w.end - w.begin) / 2;
   const std::uint32_t dim = node.dim;
   const Dist diff = static_cast<Dist>(q[dim]) - static_cast<Dist>(node.split);
   // The query's side (1: near is the left child) and the kind of split, as
@@ -249,21 +261,21 @@ inline bool descend_ranked(Frame<T>& f, const typename KdTraits<T>::Node& node,
   const std::uint32_t left = diff <= 0 ? 1u : 0u;
   const std::uint32_t attribute = dim >= static_cast<std::uint32_t>(kDescriptorSize) ? 1u : 0u;
   const std::uint32_t left_mask = 0u - left;
-  const Dist old = f.offset[dim];
+  const Dist old = cell.offset[dim];
   const Dist delta = diff * diff - old * old;
-  far = f;
-  far.level = f.level + 1;
-  far.node = 2 * f.node + 1 + left;
-  far.begin = (mid & left_mask) | (f.begin & ~left_mask);
-  far.end = (f.end & left_mask) | (mid & ~left_mask);
+  far.node = 2 * w.node + 1 + left;
+  far.begin = (mid & left_mask) | (w.begin & ~left_mask);
+  far.end = (w.end & left_mask) | (mid & ~left_mask);
+  far.level = w.level + 1;
+  far.bound = cell.bound + delta * static_cast<Dist>(1 - attribute);
+  std::copy(cell.offset, cell.offset + kSearchDims, far.offset);
   far.offset[dim] = static_cast<typename KdTraits<T>::Offset>(diff);
-  far.bound = f.bound + delta * static_cast<Dist>(1 - attribute);
-  far.priority = f.priority + cost[attribute] * static_cast<double>(delta);
+  far.priority = cell.priority + cost[attribute] * static_cast<double>(delta);
   const Dist magnitude = diff < 0 ? -diff : diff;
-  f.level += 1;
-  f.node = 2 * f.node + 2 - left;
-  f.begin = (f.begin & left_mask) | (mid & ~left_mask);
-  f.end = (mid & left_mask) | (f.end & ~left_mask);
+  w.node = 2 * w.node + 2 - left;
+  w.begin = (w.begin & left_mask) | (mid & ~left_mask);
+  w.end = (mid & left_mask) | (w.end & ~left_mask);
+  w.level += 1;
   const std::uint32_t in_box = magnitude <= box ? 1u : 0u;
   const std::uint32_t in_ball = far.bound < radius2 ? 1u : 0u;
   return ((attribute & in_box) | ((1 - attribute) & in_ball)) != 0;
@@ -410,20 +422,21 @@ std::uint32_t BasicKdTreeView<T, D>::radius_search_approximate(const Point& q, D
   int n_batch = 0;
   while (size > 0 && leaves < max_leaves) {
     const int cell = pop_pending(heap, size).cell;
-    Frame<T> f = cells[cell];
+    const Frame<T> f = cells[cell];  // a copy: the cell is free for the first far child
     free_cells[n_free++] = cell;
+    Walk w{f.node, f.begin, f.end, f.level};
     // The far children of the walk go straight into the next free cells
     // (into cells[kCells] when none is left) and are queued once it ends:
     // the cell bookkeeping is arithmetic on whether each is kept.
     PendingCell kept[kMaxTreeDepth];
     int n_kept = 0;
-    while (f.level < depth_) {
+    while (w.level < depth_) {
       const int reuse = n_free > 0 ? 1 : 0;
       const int free_slot = free_cells[n_free - reuse];  // index 0 when there is none
       const int slot = reuse ? free_slot : n_used;       // n_used == kCells: the sink
       const int room = slot < kCells ? 1 : 0;
       const int keep =
-          (descend_ranked<T, D>(f, nodes_[f.node], q, radius2, box, cost, cells[slot]) ? 1 : 0) &
+          (descend_ranked<T, D>(w, f, nodes_[w.node], q, radius2, box, cost, cells[slot]) ? 1 : 0) &
           room;
       kept[n_kept] = {pending_key(cells[slot].priority, pushed), slot};
       pushed += static_cast<std::uint32_t>(keep);
@@ -436,8 +449,8 @@ std::uint32_t BasicKdTreeView<T, D>::radius_search_approximate(const Point& q, D
     // The walk never depends on what the leaves hold, so leaves are scanned
     // in batches after their memory has been requested: the misses of a
     // batch overlap instead of stalling one after another.
-    batch[n_batch++] = {f.node, f.begin, f.end};
-    prefetch_leaf(f.node, f.begin, f.end);
+    batch[n_batch++] = {w.node, w.begin, w.end};
+    prefetch_leaf(w.node, w.begin, w.end);
     if (n_batch == kBatch) {
       for (int b = 0; b < n_batch; ++b)
         scan_leaf(batch[b].node, batch[b].begin, batch[b].end, q, radius2, box, out, capacity,

@@ -194,6 +194,7 @@ Selector::ArcList Selector::lookup(const SelectionInput& in, int e, const Limits
   pool_.resize(pool_.size() + n);
   std::uint64_t* keys = pool_.data() + begin_[e];
   const std::uint32_t* slots = found_.data();
+  for (std::uint32_t i = 0; i < n; ++i) in.index->prefetch_arc(slots[i]);
   for (std::uint32_t i = 0; i < n; ++i) {
     const ModelArc arc = in.index->arc(slots[i]);
     keys[i] = arc_key(arc.from, arc.to);
