@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "core/simd_dispatch.h"
+
 namespace kg {
 namespace {
 
@@ -33,7 +35,7 @@ void make_kernel(float sigma, Kernel& k) {
 // border rows are replicated). Taps outer, pixels inner, so the inner loop is
 // a contiguous multiply-add the compiler vectorises.
 template <class T, class RowFn>
-void vertical_row(RowFn row, int y, int w, int h, const Kernel& k, float* out) {
+KG_ALWAYS_INLINE void vertical_row(RowFn row, int y, int w, int h, const Kernel& k, float* out) {
   const T* c = row(y);
   const float k0 = k.w[0];
   for (int x = 0; x < w; ++x) out[x] = k0 * static_cast<float>(c[x]);
@@ -80,7 +82,7 @@ void vertical_row(RowFn row, int y, int w, int h, const Kernel& k, float* out) {
 // Horizontal pass of one row. `in` points at pixel 0 of a row padded with
 // `radius` replicated pixels on both sides, so no read needs a clamp; `out`
 // must not alias it.
-void horizontal_row(const float* in, int w, const Kernel& k, float* out) {
+KG_ALWAYS_INLINE void horizontal_row(const float* in, int w, const Kernel& k, float* out) {
   const int r = k.radius;
   const float k0 = k.w[0];
   for (int x = 0; x < w; ++x) out[x] = k0 * in[x];
@@ -107,9 +109,75 @@ void horizontal_row(const float* in, int w, const Kernel& k, float* out) {
 }
 
 // Replicates the end pixels of the row [0, w) into its `radius` padding.
-void pad_row(float* row, int w, int radius) {
+KG_ALWAYS_INLINE void pad_row(float* row, int w, int radius) {
   std::fill(row - radius, row, row[0]);
   std::fill(row + w, row + w + radius, row[w - 1]);
+}
+
+// The two image loops, each compiled for the baseline and (x86-64) for
+// AVX2; blur_u8[i] / blur_float[i] is the version for dispatch() == i.
+KG_ALWAYS_INLINE void blur_u8_rows(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst,
+                                   float* vert, float* horz) {
+  const int w = src.width;
+  const int h = src.height;
+  const auto row = [&src](int y) { return src.row(y); };
+  for (int y = 0; y < h; ++y) {
+    vertical_row<std::uint8_t>(row, y, w, h, k, vert);
+    pad_row(vert, w, k.radius);
+    horizontal_row(vert, w, k, horz);
+    std::uint8_t* d = dst.row(y);
+    for (int x = 0; x < w; ++x) {
+      // Normalised weights keep the sum within [0, 255] up to rounding.
+      const int v = static_cast<int>(horz[x] + 0.5f);
+      d[x] = static_cast<std::uint8_t>(std::clamp(v, 0, 255));
+    }
+  }
+}
+
+// Row by row (vertical into a padded buffer row, then horizontal straight
+// into dst) so the source rows in use stay in cache.
+KG_ALWAYS_INLINE void blur_float_rows(const Plane<float>& src, const Kernel& k, Plane<float>& dst,
+                                      float* vert) {
+  const int w = src.width();
+  const int h = src.height();
+  const auto row = [&src](int y) { return src.row(y); };
+  for (int y = 0; y < h; ++y) {
+    vertical_row<float>(row, y, w, h, k, vert);
+    pad_row(vert, w, k.radius);
+    horizontal_row(vert, w, k, dst.row(y));
+  }
+}
+
+void blur_u8_baseline(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst, float* vert,
+                      float* horz) {
+  blur_u8_rows(src, k, dst, vert, horz);
+}
+void blur_float_baseline(const Plane<float>& src, const Kernel& k, Plane<float>& dst, float* vert) {
+  blur_float_rows(src, k, dst, vert);
+}
+
+#if defined(KG_DISPATCH_AVX2)
+KG_TARGET_AVX2 void blur_u8_avx2(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst,
+                                 float* vert, float* horz) {
+  blur_u8_rows(src, k, dst, vert, horz);
+}
+KG_TARGET_AVX2 void blur_float_avx2(const Plane<float>& src, const Kernel& k, Plane<float>& dst,
+                                    float* vert) {
+  blur_float_rows(src, k, dst, vert);
+}
+constexpr void (*blur_u8[])(ImageView, const Kernel&, Plane<std::uint8_t>&, float*, float*) = {
+    blur_u8_baseline, blur_u8_avx2};
+constexpr void (*blur_float[])(const Plane<float>&, const Kernel&, Plane<float>&, float*) = {
+    blur_float_baseline, blur_float_avx2};
+#else
+constexpr void (*blur_u8[])(ImageView, const Kernel&, Plane<std::uint8_t>&, float*,
+                            float*) = {blur_u8_baseline};
+constexpr void (*blur_float[])(const Plane<float>&, const Kernel&, Plane<float>&,
+                               float*) = {blur_float_baseline};
+#endif
+
+int dispatch() {
+  return simd_level() == SimdLevel::kAvx2 ? 1 : 0;
 }
 
 }  // namespace
@@ -139,18 +207,7 @@ void gaussian_blur(ImageView src, float sigma, Plane<std::uint8_t>& dst, Plane<f
   scratch.resize(padded, 2);
   float* vert = scratch.row(0) + k.radius;
   float* horz = scratch.row(1);
-  const auto row = [&src](int y) { return src.row(y); };
-  for (int y = 0; y < h; ++y) {
-    vertical_row<std::uint8_t>(row, y, w, h, k, vert);
-    pad_row(vert, w, k.radius);
-    horizontal_row(vert, w, k, horz);
-    std::uint8_t* d = dst.row(y);
-    for (int x = 0; x < w; ++x) {
-      // Normalised weights keep the sum within [0, 255] up to rounding.
-      const int v = static_cast<int>(horz[x] + 0.5f);
-      d[x] = static_cast<std::uint8_t>(std::clamp(v, 0, 255));
-    }
-  }
+  blur_u8[dispatch()](src, k, dst, vert, horz);
 }
 
 void gaussian_blur(const Plane<float>& src, float sigma, Plane<float>& dst, Plane<float>& scratch) {
@@ -168,16 +225,9 @@ void gaussian_blur(const Plane<float>& src, float sigma, Plane<float>& dst, Plan
   }
   Kernel k;
   make_kernel(sigma, k);
-  // Row by row (vertical into a padded buffer row, then horizontal straight
-  // into dst) so the source rows in use stay in cache.
   scratch.resize(w + 2 * k.radius, 1);
   float* vert = scratch.row(0) + k.radius;
-  const auto row = [&src](int y) { return src.row(y); };
-  for (int y = 0; y < h; ++y) {
-    vertical_row<float>(row, y, w, h, k, vert);
-    pad_row(vert, w, k.radius);
-    horizontal_row(vert, w, k, dst.row(y));
-  }
+  blur_float[dispatch()](src, k, dst, vert);
 }
 
 }  // namespace kg

@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "core/blur.h"
+#include "core/simd_dispatch.h"
 #include "core/strongest.h"
 
 namespace kg {
@@ -41,8 +42,9 @@ void to_unit_float(ImageView image, Plane<float>& dst) {
 // branch-free so the compiler vectorises it; few pixels pass, so the
 // remaining checks run rarely and their branches stay predictable.
 // Candidates beyond `limit` ints are dropped; returns false then.
-bool collect_candidates(const float* m0, const float* m1, const float* m2, int y, int w, float thr,
-                        std::uint8_t* mask, WorkVector<std::int32_t>& cand, std::size_t limit) {
+KG_ALWAYS_INLINE bool collect_candidates(const float* m0, const float* m1, const float* m2, int y,
+                                         int w, float thr, std::uint8_t* mask,
+                                         WorkVector<std::int32_t>& cand, std::size_t limit) {
   for (int x = kBorder; x < w - kBorder; ++x) {
     const float v = m1[x];
     mask[x] = static_cast<std::uint8_t>((v > thr) & (v > m1[x - 1]) & (v >= m1[x + 1]) &
@@ -71,9 +73,9 @@ bool collect_candidates(const float* m0, const float* m1, const float* m2, int y
 // every pixel with all 8 neighbours; the 1-px frame is never read. With
 // `cand`, also collects the level's extremum candidates while the rows are
 // still in cache.
-bool hessian_response(const Plane<float>& L, float sigma, float threshold, Plane<float>& R,
-                      WorkVector<std::uint8_t>& mask, WorkVector<std::int32_t>* cand,
-                      std::size_t limit) {
+KG_ALWAYS_INLINE bool hessian_response_rows(const Plane<float>& L, float sigma, float threshold,
+                                            Plane<float>& R, WorkVector<std::uint8_t>& mask,
+                                            WorkVector<std::int32_t>* cand, std::size_t limit) {
   const int w = L.width();
   const int h = L.height();
   R.resize(w, h);
@@ -100,6 +102,31 @@ bool hessian_response(const Plane<float>& L, float sigma, float threshold, Plane
                                     *cand, limit);
   }
   return complete;
+}
+
+// hessian_response_rows for the baseline and (x86-64) AVX2; see
+// core/simd_dispatch.h.
+bool hessian_response_baseline(const Plane<float>& L, float sigma, float threshold, Plane<float>& R,
+                               WorkVector<std::uint8_t>& mask, WorkVector<std::int32_t>* cand,
+                               std::size_t limit) {
+  return hessian_response_rows(L, sigma, threshold, R, mask, cand, limit);
+}
+#if defined(KG_DISPATCH_AVX2)
+KG_TARGET_AVX2 bool hessian_response_avx2(const Plane<float>& L, float sigma, float threshold,
+                                          Plane<float>& R, WorkVector<std::uint8_t>& mask,
+                                          WorkVector<std::int32_t>* cand, std::size_t limit) {
+  return hessian_response_rows(L, sigma, threshold, R, mask, cand, limit);
+}
+#endif
+
+bool hessian_response(const Plane<float>& L, float sigma, float threshold, Plane<float>& R,
+                      WorkVector<std::uint8_t>& mask, WorkVector<std::int32_t>* cand,
+                      std::size_t limit) {
+#if defined(KG_DISPATCH_AVX2)
+  if (simd_level() == SimdLevel::kAvx2)
+    return hessian_response_avx2(L, sigma, threshold, R, mask, cand, limit);
+#endif
+  return hessian_response_baseline(L, sigma, threshold, R, mask, cand, limit);
 }
 
 // Halves the image by averaging 2x2 blocks (a trailing odd row or column is

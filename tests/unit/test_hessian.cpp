@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <vector>
 
@@ -15,6 +16,7 @@
 
 #include "core/blur.h"
 #include "core/hessian.h"
+#include "core/simd_dispatch.h"
 #include "keygraph/params.h"
 #include "keygraph/types.h"
 #include "test_data.h"
@@ -290,6 +292,46 @@ TEST(Hessian, DeterministicAndIndependentOfReuse) {
       ImageView(padded.data, small.cols, small.rows, static_cast<std::ptrdiff_t>(padded.step)),
       params, 1000, out);
   EXPECT_TRUE(same(first, out));
+}
+
+// The AVX2 versions of the blur and response loops (chosen at run time on
+// x86-64) compute exactly what the baseline ones do: the same blurred
+// pixels, bit for bit, and so the same keypoints. On a CPU or build
+// without them both runs take the baseline path.
+TEST(Hessian, DispatchedLoopsEqualBaseline) {
+  const cv::Mat img = test::load_gray(test::opencv_data("graf3.png"));
+  ASSERT_FALSE(img.empty());
+  const SimdLevel chosen = simd_level();
+  std::printf("dispatched level: %s\n", simd_level_name(chosen));
+  const auto blurred = [&img]() {
+    Plane<std::uint8_t> u8;
+    Plane<float> f, g, scratch;
+    gaussian_blur(test::view(img), 1.3f, u8, scratch);
+    f.resize(img.cols, img.rows);
+    for (int y = 0; y < img.rows; ++y)
+      for (int x = 0; x < img.cols; ++x)
+        f.row(y)[x] = static_cast<float>(img.at<std::uint8_t>(y, x));
+    gaussian_blur(f, 2.45f, g, scratch);
+    std::vector<float> out;
+    for (int y = 0; y < img.rows; ++y) {
+      out.insert(out.end(), g.row(y), g.row(y) + img.cols);
+      for (int x = 0; x < img.cols; ++x) out.push_back(u8.row(y)[x]);
+    }
+    return out;
+  };
+  const std::vector<float> dispatched_blur = blurred();
+  const std::vector<Keypoint> dispatched = detect(img);
+  set_simd_level(SimdLevel::kBaseline);
+  const std::vector<float> baseline_blur = blurred();
+  const std::vector<Keypoint> baseline = detect(img);
+  set_simd_level(SimdLevel::kAvx2);
+  EXPECT_EQ(simd_level(), chosen);  // restored
+  ASSERT_EQ(dispatched_blur.size(), baseline_blur.size());
+  EXPECT_EQ(std::memcmp(dispatched_blur.data(), baseline_blur.data(),
+                        baseline_blur.size() * sizeof(float)),
+            0);
+  ASSERT_GT(baseline.size(), 500u);
+  EXPECT_TRUE(same(dispatched, baseline));
 }
 
 TEST(Hessian, RotationBy90DegreesMovesKeypoints) {
