@@ -38,17 +38,27 @@ void to_unit_float(ImageView image, Plane<float>& dst) {
 }
 
 // Appends (x, y) of the pixels of row y (rows m0, m1, m2 around it) that
-// are above the threshold and above their 4 nearest neighbours. The test is
-// branch-free so the compiler vectorises it; few pixels pass, so the
-// remaining checks run rarely and their branches stay predictable.
-// Candidates beyond `limit` ints are dropped; returns false then.
-KG_ALWAYS_INLINE bool collect_candidates(const float* m0, const float* m1, const float* m2, int y,
+// are above the threshold, above their 8 neighbours in the level and, with
+// the level below (rows l0, l1, l2 of its response), above the 9 there:
+// all of the 3x3x3 test but the level above, which is not computed yet.
+// The test is branch-free so the compiler vectorises it, and it runs while
+// the rows are in cache: done later per candidate, these reads missed the
+// cache and the comparisons mispredicted, for the tens of thousands of
+// candidates of a frame that fail them. Candidates beyond `limit` ints are
+// dropped; returns false then.
+KG_ALWAYS_INLINE bool collect_candidates(const float* m0, const float* m1, const float* m2,
+                                         const float* l0, const float* l1, const float* l2, int y,
                                          int w, float thr, std::uint8_t* mask,
                                          WorkVector<std::int32_t>& cand, std::size_t limit) {
   for (int x = kBorder; x < w - kBorder; ++x) {
     const float v = m1[x];
-    mask[x] = static_cast<std::uint8_t>((v > thr) & (v > m1[x - 1]) & (v >= m1[x + 1]) &
-                                        (v > m0[x]) & (v >= m2[x]));
+    const bool level = (v > thr) & (v > m1[x - 1]) & (v >= m1[x + 1]) & (v > m0[x - 1]) &
+                       (v > m0[x]) & (v > m0[x + 1]) & (v >= m2[x - 1]) & (v >= m2[x]) &
+                       (v >= m2[x + 1]);
+    const bool below = (v > l0[x - 1]) & (v > l0[x]) & (v > l0[x + 1]) & (v > l1[x - 1]) &
+                       (v > l1[x]) & (v > l1[x + 1]) & (v > l2[x - 1]) & (v > l2[x]) &
+                       (v > l2[x + 1]);
+    mask[x] = static_cast<std::uint8_t>(level & below);
   }
   std::fill(mask + std::max(w - kBorder, 0), mask + w + 8, std::uint8_t{0});
   for (int x = kBorder; x < w - kBorder; ++x) {
@@ -72,9 +82,10 @@ KG_ALWAYS_INLINE bool collect_candidates(const float* m0, const float* m1, const
 // Scale-normalised sigma^4 (Lxx Lyy - Lxy^2) by central differences, for
 // every pixel with all 8 neighbours; the 1-px frame is never read. With
 // `cand`, also collects the level's extremum candidates while the rows are
-// still in cache.
+// still in cache; `below` is then the response of the level below.
 KG_ALWAYS_INLINE bool hessian_response_rows(const Plane<float>& L, float sigma, float threshold,
-                                            Plane<float>& R, WorkVector<std::uint8_t>& mask,
+                                            Plane<float>& R, const Plane<float>* below,
+                                            WorkVector<std::uint8_t>& mask,
                                             WorkVector<std::int32_t>* cand, std::size_t limit) {
   const int w = L.width();
   const int h = L.height();
@@ -98,8 +109,9 @@ KG_ALWAYS_INLINE bool hessian_response_rows(const Plane<float>& L, float sigma, 
     }
     // Row y - 1 has both response neighbours now.
     if (cand && complete && y - 1 >= kBorder && y - 1 < h - kBorder)
-      complete = collect_candidates(R.row(y - 2), R.row(y - 1), r, y - 1, w, threshold, mask.data(),
-                                    *cand, limit);
+      complete =
+          collect_candidates(R.row(y - 2), R.row(y - 1), r, below->row(y - 2), below->row(y - 1),
+                             below->row(y), y - 1, w, threshold, mask.data(), *cand, limit);
   }
   return complete;
 }
@@ -107,26 +119,27 @@ KG_ALWAYS_INLINE bool hessian_response_rows(const Plane<float>& L, float sigma, 
 // hessian_response_rows for the baseline and (x86-64) AVX2; see
 // core/simd_dispatch.h.
 bool hessian_response_baseline(const Plane<float>& L, float sigma, float threshold, Plane<float>& R,
-                               WorkVector<std::uint8_t>& mask, WorkVector<std::int32_t>* cand,
-                               std::size_t limit) {
-  return hessian_response_rows(L, sigma, threshold, R, mask, cand, limit);
+                               const Plane<float>* below, WorkVector<std::uint8_t>& mask,
+                               WorkVector<std::int32_t>* cand, std::size_t limit) {
+  return hessian_response_rows(L, sigma, threshold, R, below, mask, cand, limit);
 }
 #if defined(KG_DISPATCH_AVX2)
 KG_TARGET_AVX2 bool hessian_response_avx2(const Plane<float>& L, float sigma, float threshold,
-                                          Plane<float>& R, WorkVector<std::uint8_t>& mask,
+                                          Plane<float>& R, const Plane<float>* below,
+                                          WorkVector<std::uint8_t>& mask,
                                           WorkVector<std::int32_t>* cand, std::size_t limit) {
-  return hessian_response_rows(L, sigma, threshold, R, mask, cand, limit);
+  return hessian_response_rows(L, sigma, threshold, R, below, mask, cand, limit);
 }
 #endif
 
 bool hessian_response(const Plane<float>& L, float sigma, float threshold, Plane<float>& R,
-                      WorkVector<std::uint8_t>& mask, WorkVector<std::int32_t>* cand,
-                      std::size_t limit) {
+                      const Plane<float>* below, WorkVector<std::uint8_t>& mask,
+                      WorkVector<std::int32_t>* cand, std::size_t limit) {
 #if defined(KG_DISPATCH_AVX2)
   if (simd_level() == SimdLevel::kAvx2)
-    return hessian_response_avx2(L, sigma, threshold, R, mask, cand, limit);
+    return hessian_response_avx2(L, sigma, threshold, R, below, mask, cand, limit);
 #endif
-  return hessian_response_baseline(L, sigma, threshold, R, mask, cand, limit);
+  return hessian_response_baseline(L, sigma, threshold, R, below, mask, cand, limit);
 }
 
 // Halves the image by averaging 2x2 blocks (a trailing odd row or column is
@@ -174,7 +187,8 @@ struct LevelInfo {
 };
 
 // Local maxima of `mid` over its 26 neighbours in (lo, mid, hi), among the
-// candidates collected with it; refined and offered to `out`. A plateau
+// candidates collected with it (already above their 17 neighbours in lo and
+// mid, so only hi is left to test); refined and offered to `out`. A plateau
 // yields one maximum: values must be strictly above the neighbours before
 // them in (scale, y, x) order, and at least equal to those after.
 void scan_level(const WorkVector<std::int32_t>& cand, const Plane<float>& lo,
@@ -187,17 +201,16 @@ void scan_level(const WorkVector<std::int32_t>& cand, const Plane<float>& lo,
     const float* m1 = mid.row(y);
     const float* m2 = mid.row(y + 1);
     const float v = m1[x];
-    if (!(v > m0[x - 1] && v > m0[x + 1] && v >= m2[x - 1] && v >= m2[x + 1])) continue;
     const float* l0 = lo.row(y - 1);
     const float* l1 = lo.row(y);
     const float* l2 = lo.row(y + 1);
     const float* h0 = hi.row(y - 1);
     const float* h1 = hi.row(y);
     const float* h2 = hi.row(y + 1);
+    // The level and the level below were tested when collecting.
     bool is_max = true;
     for (int dx = -1; dx <= 1 && is_max; ++dx)
-      is_max = v > l0[x + dx] && v > l1[x + dx] && v > l2[x + dx] && v >= h0[x + dx] &&
-               v >= h1[x + dx] && v >= h2[x + dx];
+      is_max = v >= h0[x + dx] && v >= h1[x + dx] && v >= h2[x + dx];
     if (!is_max) continue;
 
     // Quadratic fit in (x, y, scale) from central differences.
@@ -292,8 +305,8 @@ bool HessianDetector::detect(ImageView image, const KeypointParams& params, int 
     // After octave 0 the first level also carries halve()'s box blur.
     const double first_sigma =
         octave == 0 ? kSigma0 : std::sqrt(kSigma0 * kSigma0 + kHalvingVariance);
-    hessian_response(*first, static_cast<float>(first_sigma), info.threshold, responses_[0], mask_,
-                     nullptr, max_candidate_ints_);
+    hessian_response(*first, static_cast<float>(first_sigma), info.threshold, responses_[0],
+                     nullptr, mask_, nullptr, max_candidate_ints_);
     const Plane<float>* prev = first;
     for (int j = 1; j <= levels + 1; ++j) {
       const double s_prev = j == 1 ? first_sigma : kSigma0 * std::pow(k, j - 1);
@@ -304,7 +317,8 @@ bool HessianDetector::detect(ImageView image, const KeypointParams& params, int 
                     scratch_);
       // Candidates only where maxima are taken: levels 1..levels.
       complete &=
-          hessian_response(cur, static_cast<float>(s_cur), info.threshold, responses_[j % 3], mask_,
+          hessian_response(cur, static_cast<float>(s_cur), info.threshold, responses_[j % 3],
+                           &responses_[(j - 1) % 3], mask_,
                            j <= levels ? &candidates_[j % 2] : nullptr, max_candidate_ints_);
       // Octave 0's first level lives in levels_[0], which level 2 overwrites,
       // so the next octave's first level goes to its own plane.
