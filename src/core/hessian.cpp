@@ -41,10 +41,11 @@ void to_unit_float(ImageView image, Plane<float>& dst) {
 // are above the threshold, above their 8 neighbours in the level and, with
 // the level below (rows l0, l1, l2 of its response), above the 9 there:
 // all of the 3x3x3 test but the level above, which is not computed yet.
-// The test is branch-free so the compiler vectorises it, and it runs while
-// the rows are in cache: done later per candidate, these reads missed the
-// cache and the comparisons mispredicted, for the tens of thousands of
-// candidates of a frame that fail them. Candidates beyond `limit` ints are
+// It runs while the rows are in cache: done later per candidate, these
+// reads missed the cache and the comparisons mispredicted, for the tens of
+// thousands of candidates of a frame that fail them. The level test is
+// branch-free so the compiler vectorises it; the few pixels that pass it
+// take the level-below test one by one. Candidates beyond `limit` ints are
 // dropped; returns false then.
 KG_ALWAYS_INLINE bool collect_candidates(const float* m0, const float* m1, const float* m2,
                                          const float* l0, const float* l1, const float* l2, int y,
@@ -52,13 +53,9 @@ KG_ALWAYS_INLINE bool collect_candidates(const float* m0, const float* m1, const
                                          WorkVector<std::int32_t>& cand, std::size_t limit) {
   for (int x = kBorder; x < w - kBorder; ++x) {
     const float v = m1[x];
-    const bool level = (v > thr) & (v > m1[x - 1]) & (v >= m1[x + 1]) & (v > m0[x - 1]) &
-                       (v > m0[x]) & (v > m0[x + 1]) & (v >= m2[x - 1]) & (v >= m2[x]) &
-                       (v >= m2[x + 1]);
-    const bool below = (v > l0[x - 1]) & (v > l0[x]) & (v > l0[x + 1]) & (v > l1[x - 1]) &
-                       (v > l1[x]) & (v > l1[x + 1]) & (v > l2[x - 1]) & (v > l2[x]) &
-                       (v > l2[x + 1]);
-    mask[x] = static_cast<std::uint8_t>(level & below);
+    mask[x] = static_cast<std::uint8_t>((v > thr) & (v > m1[x - 1]) & (v >= m1[x + 1]) &
+                                        (v > m0[x - 1]) & (v > m0[x]) & (v > m0[x + 1]) &
+                                        (v >= m2[x - 1]) & (v >= m2[x]) & (v >= m2[x + 1]));
   }
   std::fill(mask + std::max(w - kBorder, 0), mask + w + 8, std::uint8_t{0});
   for (int x = kBorder; x < w - kBorder; ++x) {
@@ -70,7 +67,12 @@ KG_ALWAYS_INLINE bool collect_candidates(const float* m0, const float* m1, const
         continue;
       }
     }
-    if (mask[x]) {
+    if (!mask[x]) continue;
+    const float v = m1[x];
+    const bool below = (v > l0[x - 1]) & (v > l0[x]) & (v > l0[x + 1]) & (v > l1[x - 1]) &
+                       (v > l1[x]) & (v > l1[x + 1]) & (v > l2[x - 1]) & (v > l2[x]) &
+                       (v > l2[x + 1]);
+    if (below) {
       if (cand.size() + 2 > limit) return false;
       cand.push_back(x);
       cand.push_back(y);
