@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include "core/arc_attributes.h"
 #include "core/arc_descriptor.h"
@@ -255,16 +256,26 @@ bool Selector::candidate_lists(const ArcList* lists, int k) {
     const std::uint32_t total = count[i];
     const int s = shift[i];
     std::uint64_t* const out = kept_[i].data();
-    std::uint32_t n = 0;
-    for (std::uint32_t x = 0; x < total; ++x) {
-      const std::uint64_t a = arc(list[x], s);
-      const std::uint32_t from = key_from(a), to = key_to(a);
-      out[n] = a;
-      // Branch-free: most arcs are dropped.
-      n += static_cast<std::uint32_t>(((flags[from] & entered) != 0) & ((flags[to] & left) != 0));
-      flags[from] &= keep_at_from;
-      flags[to] &= keep_at_to;
-    }
+    // Branch-free: most arcs are dropped. Only list 0's sources and the
+    // middle lists' targets keep their flags: those loops skip the store.
+    const auto cut = [&](auto clear_from, auto clear_to) {
+      std::uint32_t kept = 0;
+      for (std::uint32_t x = 0; x < total; ++x) {
+        const std::uint64_t a = arc(list[x], s);
+        const std::uint32_t from = key_from(a), to = key_to(a);
+        out[kept] = a;
+        kept +=
+            static_cast<std::uint32_t>(((flags[from] & entered) != 0) & ((flags[to] & left) != 0));
+        if constexpr (decltype(clear_from)::value) flags[from] &= keep_at_from;
+        if constexpr (decltype(clear_to)::value) flags[to] &= keep_at_to;
+      }
+      return kept;
+    };
+    using Yes = std::true_type;
+    using No = std::false_type;
+    const std::uint32_t n = i == 0      ? (i == last ? cut(No{}, Yes{}) : cut(No{}, No{}))
+                            : i == last ? cut(Yes{}, Yes{})
+                                        : cut(Yes{}, No{});
     kept_count_[i] = n;
     semi_join_kept_ += n;
     if (n == 0) {
