@@ -146,7 +146,7 @@ Selector::ArcList Selector::lookup(const SelectionInput& in, int e, const Limits
                                    DetectStats& stats) {
   if (state_[e] != kUnseen) return {begin_[e], count_[e], state_[e] == kReversed};
   state_[e] = kLooked;
-  begin_[e] = static_cast<std::uint32_t>(pool_.size());
+  begin_[e] = static_cast<std::uint32_t>(pool_used_);
   count_[e] = 0;
   // The reverse arc b -> a was looked up already: model arcs similar to it
   // are, reversed, the ones similar to a -> b (reversing a profile maps its
@@ -188,11 +188,12 @@ Selector::ArcList Selector::lookup(const SelectionInput& in, int e, const Limits
           : in.search->radius_search(d, scaled ? attributes : nullptr, found_.data(), cap);
   stats.arc_matches += total;
   std::uint32_t n = std::min(total, cap);
-  const std::size_t room = pool_limit_ - std::min(pool_limit_, pool_.size());
+  const std::size_t room = pool_limit_ - std::min(pool_limit_, pool_used_);
   if (n > room) n = static_cast<std::uint32_t>(room);
   if (n < total) stats.truncated_arc_matches = true;
   // Within the reserved pool (room), so the resize never allocates.
-  pool_.resize(pool_.size() + n);
+  if (pool_.size() < pool_used_ + n) pool_.resize(pool_used_ + n);
+  pool_used_ += n;
   std::uint64_t* keys = pool_.data() + begin_[e];
   const std::uint32_t* slots = found_.data();
   for (std::uint32_t i = 0; i < n; ++i) in.index->prefetch_arc(slots[i]);
@@ -323,7 +324,7 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   state_.assign(edges, kUnseen);
   begin_.resize(edges);
   count_.resize(edges);
-  pool_.clear();
+  pool_used_ = 0;
   id_bits_ = id_bits(in.index->keypoint_count());
   // Within what reserve() sized (the Detector's limits and index), this
   // never allocates.
