@@ -30,6 +30,10 @@ constexpr double kLineSpreadTolerance = 1e-6;
 // Second smallest over largest eigenvalue of the normalised A^T A below
 // this: the DLT null space is not one-dimensional (n > 4).
 constexpr double kRankTolerance = 1e-10;
+// Smallest over largest LDLT pivot of the h33 = 1 normal equations below
+// this: not trusted (an ill-conditioned or degenerate set, or h33 near 0);
+// the eigen solver decides instead (n > 4).
+constexpr double kLsqPivotTolerance = 1e-8;
 // |h33| below this times the largest |h_ij|: h33 cannot be scaled to 1.
 constexpr double kTinyH33 = 1e-12;
 
@@ -164,7 +168,9 @@ double lm_cost(const Vec8& p, const Point2f* model, const Point2f* scene, int n,
 
 }  // namespace
 
-bool fit_homography(const Point2f* model, const Point2f* scene, int n, Homography& h) {
+namespace {
+
+bool fit(const Point2f* model, const Point2f* scene, int n, bool fast, Homography& h) {
   if (model == nullptr || scene == nullptr || n < 4) return false;
   Normaliser nm;
   Normaliser ns;
@@ -198,6 +204,26 @@ bool fit_homography(const Point2f* model, const Point2f* scene, int n, Homograph
     return false;
   }
 
+  if (!solved && fast) {
+    // n > 4, well conditioned: least squares with h33 = 1, the 8x8 normal
+    // equations by LDLT, about a tenth of the eigen solver's cost.
+    Mat8 normal = Mat8::Zero();
+    Vec8 rhs = Vec8::Zero();
+    for (int i = 0; i < n; ++i) {
+      dlt_rows(nm.x(model[i]), nm.y(model[i]), ns.x(scene[i]), ns.y(scene[i]), r1, r2);
+      normal.selfadjointView<Eigen::Lower>().rankUpdate(r1.head<8>());
+      normal.selfadjointView<Eigen::Lower>().rankUpdate(r2.head<8>());
+      rhs -= r1[8] * r1.head<8>() + r2[8] * r2.head<8>();
+    }
+    const Eigen::LDLT<Mat8, Eigen::Lower> ldlt(normal);
+    const Vec8 pivots = ldlt.vectorD();
+    if (ldlt.info() == Eigen::Success &&
+        pivots.minCoeff() > kLsqPivotTolerance * pivots.maxCoeff()) {
+      hn.head<8>() = ldlt.solve(rhs);
+      hn[8] = 1.0;
+      solved = hn.allFinite();
+    }
+  }
   if (!solved) {
     // Least squares: the eigenvector of A^T A with the smallest eigenvalue,
     // A^T A accumulated row by row so that no n x 9 matrix is needed.
@@ -221,6 +247,16 @@ bool fit_homography(const Point2f* model, const Point2f* scene, int n, Homograph
   if (!normalise_scale(full)) return false;
   from_matrix(full, h);
   return true;
+}
+
+}  // namespace
+
+bool fit_homography(const Point2f* model, const Point2f* scene, int n, Homography& h) {
+  return fit(model, scene, n, false, h);
+}
+
+bool fit_homography_hypothesis(const Point2f* model, const Point2f* scene, int n, Homography& h) {
+  return fit(model, scene, n, true, h);
 }
 
 double rms_reprojection_error(const Point2f* model, const Point2f* scene, int n,

@@ -103,7 +103,7 @@ struct KeygraphEstimator {
       }
     }
     if (n < 4) return false;
-    if (!fit_homography(model, scene, n, out)) return false;
+    if (!fit_homography_hypothesis(model, scene, n, out)) return false;
     return is_plausible_pose(out, model_w, model_h, params);
   }
 

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include <Eigen/Core>
@@ -183,6 +184,54 @@ NoisyData noisy_correspondences(int n, double sigma, std::uint64_t seed) {
                        static_cast<float>(s.y + sigma * gaussian(rng))});
   }
   return d;
+}
+
+// The RANSAC hypothesis fit (least squares with h33 = 1 for n > 4) against
+// the null-space fit: the same homography from exact correspondences, as
+// close to the truth from noisy ones, and the same degenerate sets refused.
+TEST(FitHomographyHypothesis, AgreesWithTheNullSpaceFit) {
+  for (int n = 4; n <= 8; ++n) {
+    Rng rng(static_cast<std::uint64_t>(100 + n));
+    const std::vector<Point2f> model = random_model_points(rng, n);
+    const std::vector<Point2f> scene = map_points(kPerspective, model);
+    Homography fast{}, reference{};
+    ASSERT_TRUE(fit_homography_hypothesis(model.data(), scene.data(), n, fast)) << n;
+    ASSERT_TRUE(fit_homography(model.data(), scene.data(), n, reference)) << n;
+    EXPECT_LT(corner_relative_error(fast, kPerspective), 1e-5) << n;  // float points
+    EXPECT_LT(corner_pixel_error(fast, reference), 1e-4) << n;
+  }
+  // Noisy samples of 6 and 8 points (two or four circuits' worth): over
+  // many draws the corners are as far from the truth as the null-space
+  // fit's, within 10 %.
+  for (int n : {6, 8}) {
+    double fast_error = 0.0, reference_error = 0.0;
+    int fitted = 0;
+    for (int trial = 0; trial < 300; ++trial) {
+      const NoisyData d =
+          noisy_correspondences(n, 1.0, static_cast<std::uint64_t>(1000 * n + trial));
+      Homography fast{}, reference{};
+      if (!fit_homography(d.model.data(), d.scene.data(), n, reference)) continue;
+      ASSERT_TRUE(fit_homography_hypothesis(d.model.data(), d.scene.data(), n, fast)) << trial;
+      fast_error += corner_pixel_error(fast, kPerspective);
+      reference_error += corner_pixel_error(reference, kPerspective);
+      ++fitted;
+    }
+    ASSERT_GT(fitted, 290) << n;
+    std::printf("n = %d: mean corner error %.3f px (h33 = 1 least squares), %.3f px (null space)\n",
+                n, fast_error / fitted, reference_error / fitted);
+    EXPECT_LT(fast_error, 1.1 * reference_error) << n;
+  }
+  // Degenerate: four points on a line and one off it; all on a line.
+  std::vector<Point2f> line;
+  for (int i = 0; i < 8; ++i)
+    line.push_back({10.f + 45.f * static_cast<float>(i), 20.f + 30.f * static_cast<float>(i)});
+  const std::vector<Point2f> line_scene = map_points(kPerspective, line);
+  Homography h{};
+  EXPECT_FALSE(fit_homography_hypothesis(line.data(), line_scene.data(), 8, h));
+  std::vector<Point2f> four_plus_one(line.begin(), line.begin() + 4);
+  four_plus_one.push_back({300.f, 10.f});
+  const std::vector<Point2f> fpo_scene = map_points(kPerspective, four_plus_one);
+  EXPECT_FALSE(fit_homography_hypothesis(four_plus_one.data(), fpo_scene.data(), 5, h));
 }
 
 TEST(RefineHomography, LowersErrorToNoiseLevelFromPerturbedStart) {
