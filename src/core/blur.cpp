@@ -114,8 +114,7 @@ KG_ALWAYS_INLINE void pad_row(float* row, int w, int radius) {
   std::fill(row + w, row + w + radius, row[w - 1]);
 }
 
-// The two image loops, each compiled for the baseline and (x86-64) for
-// AVX2; blur_u8[i] / blur_float[i] is the version for dispatch() == i.
+// The two image loops, compiled below for each dispatch level.
 KG_ALWAYS_INLINE void blur_u8_rows(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst,
                                    float* vert, float* horz) {
   const int w = src.width;
@@ -148,6 +147,7 @@ KG_ALWAYS_INLINE void blur_float_rows(const Plane<float>& src, const Kernel& k, 
   }
 }
 
+// The two loops for the baseline and (x86-64) AVX2; see core/simd_dispatch.h.
 void blur_u8_baseline(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst, float* vert,
                       float* horz) {
   blur_u8_rows(src, k, dst, vert, horz);
@@ -155,7 +155,6 @@ void blur_u8_baseline(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst, 
 void blur_float_baseline(const Plane<float>& src, const Kernel& k, Plane<float>& dst, float* vert) {
   blur_float_rows(src, k, dst, vert);
 }
-
 #if defined(KG_DISPATCH_AVX2)
 KG_TARGET_AVX2 void blur_u8_avx2(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst,
                                  float* vert, float* horz) {
@@ -165,19 +164,20 @@ KG_TARGET_AVX2 void blur_float_avx2(const Plane<float>& src, const Kernel& k, Pl
                                     float* vert) {
   blur_float_rows(src, k, dst, vert);
 }
-constexpr void (*blur_u8[])(ImageView, const Kernel&, Plane<std::uint8_t>&, float*, float*) = {
-    blur_u8_baseline, blur_u8_avx2};
-constexpr void (*blur_float[])(const Plane<float>&, const Kernel&, Plane<float>&, float*) = {
-    blur_float_baseline, blur_float_avx2};
-#else
-constexpr void (*blur_u8[])(ImageView, const Kernel&, Plane<std::uint8_t>&, float*,
-                            float*) = {blur_u8_baseline};
-constexpr void (*blur_float[])(const Plane<float>&, const Kernel&, Plane<float>&,
-                               float*) = {blur_float_baseline};
 #endif
 
-int dispatch() {
-  return simd_level() == SimdLevel::kAvx2 ? 1 : 0;
+void blur_u8(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst, float* vert, float* horz) {
+#if defined(KG_DISPATCH_AVX2)
+  if (simd_level() == SimdLevel::kAvx2) return blur_u8_avx2(src, k, dst, vert, horz);
+#endif
+  blur_u8_baseline(src, k, dst, vert, horz);
+}
+
+void blur_float(const Plane<float>& src, const Kernel& k, Plane<float>& dst, float* vert) {
+#if defined(KG_DISPATCH_AVX2)
+  if (simd_level() == SimdLevel::kAvx2) return blur_float_avx2(src, k, dst, vert);
+#endif
+  blur_float_baseline(src, k, dst, vert);
 }
 
 }  // namespace
@@ -207,7 +207,7 @@ void gaussian_blur(ImageView src, float sigma, Plane<std::uint8_t>& dst, Plane<f
   scratch.resize(padded, 2);
   float* vert = scratch.row(0) + k.radius;
   float* horz = scratch.row(1);
-  blur_u8[dispatch()](src, k, dst, vert, horz);
+  blur_u8(src, k, dst, vert, horz);
 }
 
 void gaussian_blur(const Plane<float>& src, float sigma, Plane<float>& dst, Plane<float>& scratch) {
@@ -227,7 +227,7 @@ void gaussian_blur(const Plane<float>& src, float sigma, Plane<float>& dst, Plan
   make_kernel(sigma, k);
   scratch.resize(w + 2 * k.radius, 1);
   float* vert = scratch.row(0) + k.radius;
-  blur_float[dispatch()](src, k, dst, vert);
+  blur_float(src, k, dst, vert);
 }
 
 }  // namespace kg

@@ -25,9 +25,8 @@ inline std::uint64_t pending_key(double priority, std::uint32_t order) {
   return (static_cast<std::uint64_t>(bits) << 32) | order;
 }
 
-// Adds x to heap[0..size); the array must have room for it.
-inline void push_pending(PendingCell* heap, int& size, PendingCell x) {
-  int i = size++;
+// Places x at the hole heap[i] or above it, moving larger parents down.
+inline void sift_up(PendingCell* heap, int i, PendingCell x) {
   while (i > 0) {
     const int parent = (i - 1) / 2;
     if (heap[parent].key <= x.key) break;
@@ -35,6 +34,11 @@ inline void push_pending(PendingCell* heap, int& size, PendingCell x) {
     i = parent;
   }
   heap[i] = x;
+}
+
+// Adds x to heap[0..size); the array must have room for it.
+inline void push_pending(PendingCell* heap, int& size, PendingCell x) {
+  sift_up(heap, size++, x);
 }
 
 // Removes and returns the entry of smallest key (size > 0): the hole left
@@ -51,13 +55,7 @@ inline PendingCell pop_pending(PendingCell* heap, int& size) {
     heap[i] = heap[c];
     i = c;
   }
-  while (i > 0) {
-    const int parent = (i - 1) / 2;
-    if (heap[parent].key <= last.key) break;
-    heap[i] = heap[parent];
-    i = parent;
-  }
-  heap[i] = last;
+  sift_up(heap, i, last);
   return top;
 }
 

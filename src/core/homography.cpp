@@ -166,10 +166,6 @@ double lm_cost(const Vec8& p, const Point2f* model, const Point2f* scene, int n,
   return std::isfinite(sum) ? sum : HUGE_VAL;
 }
 
-}  // namespace
-
-namespace {
-
 bool fit(const Point2f* model, const Point2f* scene, int n, bool fast, Homography& h) {
   if (model == nullptr || scene == nullptr || n < 4) return false;
   Normaliser nm;

@@ -144,11 +144,12 @@ class BasicKdTreeView {
 
  private:
   std::uint32_t id(std::uint32_t slot) const { return ids_ != nullptr ? ids_[slot] : slot; }
+  // Asks the cache for the bounds and points of the leaf `node`, slots
+  // [begin, end).
+  void prefetch_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end) const;
   // Appends to out (up to capacity; `found` counts all) the points of the
   // leaf `node`, slots [begin, end), within radius2 and box of q; skips the
   // leaf when its bounds rule it out.
-  // Asks the cache for the leaf's bounds and points.
-  void prefetch_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end) const;
   void scan_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end, const Point& q,
                  Dist radius2, Dist box, std::uint32_t* out, std::uint32_t capacity,
                  std::uint32_t& found) const;
