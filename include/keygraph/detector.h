@@ -100,6 +100,8 @@ class DetectionList {
   bool empty() const { return size_ == 0; }
   static constexpr std::size_t capacity() { return kMaxDetections; }
   void clear() { size_ = 0; }
+  // Keeps the first `size` detections (no effect when there are fewer).
+  void truncate(std::size_t size) { size_ = size < size_ ? size : size_; }
   // False (and nothing added) when full.
   bool push_back(const Detection& d) {
     if (size_ == capacity()) return false;

@@ -84,6 +84,9 @@ class ModelIndex {
   const Point2f* keypoints() const { return keypoints_; }
   // Detector scale (sigma in model pixels, 0 when unknown) per keypoint.
   const float* keypoint_scales() const { return keypoint_scales_; }
+  // Per keypoint two view scale codes (docs/FORMAT.md, section 11): the
+  // finest and the coarsest view of the model that detected it.
+  const std::uint8_t* keypoint_views() const { return keypoint_views_; }
   // Arcs in search-tree order: arc(slot) is the arc whose descriptor is in
   // tree slot `slot` (< arc_count()), so a tree query's slots name arcs
   // directly.
@@ -183,6 +186,7 @@ class ModelIndex {
   int tree_depth_ = 0;
   const std::uint8_t* vertex_descriptors_ = nullptr;
   const float* keypoint_scales_ = nullptr;
+  const std::uint8_t* keypoint_views_ = nullptr;
 };
 
 }  // namespace kg

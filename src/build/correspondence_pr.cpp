@@ -7,6 +7,7 @@
 
 #include "build/image_io.h"
 #include "build/sift_descriptors.h"
+#include "core/arc_attributes.h"
 #include "core/arc_descriptor.h"
 #include "core/blur.h"
 #include "core/plane.h"
@@ -96,13 +97,28 @@ CaseCurve keygraph_curve(const BuiltModel& model, std::uint32_t keypoint_begin,
                                params.descriptor, scratch, d.second);
     return scene_arcs.emplace(key, d).first->second;
   };
-  const auto model_arc = [&](std::uint32_t a, std::uint32_t b) -> const ArcDescriptor* {
-    const auto it = std::lower_bound(model.arcs.begin(), model.arcs.end(), ModelArc{a, b},
-                                     [](const ModelArc& x, const ModelArc& y) {
-                                       return x.from < y.from || (x.from == y.from && x.to < y.to);
-                                     });
-    if (it == model.arcs.end() || it->from != a || it->to != b) return nullptr;
-    return &model.descriptors[static_cast<std::size_t>(it - model.arcs.begin())];
+  // The distance to the most similar of the model's arcs from a to b (views
+  // may describe one pair several times); NaN when there is none.
+  const std::int32_t box = attribute_box(params.graph);
+  const auto model_arc_distance = [&](std::uint32_t a, std::uint32_t b, const ArcDescriptor& d,
+                                      const float* attributes) {
+    const auto range =
+        std::equal_range(model.arcs.begin(), model.arcs.end(), ModelArc{a, b},
+                         [](const ModelArc& x, const ModelArc& y) {
+                           return x.from < y.from || (x.from == y.from && x.to < y.to);
+                         });
+    double best = std::numeric_limits<double>::quiet_NaN();
+    for (auto it = range.first; it != range.second; ++it) {
+      const auto i = static_cast<std::size_t>(it - model.arcs.begin());
+      // As the search: the scale attributes within the box, then the descriptor.
+      if (box > 0 && attributes != nullptr && i < model.arc_attributes.size() &&
+          (std::fabs(model.arc_attributes[i][0] - attributes[0]) > static_cast<float>(box) ||
+           std::fabs(model.arc_attributes[i][1] - attributes[1]) > static_cast<float>(box)))
+        continue;
+      const double e = std::sqrt(double{squared_distance(model.descriptors[i], d)});
+      if (!(e >= best)) best = e;
+    }
+    return best;
   };
   for (const KeygraphMatch& match : matches) {
     if (match.model_id != model_id) continue;
@@ -115,13 +131,20 @@ CaseCurve keygraph_curve(const BuiltModel& model, std::uint32_t keypoint_begin,
     double worst = valid ? 0.0 : std::numeric_limits<double>::quiet_NaN();
     for (int e = 0; valid && e < arcs; ++e) {
       const int a = e, b = (e + 1) % k;
-      const ArcDescriptor* md = model_arc(mv[a], mv[b]);
       const auto& sd = scene_arc(match.scene_vertices[a], match.scene_vertices[b]);
-      if (md == nullptr || !sd.first) {
-        worst = std::numeric_limits<double>::quiet_NaN();
+      float attributes[kArcAttributes];
+      const Keypoint& sa = scene[match.scene_vertices[a]];
+      const Keypoint& sb = scene[match.scene_vertices[b]];
+      const bool scaled =
+          arc_attributes({sa.x, sa.y}, {sb.x, sb.y}, sa.scale, sb.scale, attributes);
+      const double distance =
+          sd.first ? model_arc_distance(mv[a], mv[b], sd.second, scaled ? attributes : nullptr)
+                   : std::nan("");
+      if (std::isnan(distance)) {
+        worst = distance;
         break;
       }
-      worst = std::max(worst, std::sqrt(double{squared_distance(*md, sd.second)}));
+      worst = std::max(worst, distance);
     }
     bool correct = true;
     long long ids[4] = {-1, -1, -1, -1};

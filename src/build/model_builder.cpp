@@ -7,11 +7,13 @@
 #include <filesystem>
 #include <system_error>
 #include <type_traits>
+#include <unordered_map>
 
 #include <opencv2/imgproc.hpp>
 
 #include "build/image_io.h"
 #include "build/keypoints.h"
+#include "build/model_views.h"
 #include "build/sift_descriptors.h"
 #include "core/arc_attributes.h"
 #include "core/arc_descriptor.h"
@@ -39,8 +41,9 @@ constexpr DescriptorEncoding encoding_of() {
   }
 }
 
-// Model keypoints: the detector on the image at several scales, mapped back
-// to model pixels, near-duplicates merged (strongest kept).
+// Model keypoints without views (the paper's model): the detector on the
+// image at several scales, mapped back to model pixels, near-duplicates
+// merged (strongest kept).
 void model_keypoints(const cv::Mat& gray, const KeypointParams& params,
                      std::vector<Keypoint>& out) {
   KeypointExtractor extractor;
@@ -79,6 +82,203 @@ void model_keypoints(const cv::Mat& gray, const KeypointParams& params,
   for (int i : kept) out.push_back(all[i]);
 }
 
+// Arc descriptors as the frames compute them: fixed point for the integer
+// encodings (stored as q / scale, which quantise() turns back into q
+// exactly), float otherwise.
+class ArcDescriber {
+ public:
+  explicit ArcDescriber(const DescriptorParams& params)
+      : params_(params),
+        fixed_(uses_fixed_point(params)),
+        scale_(encoding_scale(params.encoding)) {}
+  void set_image(const cv::Mat& gray) {
+    gaussian_blur(view_of(gray), params_.blur_sigma, blurred_, scratch_);
+  }
+  bool describe(Point2f from, Point2f to, ArcDescriptor& d) {
+    const ImageView bv = view_of(blurred_);
+    if (!fixed_) return arc_descriptor(bv, from, to, params_, profile_, d);
+    std::int32_t q[kDescriptorSize];
+    if (!arc_descriptor_fixed(bv, from, to, params_, scale_, sums_, q)) return false;
+    for (int i = 0; i < kDescriptorSize; ++i)
+      d[i] = static_cast<float>(q[i]) / static_cast<float>(scale_);
+    return true;
+  }
+
+ private:
+  const DescriptorParams& params_;
+  bool fixed_;
+  std::int32_t scale_;
+  Plane<std::uint8_t> blurred_;
+  Plane<float> scratch_;
+  std::vector<float> profile_;
+  std::vector<std::int32_t> sums_;
+};
+
+// Arcs of one keypoint set in one image: every pair within the Chebyshev
+// range, described on that image. ids map local keypoints to model ids.
+void add_arcs(const std::vector<Keypoint>& points, const std::vector<std::uint32_t>& ids,
+              const Params& params, ArcDescriber& describer, BuiltModel& out,
+              std::vector<std::vector<std::uint32_t>>& arcs_by_pair_from) {
+  const std::size_t n = points.size();
+  for (std::size_t a = 0; a < n; ++a) {
+    const Point2f pa{points[a].x, points[a].y};
+    for (std::size_t b = 0; b < n; ++b) {
+      if (a == b || ids[a] == ids[b]) continue;
+      const Point2f pb{points[b].x, points[b].y};
+      if (!is_model_arc(pa, pb, points[a].scale, points[b].scale, params.graph)) continue;
+      ArcDescriptor d;
+      if (!describer.describe(pa, pb, d)) continue;
+      float attributes[kArcAttributes];
+      arc_attributes(pa, pb, points[a].scale, points[b].scale, attributes);
+      // Stored once when another view already described it alike.
+      bool duplicate = false;
+      const bool dedupe = params.views.dedupe_distance >= 0.f;
+      const float limit2 = params.views.dedupe_distance * params.views.dedupe_distance;
+      for (std::uint32_t other : arcs_by_pair_from[ids[a]]) {
+        if (!dedupe) break;
+        if (out.arcs[other].to != ids[b]) continue;
+        float d2 = 0.f;
+        for (int i = 0; i < kDescriptorSize; ++i) {
+          const float e = d[i] - out.descriptors[other][i];
+          d2 += e * e;
+        }
+        const auto& o = out.arc_attributes[other];
+        if (d2 <= limit2 && std::fabs(o[0] - attributes[0]) <= 1.f &&
+            std::fabs(o[1] - attributes[1]) <= 1.f) {
+          duplicate = true;
+          break;
+        }
+      }
+      if (duplicate) continue;
+      arcs_by_pair_from[ids[a]].push_back(static_cast<std::uint32_t>(out.arcs.size()));
+      out.arcs.push_back({ids[a], ids[b]});
+      out.descriptors.push_back(d);
+      out.arc_attributes.push_back({attributes[0], attributes[1]});
+    }
+  }
+}
+
+// Model keypoints found so far, with a grid for merging those of later
+// views that land within a view-dependent radius.
+class ModelKeypointSet {
+ public:
+  ModelKeypointSet(int width, int height) : width_(width), height_(height) {}
+  // The model keypoint within `radius` model pixels of p, or a new one.
+  std::uint32_t add(Point2f p, float sigma, float radius, std::uint8_t code, bool& added) {
+    const int cx = cell(p.x), cy = cell(p.y);
+    const int reach = static_cast<int>(std::ceil(radius / kCell));
+    std::uint32_t best = kNone;
+    float best_d2 = radius * radius;
+    for (int y = cy - reach; y <= cy + reach; ++y) {
+      for (int x = cx - reach; x <= cx + reach; ++x) {
+        const auto it = cells_.find(key(x, y));
+        if (it == cells_.end()) continue;
+        for (std::uint32_t id : it->second) {
+          const float dx = points_[id].x - p.x, dy = points_[id].y - p.y;
+          const float d2 = dx * dx + dy * dy;
+          if (d2 <= best_d2) best = id, best_d2 = d2;
+        }
+      }
+    }
+    added = best == kNone;
+    if (!added) {
+      views_[best][0] = std::min(views_[best][0], code);
+      views_[best][1] = std::max(views_[best][1], code);
+      return best;
+    }
+    const auto id = static_cast<std::uint32_t>(points_.size());
+    points_.push_back(p);
+    sigmas_.push_back(sigma);
+    views_.push_back({code, code});
+    cells_[key(cx, cy)].push_back(id);
+    return id;
+  }
+  const std::vector<Point2f>& points() const { return points_; }
+  const std::vector<float>& sigmas() const { return sigmas_; }
+  const std::vector<std::array<std::uint8_t, 2>>& views() const { return views_; }
+
+ private:
+  static constexpr float kCell = 4.f;
+  static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+  int cell(float v) const { return static_cast<int>(std::floor(v / kCell)); }
+  std::int64_t key(int x, int y) const {
+    return (static_cast<std::int64_t>(y) << 32) ^ static_cast<std::uint32_t>(x);
+  }
+  int width_, height_;
+  std::vector<Point2f> points_;
+  std::vector<float> sigmas_;
+  std::vector<std::array<std::uint8_t, 2>> views_;
+  std::unordered_map<std::int64_t, std::vector<std::uint32_t>> cells_;
+};
+
+// The model through simulated views (ViewParams): per view, its keypoints
+// mapped back to model pixels (merged with earlier views' within
+// merge_distance view pixels), and its arcs described on the view with
+// attributes in view pixels, between model keypoint ids.
+Status build_views(const cv::Mat& gray, const Params& params, BuiltModel& out) {
+  const std::vector<ModelView> views = model_views(gray.cols, gray.rows, params.views, 1);
+  ModelKeypointSet set(gray.cols, gray.rows);
+  KeypointExtractor extractor;
+  ArcDescriber describer(params.descriptor);
+  std::vector<std::vector<std::uint32_t>> arcs_by_from;
+  std::vector<Keypoint> detected, kept;
+  std::vector<std::uint32_t> ids;
+  cv::Mat image, inside;
+  for (const ModelView& view : views) {
+    render_view(gray, view, image, inside);
+    extractor.extract(image, params.keypoints, params.keypoints.max_model_keypoints, detected);
+    const cv::Matx23d& a = view.to_view;
+    const double det = a(0, 0) * a(1, 1) - a(0, 1) * a(1, 0);
+    // Inverse map view -> model.
+    const double i00 = a(1, 1) / det, i01 = -a(0, 1) / det, i10 = -a(1, 0) / det,
+                 i11 = a(0, 0) / det;
+    const float radius =
+        params.views.merge_distance / static_cast<float>(std::sqrt(std::fabs(det)));
+    // This view's scale code: -log2 of its area scale, eighths of an octave.
+    const double code = std::round(-0.5 * std::log2(std::fabs(det)) * format::kViewCodesPerOctave);
+    const auto view_code = static_cast<std::uint8_t>(std::clamp(code, 0.0, 255.0));
+    kept.clear();
+    ids.clear();
+    for (const Keypoint& k : detected) {
+      const int x = static_cast<int>(std::lround(k.x)), y = static_cast<int>(std::lround(k.y));
+      if (x < 0 || y < 0 || x >= inside.cols || y >= inside.rows ||
+          inside.at<std::uint8_t>(y, x) == 0)
+        continue;
+      const double vx = k.x - a(0, 2), vy = k.y - a(1, 2);
+      const Point2f m{static_cast<float>(i00 * vx + i01 * vy),
+                      static_cast<float>(i10 * vx + i11 * vy)};
+      const float right = static_cast<float>(gray.cols) - 0.5f;
+      const float bottom = static_cast<float>(gray.rows) - 0.5f;
+      if (!(m.x >= -0.5f && m.y >= -0.5f && m.x <= right && m.y <= bottom)) continue;
+      if (set.points().size() >= static_cast<std::size_t>(format::kMaxModelKeypoints) - 1) break;
+      bool added = false;
+      const std::uint32_t id = set.add(m, static_cast<float>(k.scale / std::sqrt(std::fabs(det))),
+                                       radius, view_code, added);
+      // One view keypoint per model keypoint in this view.
+      if (std::find(ids.begin(), ids.end(), id) != ids.end()) continue;
+      kept.push_back(k);
+      ids.push_back(id);
+    }
+    arcs_by_from.resize(set.points().size());
+    describer.set_image(image);
+    const std::size_t arcs_before = out.arcs.size();
+    add_arcs(kept, ids, params, describer, out, arcs_by_from);
+    ViewSummary summary;
+    summary.scale = view.scale;
+    summary.tilt = view.tilt;
+    summary.longitude = view.longitude;
+    summary.width = view.size.width;
+    summary.height = view.size.height;
+    summary.keypoints = static_cast<int>(kept.size());
+    summary.arcs = static_cast<int>(out.arcs.size() - arcs_before);
+    out.views.push_back(summary);
+  }
+  out.keypoints = set.points();
+  out.keypoint_scales = set.sigmas();
+  out.keypoint_views = set.views();
+  return Status::ok();
+}
+
 }  // namespace
 
 Status build_model(const cv::Mat& gray, const std::string& name, const Params& params,
@@ -92,61 +292,88 @@ Status build_model(const cv::Mat& gray, const std::string& name, const Params& p
   out.width = gray.cols;
   out.height = gray.rows;
 
-  std::vector<Keypoint> keypoints;
-  model_keypoints(gray, params.keypoints, keypoints);
-  // Sort by position so arcs and files do not depend on response ties.
-  std::sort(keypoints.begin(), keypoints.end(), [](const Keypoint& a, const Keypoint& b) {
-    return a.y < b.y || (a.y == b.y && a.x < b.x);
-  });
-  for (const Keypoint& k : keypoints) {
-    out.keypoints.push_back({k.x, k.y});
-    out.keypoint_scales.push_back(k.scale);
+  if (params.views.min_size > 0.f) {
+    if (s = build_views(gray, params, out); !s) return s;
+    if (params.descriptor.vertex_descriptor == VertexDescriptor::kSift) {
+      // On the model image, at each keypoint's scale in model pixels.
+      std::vector<Keypoint> keypoints(out.keypoints.size());
+      for (std::size_t i = 0; i < keypoints.size(); ++i)
+        keypoints[i] = {out.keypoints[i].x, out.keypoints[i].y, out.keypoint_scales[i], 0.f};
+      SiftDescriber sift;
+      sift.describe(gray, keypoints.data(), static_cast<int>(keypoints.size()),
+                    out.vertex_descriptors);
+    }
+  } else {
+    std::vector<Keypoint> keypoints;
+    model_keypoints(gray, params.keypoints, keypoints);
+    // Sort by position so arcs and files do not depend on response ties.
+    std::sort(keypoints.begin(), keypoints.end(), [](const Keypoint& a, const Keypoint& b) {
+      return a.y < b.y || (a.y == b.y && a.x < b.x);
+    });
+    std::vector<std::uint32_t> ids;
+    for (const Keypoint& k : keypoints) {
+      ids.push_back(static_cast<std::uint32_t>(out.keypoints.size()));
+      out.keypoints.push_back({k.x, k.y});
+      out.keypoint_scales.push_back(k.scale);
+      out.keypoint_views.push_back({0, 255});  // no views: every scale
+    }
+    if (params.descriptor.vertex_descriptor == VertexDescriptor::kSift) {
+      SiftDescriber sift;
+      sift.describe(gray, keypoints.data(), static_cast<int>(keypoints.size()),
+                    out.vertex_descriptors);
+    }
+    ArcDescriber describer(params.descriptor);
+    describer.set_image(gray);
+    std::vector<std::vector<std::uint32_t>> arcs_by_from(keypoints.size());
+    Params single = params;
+    single.views.dedupe_distance = -1.f;  // one image: nothing to deduplicate
+    add_arcs(keypoints, ids, single, describer, out, arcs_by_from);
+    ViewSummary summary;
+    summary.width = gray.cols;
+    summary.height = gray.rows;
+    summary.keypoints = static_cast<int>(keypoints.size());
+    summary.arcs = static_cast<int>(out.arcs.size());
+    out.views.push_back(summary);
   }
-  if (params.descriptor.vertex_descriptor == VertexDescriptor::kSift) {
-    SiftDescriber sift;
-    sift.describe(gray, keypoints.data(), static_cast<int>(keypoints.size()),
-                  out.vertex_descriptors);
+  // Arcs sorted by (from, to): files do not depend on the views' order.
+  {
+    std::vector<std::size_t> order(out.arcs.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+      return out.arcs[a].from < out.arcs[b].from ||
+             (out.arcs[a].from == out.arcs[b].from && out.arcs[a].to < out.arcs[b].to);
+    });
+    BuiltModel sorted;
+    for (std::size_t i : order) {
+      sorted.arcs.push_back(out.arcs[i]);
+      sorted.descriptors.push_back(out.descriptors[i]);
+      sorted.arc_attributes.push_back(out.arc_attributes[i]);
+    }
+    out.arcs.swap(sorted.arcs);
+    out.descriptors.swap(sorted.descriptors);
+    out.arc_attributes.swap(sorted.arc_attributes);
   }
-
-  Plane<std::uint8_t> blurred;
-  Plane<float> scratch;
-  gaussian_blur(view_of(gray), params.descriptor.blur_sigma, blurred, scratch);
-  const ImageView bv = view_of(blurred);
-  std::vector<float> profile;
-  std::vector<std::int32_t> sums;
-  // As the frames are described: fixed point for the integer encodings
-  // (stored as q / scale, which quantise() turns back into q exactly).
-  const bool fixed = uses_fixed_point(params.descriptor);
-  const std::int32_t scale = encoding_scale(params.descriptor.encoding);
-  auto describe = [&](Point2f from, Point2f to, ArcDescriptor& d) {
-    if (!fixed) return arc_descriptor(bv, from, to, params.descriptor, profile, d);
-    std::int32_t q[kDescriptorSize];
-    if (!arc_descriptor_fixed(bv, from, to, params.descriptor, scale, sums, q)) return false;
-    for (int i = 0; i < kDescriptorSize; ++i)
-      d[i] = static_cast<float>(q[i]) / static_cast<float>(scale);
-    return true;
-  };
   const auto n = static_cast<std::uint32_t>(out.keypoints.size());
   std::vector<std::uint32_t> offsets(n + 1, 0), to;
-  for (std::uint32_t a = 0; a < n; ++a) {
-    offsets[a] = static_cast<std::uint32_t>(out.arcs.size());
-    for (std::uint32_t b = 0; b < n; ++b) {
-      if (a == b || !is_model_arc(out.keypoints[a], out.keypoints[b], out.keypoint_scales[a],
-                                  out.keypoint_scales[b], params.graph))
-        continue;
-      ArcDescriptor d;
-      if (!describe(out.keypoints[a], out.keypoints[b], d)) continue;
-      out.arcs.push_back({a, b});
-      out.descriptors.push_back(d);
+  {
+    std::size_t at = 0;
+    for (std::uint32_t a = 0; a <= n; ++a) {
+      while (at < out.arcs.size() && out.arcs[at].from < a) ++at;
+      offsets[a] = static_cast<std::uint32_t>(at);
     }
   }
-  offsets[n] = static_cast<std::uint32_t>(out.arcs.size());
-  to.reserve(out.arcs.size());
-  for (const ModelArc& arc : out.arcs) to.push_back(arc.to);
+  // Distinct targets per source (views may describe one pair twice).
+  std::vector<std::uint32_t> unique_offsets(n + 1, 0);
+  for (std::uint32_t a = 0; a < n; ++a) {
+    unique_offsets[a] = static_cast<std::uint32_t>(to.size());
+    for (std::uint32_t i = offsets[a]; i < offsets[a + 1]; ++i) {
+      if (i == offsets[a] || out.arcs[i].to != out.arcs[i - 1].to) to.push_back(out.arcs[i].to);
+    }
+  }
+  unique_offsets[n] = static_cast<std::uint32_t>(to.size());
   // Keygraphs over arcs that have descriptors (the ones selection can find).
-  GraphParams graph = params.graph;
-  out.keygraphs = count_model_keygraphs(out.keypoints.data(), static_cast<int>(n), offsets.data(),
-                                        to.data(), graph);
+  out.keygraphs = count_model_keygraphs(out.keypoints.data(), static_cast<int>(n),
+                                        unique_offsets.data(), to.data(), params.graph);
   if (out.arcs.empty())
     return {StatusCode::kInvalidArgument, name + ": no model arcs (" + std::to_string(n) +
                                               " keypoints); image too small or flat"};
@@ -201,18 +428,31 @@ void encode_tree(const std::vector<ArcSearchPoint>& search_points, double attrib
 
 }  // namespace
 
-Status serialize_index(const std::vector<BuiltModel>& models, const Params& params,
+Params index_params(const std::vector<BuiltModel>& models, const Params& params) {
+  Params out = params;
+  if (params.views.min_size <= 0.f) return out;
+  int longest = 0;
+  for (const BuiltModel& m : models) longest = std::max({longest, m.width, m.height});
+  const double shrink = longest / static_cast<double>(params.views.min_size);
+  // Area scale of the smallest view, with a margin for the views' spacing.
+  out.ransac.max_scale_change = std::max(params.ransac.max_scale_change, 1.5 * shrink * shrink);
+  return out;
+}
+
+Status serialize_index(const std::vector<BuiltModel>& models, const Params& requested,
                        std::vector<std::uint8_t>& bytes) {
   using namespace format;
-  Status s = validate_params(params);
+  Status s = validate_params(requested);
   if (!s) return s;
   if (models.empty()) return {StatusCode::kInvalidArgument, "no models to write"};
+  const Params params = index_params(models, requested);
 
   // Gather global arrays.
   std::vector<std::uint8_t> records(models.size() * kModelRecordSize, 0);
   std::string strings;
   std::vector<Point2f> keypoints;
   std::vector<float> keypoint_scales;
+  std::vector<std::uint8_t> keypoint_views;
   std::vector<ModelArc> arcs;
   std::vector<ArcDescriptor> descriptors;
   std::vector<std::uint8_t> vertex_descriptors;
@@ -228,6 +468,8 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
                   "the parameters of the index)"};
     if (model.keypoint_scales.size() != model.keypoints.size())
       return {StatusCode::kInvalidArgument, model.name + ": one scale per keypoint expected"};
+    if (!model.keypoint_views.empty() && model.keypoint_views.size() != model.keypoints.size())
+      return {StatusCode::kInvalidArgument, model.name + ": one view range per keypoint expected"};
     if (model.descriptors.size() != model.arcs.size())
       return {StatusCode::kInvalidArgument, model.name + ": one descriptor per arc expected"};
     std::uint8_t* r = records.data() + m * kModelRecordSize;
@@ -249,6 +491,11 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
     keypoints.insert(keypoints.end(), model.keypoints.begin(), model.keypoints.end());
     keypoint_scales.insert(keypoint_scales.end(), model.keypoint_scales.begin(),
                            model.keypoint_scales.end());
+    for (std::size_t k = 0; k < model.keypoints.size(); ++k) {
+      const bool known = !model.keypoint_views.empty();
+      keypoint_views.push_back(known ? model.keypoint_views[k][0] : 0);
+      keypoint_views.push_back(known ? model.keypoint_views[k][1] : 255);
+    }
     for (const ModelArc& a : model.arcs) arcs.push_back({a.from + kp_begin, a.to + kp_begin});
     descriptors.insert(descriptors.end(), model.descriptors.begin(), model.descriptors.end());
     if (with_vertex)
@@ -259,12 +506,23 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
     return {StatusCode::kInvalidArgument, "more than 2^32 - 1 arcs or keypoints"};
   // Tree points: each descriptor with its arc's scale attributes.
   std::vector<ArcSearchPoint> search_points(arcs.size());
-  for (std::size_t i = 0; i < arcs.size(); ++i) {
-    float attributes[kArcAttributes];
-    arc_attributes(keypoints[arcs[i].from], keypoints[arcs[i].to], keypoint_scales[arcs[i].from],
-                   keypoint_scales[arcs[i].to], attributes);  // zero when a scale is unknown
-    search_points[i] = search_point(descriptors[i], attributes);
+  std::vector<std::array<float, 2>> attributes(arcs.size());
+  {
+    std::size_t i = 0;
+    for (const BuiltModel& model : models) {
+      for (std::size_t a = 0; a < model.arcs.size(); ++a, ++i) {
+        if (model.arc_attributes.size() == model.arcs.size()) {
+          attributes[i] = model.arc_attributes[a];
+        } else {  // zero when a scale is unknown
+          arc_attributes(keypoints[arcs[i].from], keypoints[arcs[i].to],
+                         keypoint_scales[arcs[i].from], keypoint_scales[arcs[i].to],
+                         attributes[i].data());
+        }
+      }
+    }
   }
+  for (std::size_t i = 0; i < arcs.size(); ++i)
+    search_points[i] = search_point(descriptors[i], attributes[i].data());
   // Attributes are split as often as descriptor components when their box
   // is as wide, in the stored domain, as the similarity radius; never when
   // the box is off.
@@ -330,6 +588,8 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
        arc_count},
       {kSectionLeafBounds, encoding_id, leaf_bounds.data(), leaf_bounds.size(),
        static_cast<std::uint32_t>(leaf_bounds.size() / encoded_point_size(encoding))},
+      {kSectionKeypointViews, 0, keypoint_views.data(), keypoint_views.size(),
+       static_cast<std::uint32_t>(keypoint_views.size() / 2)},
   };
   const std::size_t params_offset = kHeaderSize;
   const std::size_t table_offset = params_offset + kParamsSize;

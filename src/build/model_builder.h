@@ -5,6 +5,7 @@
 // models.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -18,17 +19,31 @@
 
 namespace kg {
 
+// What one view of a model contributed (reports, keygraph build).
+struct ViewSummary {
+  double scale = 1.0, tilt = 1.0, longitude = 0.0;  // build/model_views.h
+  int width = 0, height = 0;                        // view image size
+  int keypoints = 0;                                // detected inside the model
+  int arcs = 0;                                     // stored (after deduplication)
+};
+
 struct BuiltModel {
   std::string name;
   int width = 0;
   int height = 0;
   std::vector<Point2f> keypoints;      // model pixels
   std::vector<float> keypoint_scales;  // detector sigma per keypoint (0: unknown)
+  // Finest and coarsest view scale code (core/index_format.h) per keypoint.
+  std::vector<std::array<std::uint8_t, 2>> keypoint_views;
   // Params::descriptor.vertex_descriptor kSift: kVertexDescriptorSize bytes
   // per keypoint, in keypoint order; empty for kNone.
   std::vector<std::uint8_t> vertex_descriptors;
   std::vector<ModelArc> arcs;              // local keypoint ids, sorted by (from, to)
   std::vector<ArcDescriptor> descriptors;  // one per arc
+  // Scale attributes per arc (core/arc_attributes.h), measured in the view
+  // that described it.
+  std::vector<std::array<float, 2>> arc_attributes;
+  std::vector<ViewSummary> views;
   std::uint64_t keygraphs = 0;
 };
 
@@ -36,7 +51,14 @@ struct BuiltModel {
 Status build_model(const cv::Mat& gray, const std::string& name, const Params& params,
                    BuiltModel& out);
 
-// Serialises models into the .kgi layout (docs/FORMAT.md). Deterministic.
+// The parameters an index of `models` records: `params`, with
+// ransac.max_scale_change raised (never lowered) to cover the smallest view
+// of the largest model when views are on, so that the poses the views make
+// findable are not refused as implausible.
+Params index_params(const std::vector<BuiltModel>& models, const Params& params);
+
+// Serialises models into the .kgi layout (docs/FORMAT.md), with the
+// parameters of index_params(). Deterministic.
 Status serialize_index(const std::vector<BuiltModel>& models, const Params& params,
                        std::vector<std::uint8_t>& bytes);
 

@@ -1,6 +1,9 @@
 // keygraph build [--name NAME]... [--detector hessian|mser] [--structure 2|3|4]
 //                [--vertex-descriptor none|sift] [--encoding float32|int16|int8]
-//                [--roi X,Y,W,H] [--set NAME=VALUE]... MODEL... -o OUT.kgi
+//                [--min-size PX] [--max-tilt DEG] [--roi X,Y,W,H]
+//                [--set NAME=VALUE]... MODEL... -o OUT.kgi
+// --min-size and --max-tilt set the simulated views (views.min_size,
+// views.max_tilt; --max-tilt also asks for two tilt levels when none is set).
 // --name and --roi apply to the model image that follows them: --roi makes
 // the model that rectangle of the image (model pixel (0,0) is image pixel
 // (X,Y)); without --name the model is named after the file's stem.
@@ -41,7 +44,8 @@ int cmd_build(const Args& args) {
     const std::string& a = args[i];
     const bool has_value = i + 1 < args.size();
     if (a == "--name" || a == "-o" || a == "--output" || a == "--detector" || a == "--structure" ||
-        a == "--vertex-descriptor" || a == "--encoding" || a == "--roi" || a == "--set") {
+        a == "--vertex-descriptor" || a == "--encoding" || a == "--roi" || a == "--set" ||
+        a == "--min-size" || a == "--max-tilt") {
       if (!has_value) return fail("build: " + a + " needs a value");
       const std::string& v = args[++i];
       if (a == "--name") {
@@ -72,6 +76,11 @@ int cmd_build(const Args& args) {
           return fail("build: unknown encoding '" + v + "' (float32, int16 or int8)");
       } else if (a == "--set") {
         if (Status s = apply_param_override(v, params); !s) return fail("build: " + s.message());
+      } else if (a == "--min-size" || a == "--max-tilt") {
+        const std::string name = a == "--min-size" ? "views.min_size" : "views.max_tilt";
+        if (Status s = apply_param_override(name + "=" + v, params); !s)
+          return fail("build: " + a + ": " + s.message());
+        if (a == "--max-tilt" && params.views.tilt_levels == 0) params.views.tilt_levels = 2;
       } else if (a == "--structure") {
         if (v != "2" && v != "3" && v != "4") return fail("build: --structure takes 2, 3 or 4");
         params.graph.structure = static_cast<Structure>(v[0] - '0');
@@ -114,9 +123,12 @@ int cmd_build(const Args& args) {
     BuiltModel model;
     s = build_model(gray, name, params, model);
     if (!s) return fail(s.message());
-    std::printf("%s: %zu keypoints, %zu arcs, %llu keygraphs\n", name.c_str(),
-                model.keypoints.size(), model.arcs.size(),
-                static_cast<unsigned long long>(model.keygraphs));
+    std::vector<std::uint8_t> bytes;
+    if (s = serialize_index({model}, params, bytes); !s) return fail(s.message());
+    std::printf("%s: %zu views, %zu keypoints, %zu arcs, %llu keygraphs, %.1f KB alone\n",
+                name.c_str(), model.views.size(), model.keypoints.size(), model.arcs.size(),
+                static_cast<unsigned long long>(model.keygraphs),
+                static_cast<double>(bytes.size()) / 1024.0);
     models.push_back(std::move(model));
   }
   Status s = write_index(models, params, output);

@@ -480,6 +480,7 @@ Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count
                       model_rng, limits.max_detections, out, stats.truncated_detections);
     begin = end;
   }
+  keep_best_of_overlapping(out);
   stats.ms_pose = ms_since(t);
   if (stats.truncated_keypoints || stats.truncated_arc_matches || stats.truncated_correspondences ||
       stats.truncated_detections)

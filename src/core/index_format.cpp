@@ -52,6 +52,8 @@ const char* section_name(std::uint32_t id) {
       return "tree arc targets";
     case kSectionLeafBounds:
       return "leaf bounds";
+    case kSectionKeypointViews:
+      return "keypoint views";
     default:
       return "(unknown)";
   }
@@ -173,6 +175,21 @@ Status validate_params(const Params& p) {
     return bad("min_verification_z", "must be >= 0");
   if (p.ransac.max_instances < 1 || p.ransac.max_instances > 64)
     return bad("max_instances", "must be in 1..64");
+  if (!(std::isfinite(p.views.min_size) && p.views.min_size >= 0.f && p.views.min_size <= 100000.f))
+    return bad("views.min_size", "must be in [0, 100000] (0: no views)");
+  if (!(std::isfinite(p.views.scale_step) && p.views.scale_step >= 0.3f &&
+        p.views.scale_step <= 0.95f))
+    return bad("views.scale_step", "must be in [0.3, 0.95]");
+  if (!(std::isfinite(p.views.max_tilt) && p.views.max_tilt >= 0.f && p.views.max_tilt <= 80.f))
+    return bad("views.max_tilt", "must be in [0, 80] degrees");
+  if (p.views.tilt_levels < 0 || p.views.tilt_levels > 8)
+    return bad("views.tilt_levels", "must be in 0..8");
+  if (!(std::isfinite(p.views.merge_distance) && p.views.merge_distance >= 0.f &&
+        p.views.merge_distance <= 10.f))
+    return bad("views.merge_distance", "must be in [0, 10]");
+  if (!(std::isfinite(p.views.dedupe_distance) && p.views.dedupe_distance >= 0.f &&
+        p.views.dedupe_distance <= 2.f))
+    return bad("views.dedupe_distance", "must be in [0, 2]");
   return Status::ok();
 }
 

@@ -21,7 +21,9 @@ inline constexpr std::uint8_t kMagic[8] = {0x89, 'K', 'G', 'I', '\r', '\n', 0x1A
 // of descriptor plus scale attributes (kSearchDims components).
 // 4.0: scale attributes on a 1/16-log grid, leaf bounds.
 // 5.0: search-tree leaves of up to 64 arcs (kLeafSize; 4.x: 32).
-inline constexpr std::uint16_t kVersionMajor = 5;
+// 6.0: model views (parameters views.*; arcs and their scale attributes
+// from simulated views) and the keypoint views section (11).
+inline constexpr std::uint16_t kVersionMajor = 6;
 inline constexpr std::uint16_t kVersionMinor = 0;
 inline constexpr std::size_t kAlignment = 64;
 
@@ -59,11 +61,18 @@ enum SectionId : std::uint32_t {
   kSectionKeypointScales = 8,     // float32 detector scale (sigma, model pixels) per keypoint
   kSectionTreeArcTargets = 9,     // int16 `to - from` per tree slot
   kSectionLeafBounds = 10,        // per tree leaf: minimum and maximum tree point, encoded
+  kSectionKeypointViews = 11,     // u8 finest, u8 coarsest view scale code per keypoint
 };
 // Sections 1..kSectionCount are in every index and required (empty ones
 // included). Ids above are skipped by the reader: room for minor versions.
-inline constexpr std::uint32_t kSectionCount = 10;
-inline constexpr std::uint32_t kLastSectionId = 10;
+inline constexpr std::uint32_t kSectionCount = 11;
+inline constexpr std::uint32_t kLastSectionId = 11;
+
+// View scale codes (section 11): code = round(-log2(scale) * 8), 0 for the
+// model image's own scale, one step per eighth of an octave; the scale of a
+// tilted view is its area scale, sqrt(scale^2 / tilt). A keypoint detected
+// in no view but kept (the paper's model, without views) spans 0..255.
+inline constexpr float kViewCodesPerOctave = 8.f;
 // A model has at most this many keypoints, so that an arc's `to - from`
 // fits the int16 of section 9.
 inline constexpr int kMaxModelKeypoints = 32768;
@@ -151,6 +160,12 @@ void visit_params(P& p, F&& f) {
   f("graph.max_scale_error", p.graph.max_scale_error);
   f("graph.max_relative_length", p.graph.max_relative_length);
   f("descriptor.max_search_leaves", p.descriptor.max_search_leaves);
+  f("views.min_size", p.views.min_size);
+  f("views.scale_step", p.views.scale_step);
+  f("views.max_tilt", p.views.max_tilt);
+  f("views.tilt_levels", p.views.tilt_levels);
+  f("views.merge_distance", p.views.merge_distance);
+  f("views.dedupe_distance", p.views.dedupe_distance);
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }

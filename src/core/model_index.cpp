@@ -256,6 +256,7 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   const Section& nodes = sections[kSectionTreeNodes];
   const Section& vertex = sections[kSectionVertexDescriptors];
   const Section& scales = sections[kSectionKeypointScales];
+  const Section& views = sections[kSectionKeypointViews];
   // The point, node and bound sections name the encoding the parameters name.
   for (const std::uint32_t id : {kSectionDescriptors, kSectionTreeNodes, kSectionLeafBounds}) {
     if (sections[id].encoding != static_cast<std::uint32_t>(encoding))
@@ -279,6 +280,10 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   if (scales.count != keypoints.count)
     return corrupt("keypoint scales section: count " + std::to_string(scales.count) +
                    ", expected " + std::to_string(keypoints.count) + " (one per keypoint)");
+  if (!(s = expect_size(kSectionKeypointViews, 2))) return s;
+  if (views.count != keypoints.count)
+    return corrupt("keypoint views section: count " + std::to_string(views.count) + ", expected " +
+                   std::to_string(keypoints.count) + " (one per keypoint)");
   if (models.count == 0) return corrupt("models section: no models");
   // One vertex descriptor per keypoint exactly when the parameters ask for them.
   const bool want_vertex = params_.descriptor.vertex_descriptor != VertexDescriptor::kNone;
@@ -343,6 +348,12 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   for (std::uint32_t i = 0; i < keypoints.count; ++i) {
     if (!(std::isfinite(kp_scales[i]) && kp_scales[i] >= 0.f && kp_scales[i] < 1e6f))
       return corrupt("keypoint " + std::to_string(i) + ": scale not finite or negative");
+  }
+  // View scale codes: finest <= coarsest.
+  const std::uint8_t* kp_views = d + views.offset;
+  for (std::uint32_t i = 0; i < keypoints.count; ++i) {
+    if (kp_views[2 * i] > kp_views[2 * i + 1])
+      return corrupt("keypoint " + std::to_string(i) + ": view scale range reversed");
   }
   // These are needed by model_of_keypoint() below.
   models_ = d + models.offset;
@@ -445,6 +456,7 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   tree_depth_ = depth;
   vertex_descriptors_ = vertex.count > 0 ? d + vertex.offset : nullptr;
   keypoint_scales_ = kp_scales;
+  keypoint_views_ = kp_views;
   return Status::ok();
 }
 

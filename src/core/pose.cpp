@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/homography.h"
+#include "core/index_format.h"
 #include "core/keygraph.h"
 #include "core/ransac.h"
 
@@ -44,7 +45,92 @@ bool affine_predicts(const Point2f* m0, const Point2f* s0, const Point2f* m1, co
   return true;
 }
 
+// Whether an instance with these corners repeats one of `model_id` already
+// in `out`. A second RANSAC attempt on the left-over correspondences of one
+// instance finds the same sign again, slightly shifted.
+bool repeats_instance(const DetectionList& out, int model_id, const Point2f* corners) {
+  for (const Detection& d : out) {
+    if (d.model_id == model_id && outlines_overlap(d.corners, corners)) return true;
+  }
+  return false;
+}
+
+// View scale code (core/index_format.h) of a pose: the area scale of its
+// local affine map at the model's centre, clamped to the codes' range (a
+// scene larger than the model image is coded as the model's own scale).
+int pose_view_code(const Homography& h, const ModelInfo& info) {
+  const Point2f c{0.5f * (info.width - 1.f), 0.5f * (info.height - 1.f)};
+  const Point2f o = kg::apply(h, c), x = kg::apply(h, {c.x + 1.f, c.y}),
+                y = kg::apply(h, {c.x, c.y + 1.f});
+  const double det = std::fabs(double{x.x - o.x} * (y.y - o.y) - double{x.y - o.y} * (y.x - o.x));
+  if (!(det > 0.0) || !std::isfinite(det)) return 0;
+  const double code = std::round(-0.5 * std::log2(det) * format::kViewCodesPerOctave);
+  return static_cast<int>(std::clamp(code, 0.0, 255.0));
+}
+
+// Radius of the guided matching and the verification: the inlier
+// threshold, shrunk for instances smaller than the model image (down to
+// half of it at a quarter of the model's size). Keypoints of a small
+// instance are fine-scale ones, localised to a pixel or two, while the
+// chance of a hit grows with the radius squared: the full radius there
+// lets chance hits swamp the verification.
+float verification_radius(const RansacParams& rp, int code) {
+  const double scale = std::exp2(-code / static_cast<double>(format::kViewCodesPerOctave));
+  return static_cast<float>(rp.inlier_threshold * std::clamp(std::sqrt(scale), 0.5, 1.0));
+}
+
+// Whether the views detected model keypoint i near the scale of the pose
+// (within half an octave of its finest or coarsest view): keypoints of
+// fine detail do not exist in a small instance and only dilute the
+// verification.
+bool seen_at(const std::uint8_t* views, std::uint32_t i, int code) {
+  constexpr int kMargin = 4;  // eighths of an octave
+  return code >= views[2 * i] - kMargin && code <= views[2 * i + 1] + kMargin;
+}
+
 }  // namespace
+
+namespace {
+
+// Whether p lies inside the convex quadrilateral q (either orientation).
+bool inside_quad(const Point2f* q, Point2f p) {
+  int positive = 0, negative = 0;
+  for (int i = 0; i < 4; ++i) {
+    const float turn = orient(q[i], q[(i + 1) % 4], p);
+    positive += turn > 0.f ? 1 : 0;
+    negative += turn < 0.f ? 1 : 0;
+  }
+  return positive == 0 || negative == 0;
+}
+
+Point2f centre_of(const Point2f* q) {
+  return {(q[0].x + q[1].x + q[2].x + q[3].x) * 0.25f, (q[0].y + q[1].y + q[2].y + q[3].y) * 0.25f};
+}
+
+}  // namespace
+
+bool outlines_overlap(const Point2f* a, const Point2f* b) {
+  return inside_quad(a, centre_of(b)) || inside_quad(b, centre_of(a));
+}
+
+void keep_best_of_overlapping(DetectionList& found) {
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < found.size(); ++i) {
+    bool beaten = false;
+    for (std::size_t j = 0; j < found.size() && !beaten; ++j) {
+      if (j == i || !outlines_overlap(found[i].corners, found[j].corners)) continue;
+      // More inliers wins; ties go to the higher score over chance, then
+      // to the earlier detection.
+      const Detection& a = found[i];
+      const Detection& b = found[j];
+      const double margin_a = a.score - a.chance, margin_b = b.score - b.chance;
+      beaten = b.inliers > a.inliers ||
+               (b.inliers == a.inliers && (margin_b > margin_a || (margin_b == margin_a && j < i)));
+    }
+    if (!beaten) found[kept++] = found[i];
+  }
+  found.truncate(kept);
+}
 
 // RANSAC estimator over the active keygraph correspondences.
 struct KeygraphEstimator {
@@ -163,14 +249,17 @@ void PoseEstimator::reserve(int max_matches, int k, std::uint32_t max_model_keyp
 PoseEstimator::Support PoseEstimator::guided_refine(const ModelIndex& index, const ModelInfo& info,
                                                     const FrameKeypoints& frame, Homography& h) {
   const RansacParams& rp = index.params().ransac;
-  const auto radius = static_cast<float>(rp.inlier_threshold);
   const Point2f* model_points = index.keypoints() + info.keypoint_begin;
+  const std::uint8_t* views = index.keypoint_views() + 2 * std::size_t{info.keypoint_begin};
   Support support;
   for (int round = 0; round < 2; ++round) {
     guided_model_.clear();
     guided_scene_.clear();
     int inside = 0;
+    const int code = pose_view_code(h, info);
+    const float radius = verification_radius(rp, code);
     for (std::uint32_t i = 0; i < info.keypoint_count; ++i) {
+      if (!seen_at(views, i, code)) continue;
       const Point2f p = kg::apply(h, model_points[i]);
       if (!(p.x >= 0.f && p.y >= 0.f && p.x <= static_cast<float>(frame.width - 1) &&
             p.y <= static_cast<float>(frame.height - 1)))
@@ -199,13 +288,16 @@ double PoseEstimator::chance_fraction(const ModelIndex& index, const ModelInfo& 
   // thresholds: how often model keypoints land on frame keypoints by chance
   // in this part of the frame.
   const RansacParams& rp = index.params().ransac;
-  const auto radius = static_cast<float>(rp.inlier_threshold);
-  const float shift = 3.f * radius;
+  const auto shift = static_cast<float>(3.0 * rp.inlier_threshold);
   const Point2f offsets[4] = {{shift, 0.f}, {-shift, 0.f}, {0.f, shift}, {0.f, -shift}};
   const Point2f* model_points = index.keypoints() + info.keypoint_begin;
+  const std::uint8_t* views = index.keypoint_views() + 2 * std::size_t{info.keypoint_begin};
+  const int code = pose_view_code(h, info);
+  const float radius = verification_radius(rp, code);
   int inside = 0, hits = 0;
   for (const Point2f& o : offsets) {
     for (std::uint32_t i = 0; i < info.keypoint_count; ++i) {
+      if (!seen_at(views, i, code)) continue;
       Point2f p = kg::apply(h, model_points[i]);
       p.x += o.x;
       p.y += o.y;
@@ -332,9 +424,12 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
           ++distinct;
       }
     }
+    Point2f corners[4];
+    for (int c = 0; c < 4; ++c) corners[c] = kg::apply(refined, info.outline[c]);
     const bool accepted =
         distinct >= rp.min_inliers && final_score.sample_inliers >= rp.min_inlier_keygraphs &&
-        z >= rp.min_verification_z && is_plausible_pose(refined, info.width, info.height, rp);
+        z >= rp.min_verification_z && is_plausible_pose(refined, info.width, info.height, rp) &&
+        !repeats_instance(out, model_id, corners);
     if (accepted && static_cast<int>(out.size()) >= max_out) {
       truncated = true;
       break;
@@ -344,7 +439,7 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
       d.model_id = model_id;
       d.model_name = info.name;
       d.homography = refined;
-      for (int c = 0; c < 4; ++c) d.corners[c] = kg::apply(refined, info.outline[c]);
+      for (int c = 0; c < 4; ++c) d.corners[c] = corners[c];
       d.inliers = distinct;
       d.inlier_keygraphs = final_score.sample_inliers;
       d.score = support.fraction;

@@ -32,6 +32,15 @@ struct FrameKeypoints {
   int height = 0;
 };
 
+// Whether two detections' outlines cover the same part of the frame: the
+// centre of either lies inside the other.
+bool outlines_overlap(const Point2f* a, const Point2f* b);
+
+// Where detections of different models overlap (look-alike signs, or one
+// sign explained by two models), keeps the best supported one: the most
+// inliers, then the largest score over chance. Keeps the order of the rest.
+void keep_best_of_overlapping(DetectionList& found);
+
 class PoseEstimator {
  public:
   explicit PoseEstimator(std::pmr::memory_resource* memory = std::pmr::get_default_resource());

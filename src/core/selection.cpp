@@ -295,8 +295,14 @@ bool Selector::candidate_lists(const ArcList* lists, int k) {
     }
   }
   for (int j = 0; j < last; ++j) clear(kept_[j].data(), kept_count_[j]);
-  for (int i = 0; i <= last; ++i)
+  for (int i = 0; i <= last; ++i) {
     sort_arc_keys(kept_[i].data(), sort_scratch_.data(), kept_count_[i], id_bits_);
+    // Views store one keypoint pair once per view that describes it
+    // differently; a pair found twice would select its circuits twice.
+    std::uint64_t* sorted = kept_[i].data();
+    kept_count_[i] =
+        static_cast<std::uint32_t>(std::unique(sorted, sorted + kept_count_[i]) - sorted);
+  }
   return true;
 }
 
@@ -394,8 +400,14 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     if (empty) continue;
     bool room = true;
     if (k == 2) {
-      for (std::uint32_t x = 0; x < lists[0].count && room; ++x) {
-        const std::uint64_t key = pool_[lists[0].begin + x];
+      // Each keypoint pair once (views may store it several times).
+      std::uint64_t* keys = kept_[0].data();
+      const std::uint32_t count = std::min(lists[0].count, static_cast<std::uint32_t>(per_query));
+      std::copy_n(pool_.data() + lists[0].begin, count, keys);
+      sort_arc_keys(keys, sort_scratch_.data(), count, id_bits_);
+      const auto unique = static_cast<std::uint32_t>(std::unique(keys, keys + count) - keys);
+      for (std::uint32_t x = 0; x < unique && room; ++x) {
+        const std::uint64_t key = keys[x];
         std::uint32_t v[kMaxVertices] = {key_from(key), key_to(key), 0, 0};
         if (lists[0].reversed) std::swap(v[0], v[1]);
         room = emit(v, g);

@@ -118,8 +118,8 @@ expect_failure "build: two --name for one image" \
 INDEX=$WORK/box.kgi
 checks=$((checks + 1))
 if "$KG" build "$DATA/box.png" -o "$INDEX" >"$LOG/stdout" 2>"$LOG/stderr"; then
-  grep -Eq '^box: [0-9]+ keypoints, [0-9]+ arcs, [0-9]+ keygraphs$' "$LOG/stdout" ||
-    bad "build: no 'box: N keypoints, N arcs, N keygraphs' line in: $(cat "$LOG/stdout")"
+  grep -Eq '^box: [0-9]+ views, [0-9]+ keypoints, [0-9]+ arcs, [0-9]+ keygraphs, [0-9.]+ KB alone$' "$LOG/stdout" ||
+    bad "build: no 'box: N views, N keypoints, N arcs, N keygraphs, N KB alone' line in: $(cat "$LOG/stdout")"
   [ -s "$LOG/stderr" ] && bad "build: succeeded but wrote to stderr: $(cat "$LOG/stderr")"
   [ -s "$INDEX" ] || bad "build: $INDEX missing or empty"
   [ -e "$INDEX.tmp" ] && bad "build: $INDEX.tmp left behind"
@@ -132,7 +132,7 @@ fi
 checks=$((checks + 1))
 if "$KG" build "$DATA/box.png" --name crop --roi 10,10,200,200 "$DATA/box.png" \
   -o "$WORK/named.kgi" >"$LOG/stdout" 2>"$LOG/stderr"; then
-  names=$(sed -n 's/^\([a-z]*\): [0-9]* keypoints.*/\1/p' "$LOG/stdout" | tr '\n' ' ')
+  names=$(sed -n 's/^\([a-z]*\): [0-9]* views.*/\1/p' "$LOG/stdout" | tr '\n' ' ')
   [ "$names" = "box crop " ] || bad "build: model names '$names', expected 'box crop '"
 else
   bad "build with --name before the second image failed: $(cat "$LOG/stderr")"
@@ -181,10 +181,10 @@ if "$KG" inspect "$INDEX" >"$LOG/stdout" 2>"$LOG/stderr"; then
   grep -Eq '^ +[0-9]+ +box +[0-9]+ +[0-9]+ ' "$LOG/stdout" ||
     bad "inspect: no model line for 'box' in: $(cat "$LOG/stdout")"
   # Every section, every checksum verified.
-  [ "$(grep -Ec '^ +[0-9]+ .* crc ok$' "$LOG/stdout")" -eq 10 ] ||
-    bad "inspect: expected 10 'crc ok' sections in: $(cat "$LOG/stdout")"
+  [ "$(grep -Ec '^ +[0-9]+ .* crc ok$' "$LOG/stdout")" -eq 11 ] ||
+    bad "inspect: expected 11 'crc ok' sections in: $(cat "$LOG/stdout")"
   grep -q 'crc BAD' "$LOG/stdout" && bad "inspect: a good index shows 'crc BAD'"
-  grep -Eq '^format 5\.[0-9]+, ' "$LOG/stdout" || bad "inspect: no format line"
+  grep -Eq '^format 6\.[0-9]+, ' "$LOG/stdout" || bad "inspect: no format line"
   grep -Eq '^  descriptor\.encoding +(float32|int16|int8)$' "$LOG/stdout" ||
     bad "inspect: parameter descriptor.encoding not shown"
   grep -Eq '^bytes per arc: [0-9.]+ ' "$LOG/stdout" || bad "inspect: no bytes-per-arc line"

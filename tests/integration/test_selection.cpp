@@ -231,7 +231,9 @@ TEST(Selection, EqualsBruteForceJoinOnRealImages) {
   double kept = 1.0;
   expect_brute_force_set(c, Limits{}, &kept);
   // The semi-join does cut: a pass-through would give the same output.
-  EXPECT_LT(kept, 0.10);  // measured 2.7 %
+  // With model views a keypoint has arcs from several views, so more of
+  // them survive (measured 11.1 %; 2.7 % with the single model image).
+  EXPECT_LT(kept, 0.20);
 }
 
 // The same for 4-circuits, whose middle lists are cut against both
@@ -242,7 +244,7 @@ TEST(Selection, FourCircuitsEqualBruteForceJoinOnRealImages) {
   ASSERT_GE(c.expected.size(), 10u);
   double kept = 1.0;
   expect_brute_force_set(c, Limits{}, &kept);
-  EXPECT_LT(kept, 0.10);  // measured 2.4 %
+  EXPECT_LT(kept, 0.20);  // measured 12.5 % (2.4 % with the single model image)
 }
 
 // Arc keygraphs: every model arc similar to the scene arc, no join.

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -137,14 +138,22 @@ void reseal(Bytes& b) {
 constexpr DescriptorEncoding kEncodings[] = {DescriptorEncoding::kFloat32,
                                              DescriptorEncoding::kInt16, DescriptorEncoding::kInt8};
 
-Params with_encoding(DescriptorEncoding e, Params p = Params{}) {
+// The paper's single model image (no views): the format tests compare arcs
+// with the keypoints' own scales, one arc per keypoint pair.
+Params paper_params() {
+  Params p;
+  p.views.min_size = 0.f;
+  return p;
+}
+
+Params with_encoding(DescriptorEncoding e, Params p = paper_params()) {
   p.descriptor.encoding = e;
   return p;
 }
 
 struct Corpus {
   std::string error;
-  Params params;
+  Params params = paper_params();
   std::vector<BuiltModel> models;  // box.png, a 200x200 crop of graf1.png
   Bytes bytes;                     // serialize_index(models, params): the default encoding
   Bytes encoded[3];                // the same in each encoding (index: DescriptorEncoding)
@@ -154,7 +163,7 @@ struct Corpus {
 
 std::string build(const cv::Mat& gray, const std::string& name, BuiltModel& out) {
   if (gray.empty()) return name + ": image missing (install opencv-doc)";
-  const Status s = build_model(gray, name, Params{}, out);
+  const Status s = build_model(gray, name, paper_params(), out);
   return s ? std::string() : s.message();
 }
 
@@ -362,7 +371,7 @@ TEST_F(ModelIndexTest, RoundTripThroughView) {
   EXPECT_EQ(index.byte_size(), bytes().size());
   EXPECT_EQ(bytes().size() % format::kAlignment, 0u);
   expect_matches(index, models());
-  expect_same_params(index.params(), Params{});
+  expect_same_params(index.params(), paper_params());
   // Zero copy: the accessors point into the caller's buffer.
   EXPECT_GE(reinterpret_cast<const std::uint8_t*>(index.keypoints()), buffer.data());
   EXPECT_LT(reinterpret_cast<const std::uint8_t*>(index.keypoints()),
@@ -479,7 +488,7 @@ TEST_F(ModelIndexTest, ArcSearchEqualsBruteForceOnStoredDescriptors) {
 }
 
 TEST_F(ModelIndexTest, NonDefaultParamsRoundTrip) {
-  Params p;
+  Params p = paper_params();
   p.keypoints.detector = KeypointDetector::kMser;
   p.graph.structure = Structure::kCircuit4;
   p.graph.scene_sampling = SceneSampling::kStrongest;
@@ -509,7 +518,7 @@ TEST_F(ModelIndexTest, OwnerLookupsOnManyModels) {
     many[i].name = std::string("m").append(
         std::to_string(i));  // not "m" + ...: GCC 12 -Wrestrict false positive
   Bytes b;
-  ASSERT_TRUE(serialize_index(many, Params{}, b));
+  ASSERT_TRUE(serialize_index(many, paper_params(), b));
   AlignedBytes buffer(b);
   ModelIndex index;
   ASSERT_TRUE(ModelIndex::view(buffer.data(), buffer.size(), index));
@@ -522,30 +531,30 @@ TEST_F(ModelIndexTest, OwnerLookupsOnManyModels) {
 
 TEST_F(ModelIndexTest, SerializationIsDeterministic) {
   Bytes again;
-  ASSERT_TRUE(serialize_index(models(), Params{}, again));
+  ASSERT_TRUE(serialize_index(models(), paper_params(), again));
   EXPECT_TRUE(again == bytes()) << "two serializations of the same models differ";
 
   // Building the same image again gives the same model and the same bytes.
   BuiltModel box;
   const cv::Mat image = test::load_gray(test::opencv_data("box.png"));
   ASSERT_FALSE(image.empty());
-  ASSERT_TRUE(build_model(image, "box", Params{}, box));
+  ASSERT_TRUE(build_model(image, "box", paper_params(), box));
   const BuiltModel& first = models()[0];
   EXPECT_EQ(box.keygraphs, first.keygraphs);
   ASSERT_EQ(box.keypoints.size(), first.keypoints.size());
   ASSERT_EQ(box.arcs.size(), first.arcs.size());
   std::vector<BuiltModel> rebuilt = {box, models()[1]};
   Bytes rebuilt_bytes;
-  ASSERT_TRUE(serialize_index(rebuilt, Params{}, rebuilt_bytes));
+  ASSERT_TRUE(serialize_index(rebuilt, paper_params(), rebuilt_bytes));
   EXPECT_TRUE(rebuilt_bytes == bytes()) << "rebuilding box.png changed the index bytes";
 }
 
 TEST_F(ModelIndexTest, SerializeRejectsBadInput) {
   Bytes b;
-  EXPECT_FALSE(serialize_index({}, Params{}, b));
+  EXPECT_FALSE(serialize_index({}, paper_params(), b));
   std::vector<BuiltModel> unnamed = {models()[0]};
   unnamed[0].name.clear();
-  EXPECT_FALSE(serialize_index(unnamed, Params{}, b));
+  EXPECT_FALSE(serialize_index(unnamed, paper_params(), b));
   Params bad;
   bad.graph.structure = static_cast<Structure>(7);
   EXPECT_FALSE(serialize_index(models(), bad, b));
@@ -554,7 +563,7 @@ TEST_F(ModelIndexTest, SerializeRejectsBadInput) {
 // --- Vertex descriptors -----------------------------------------------------
 
 Params sift_params() {
-  Params p;
+  Params p = paper_params();
   p.descriptor.vertex_descriptor = VertexDescriptor::kSift;
   return p;
 }
@@ -681,7 +690,7 @@ TEST_F(ModelIndexTest, RejectsVertexDescriptorCountMismatch) {
   EXPECT_TRUE(rejected(b, "vertex descriptors section: count 0, expected"));
   // ...and descriptors the parameters do not ask for.
   b = sc.bytes;
-  put_params(b, Params{});
+  put_params(b, paper_params());
   EXPECT_TRUE(
       rejected(b, "vertex descriptors section: count " + std::to_string(n) + ", expected 0"));
 
@@ -726,7 +735,7 @@ TEST_F(ModelIndexTest, RejectsBadVertexDescriptorParameters) {
     EXPECT_TRUE(rejected(b, "parameter vertex_threshold")) << bad;
   }
   // Without vertex descriptors the threshold is unused and may be 0.
-  p = Params{};
+  p = paper_params();
   p.descriptor.vertex_threshold = 0.f;
   b = bytes();
   put_params(b, p);
@@ -743,7 +752,7 @@ TEST_F(ModelIndexTest, SerializeRejectsMissingVertexDescriptors) {
   // The other way round, descriptors are left out.
   const SiftCorpus& sc = sift_corpus();
   ASSERT_TRUE(sc.error.empty()) << sc.error;
-  ASSERT_TRUE(serialize_index(sc.models, Params{}, b));
+  ASSERT_TRUE(serialize_index(sc.models, paper_params(), b));
   EXPECT_TRUE(b == bytes()) << "models built with SIFT, written without, differ";
 }
 
@@ -788,7 +797,7 @@ TEST_F(ModelIndexTest, WriteAndOpenFile) {
   TempDir dir;
   ASSERT_FALSE(dir.path().empty());
   const std::string path = (dir.path() / "models.kgi").string();
-  Status s = write_index(models(), Params{}, path);
+  Status s = write_index(models(), paper_params(), path);
   ASSERT_TRUE(s) << s.message();
   EXPECT_TRUE(read_file(path) == bytes()) << "file differs from serialize_index";
   EXPECT_EQ(dir.entries(), std::vector<std::string>{"models.kgi"}) << "temporary file left";
@@ -798,7 +807,7 @@ TEST_F(ModelIndexTest, WriteAndOpenFile) {
   ASSERT_TRUE(s) << s.message();
   EXPECT_TRUE(index.is_mapped()) << "open() maps regular files";
   expect_matches(index, models());
-  expect_same_params(index.params(), Params{});
+  expect_same_params(index.params(), paper_params());
   EXPECT_EQ(0, std::memcmp(index.data(), bytes().data(), bytes().size()));
   EXPECT_EQ(reinterpret_cast<std::uintptr_t>(index.data()) % format::kAlignment, 0u);
 
@@ -817,7 +826,7 @@ TEST_F(ModelIndexTest, WriteAndOpenFile) {
 
   // Overwriting an existing index replaces it whole.
   std::vector<BuiltModel> one = {models()[1]};
-  ASSERT_TRUE(write_index(one, Params{}, path));
+  ASSERT_TRUE(write_index(one, paper_params(), path));
   EXPECT_EQ(dir.entries(), std::vector<std::string>{"models.kgi"});
   ModelIndex replaced;
   ASSERT_TRUE(ModelIndex::open(path, replaced));
@@ -836,7 +845,7 @@ TEST_F(ModelIndexTest, WriteIntoMissingDirectoryFails) {
   ASSERT_FALSE(dir.path().empty());
   const std::filesystem::path missing = dir.path() / "no_such_dir";
   const std::string path = (missing / "models.kgi").string();
-  const Status s = write_index(models(), Params{}, path);
+  const Status s = write_index(models(), paper_params(), path);
   ASSERT_FALSE(s);
   EXPECT_NE(s.message().find(path), std::string::npos) << s.message();
   EXPECT_FALSE(std::filesystem::exists(missing));
@@ -969,6 +978,59 @@ std::filesystem::path golden_path(DescriptorEncoding e) {
                          std::to_string(format::kVersionMinor) + "-" + encoding_name(e) + ".kgi");
 }
 
+// An index built through views (the defaults): several arcs may join one
+// keypoint pair (described in different views), every keypoint carries the
+// range of views that detected it, and the tree points hold the attributes
+// each arc's view measured.
+TEST(ModelViewsIndex, ViewRangesAndViewAttributesRoundTrip) {
+  const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+  ASSERT_FALSE(box.empty());
+  const Params params;  // views on
+  ASSERT_GT(params.views.min_size, 0.f);
+  std::vector<BuiltModel> models(1);
+  ASSERT_TRUE(build_model(box, "box", params, models[0]));
+  const BuiltModel& bm = models[0];
+  ASSERT_GT(bm.views.size(), 4u);
+  ASSERT_EQ(bm.keypoint_views.size(), bm.keypoints.size());
+  ASSERT_EQ(bm.arc_attributes.size(), bm.arcs.size());
+  Bytes b;
+  ASSERT_TRUE(serialize_index(models, params, b));
+  AlignedBytes buffer(b);
+  ModelIndex index;
+  const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
+  ASSERT_TRUE(s) << s.message();
+  // The pose limit covers the smallest view: box.png's long edge is 324 px.
+  const double shrink = 324.0 / params.views.min_size;
+  EXPECT_GE(index.params().ransac.max_scale_change, shrink * shrink);
+  int coarse = 0;
+  for (std::uint32_t i = 0; i < index.keypoint_count(); ++i) {
+    const std::uint8_t lo = index.keypoint_views()[2 * i], hi = index.keypoint_views()[2 * i + 1];
+    EXPECT_EQ(lo, bm.keypoint_views[i][0]);
+    EXPECT_EQ(hi, bm.keypoint_views[i][1]);
+    EXPECT_LE(lo, hi);
+    coarse += lo >= 8 ? 1 : 0;  // first seen at half size or smaller
+  }
+  EXPECT_GT(coarse, 0) << "no keypoint is new in a smaller view";
+  // Every built arc is in the tree with its view's attributes (a multiset:
+  // one pair may have several arcs).
+  std::multimap<std::pair<std::uint32_t, std::uint32_t>, std::array<float, 2>> built;
+  for (std::size_t i = 0; i < bm.arcs.size(); ++i)
+    built.insert({{bm.arcs[i].from, bm.arcs[i].to}, bm.arc_attributes[i]});
+  ASSERT_EQ(index.arc_count(), bm.arcs.size());
+  const ArcSearchPointI8* points = index.tree_points_i8();
+  ASSERT_NE(points, nullptr);
+  for (std::uint32_t slot = 0; slot < index.arc_count(); ++slot) {
+    const ModelArc a = index.arc(slot);
+    const auto range = built.equal_range({a.from, a.to});
+    ASSERT_NE(range.first, range.second) << "slot " << slot << " holds an unknown arc";
+    bool match = false;
+    for (auto it = range.first; it != range.second && !match; ++it)
+      match = points[slot][kDescriptorSize] == static_cast<std::int8_t>(it->second[0]) &&
+              points[slot][kDescriptorSize + 1] == static_cast<std::int8_t>(it->second[1]);
+    EXPECT_TRUE(match) << "slot " << slot << ": attributes of no view's arc";
+  }
+}
+
 TEST(Golden, RebuildIsByteIdentical) {
   const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
   ASSERT_FALSE(box.empty()) << "box.png missing (install opencv-doc)";
@@ -976,7 +1038,7 @@ TEST(Golden, RebuildIsByteIdentical) {
   const char* update = std::getenv("KG_UPDATE_GOLDEN");
   for (DescriptorEncoding e : kGoldenEncodings) {
     SCOPED_TRACE(golden_path(e).string());
-    const Params params = with_encoding(e);
+    const Params params = with_encoding(e, Params{});  // the defaults: views on
     std::vector<BuiltModel> models(1);
     ASSERT_TRUE(build_model(box(kGoldenCrop).clone(), "box_crop", params, models[0]));
     Bytes rebuilt;
@@ -1099,7 +1161,7 @@ TEST_F(ModelIndexTest, RejectsTruncation) {
 TEST_F(ModelIndexTest, RejectsOtherMajorVersion) {
   for (std::uint16_t major :
        {std::uint16_t{0}, std::uint16_t{1}, std::uint16_t{2}, std::uint16_t{3}, std::uint16_t{4},
-        std::uint16_t{6}, std::uint16_t{0xFFFF}}) {
+        std::uint16_t{5}, std::uint16_t{7}, std::uint16_t{0xFFFF}}) {
     Bytes b = bytes();
     store<std::uint16_t>(b.data() + format::kOffMajor, major);
     fix_header_crc(b);
@@ -1114,7 +1176,7 @@ TEST_F(ModelIndexTest, RejectsOtherMajorVersion) {
   const Bytes old = read_file(golden_dir() / "format-3.0-int8.kgi");
   ASSERT_FALSE(old.empty());
   EXPECT_TRUE(rejected(old,
-                       "index format version 3.0 is not supported (this reader reads 5.x): "
+                       "index format version 3.0 is not supported (this reader reads 6.x): "
                        "rebuild the index",
                        StatusCode::kUnsupportedVersion));
   // A real 4.0 file (its tree has leaves of up to 32 arcs, so its sections
@@ -1122,7 +1184,14 @@ TEST_F(ModelIndexTest, RejectsOtherMajorVersion) {
   const Bytes v4 = read_file(golden_dir() / "format-4.0-int8.kgi");
   ASSERT_FALSE(v4.empty());
   EXPECT_TRUE(rejected(v4,
-                       "index format version 4.0 is not supported (this reader reads 5.x): "
+                       "index format version 4.0 is not supported (this reader reads 6.x): "
+                       "rebuild the index",
+                       StatusCode::kUnsupportedVersion));
+  // A real 5.0 file (no views, no keypoint views section): the same.
+  const Bytes v5 = read_file(golden_dir() / "format-5.0-int8.kgi");
+  ASSERT_FALSE(v5.empty());
+  EXPECT_TRUE(rejected(v5,
+                       "index format version 5.0 is not supported (this reader reads 6.x): "
                        "rebuild the index",
                        StatusCode::kUnsupportedVersion));
   // A newer minor version of the same major is readable (new sections and
@@ -1231,7 +1300,7 @@ TEST_F(ModelIndexTest, RejectsBadSectionTable) {
   for (std::uint32_t id :
        {format::kSectionDescriptors, format::kSectionTreeNodes, format::kSectionLeafBounds}) {
     for (std::uint32_t bad : {0u, 1u, 2u, 3u, 0xFFFFFFFFu}) {
-      if (bad == static_cast<std::uint32_t>(Params{}.descriptor.encoding)) continue;
+      if (bad == static_cast<std::uint32_t>(paper_params().descriptor.encoding)) continue;
       b = bytes();
       store<std::uint32_t>(b.data() + entry(b, id) + format::kEntEncoding, bad);
       fix_header_crc(b);
@@ -1448,31 +1517,31 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
   put_params(b, p);
   EXPECT_TRUE(rejected(b, "parameter structure"));
 
-  p = Params{};
+  p = paper_params();
   p.keypoints.detector = static_cast<KeypointDetector>(9);
   b = bytes();
   put_params(b, p);
   EXPECT_TRUE(rejected(b, "parameter detector"));
 
-  p = Params{};
+  p = paper_params();
   p.descriptor.similarity_threshold = std::nanf("");
   b = bytes();
   put_params(b, p);
   EXPECT_TRUE(rejected(b, "parameter similarity_threshold"));
 
-  p = Params{};
+  p = paper_params();
   p.graph.min_distance = 200.f;  // above max_distance
   b = bytes();
   put_params(b, p);
   EXPECT_TRUE(rejected(b, "parameter min/max_distance"));
 
-  p = Params{};
+  p = paper_params();
   p.ransac.max_instances = 0;
   b = bytes();
   put_params(b, p);
   EXPECT_TRUE(rejected(b, "parameter max_instances"));
 
-  p = Params{};
+  p = paper_params();
   p.descriptor.encoding = static_cast<DescriptorEncoding>(3);
   b = bytes();
   put_params(b, p);

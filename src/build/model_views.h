@@ -1,0 +1,41 @@
+// Simulated views of a model image (the model side of DESIGN.md's "beyond
+// the paper"): the image as a camera would see it at smaller sizes and
+// under out-of-plane rotations, rendered offline so that the frame's work
+// does not change. Each view is an affine map from model pixels to view
+// pixels: a rotation by the tilt's longitude, a squeeze by the tilt factor
+// t = 1 / cos(tilt) across that direction, and a uniform scale, as ASIFT
+// simulates affine cameras (here for the model only). Views are rendered
+// with anti-aliasing (a Gaussian pre-blur matched to each axis' shrink).
+#pragma once
+
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "keygraph/params.h"
+
+namespace kg {
+
+struct ModelView {
+  double scale = 1.0;      // uniform scale, view pixels per model pixel (before the tilt)
+  double tilt = 1.0;       // t = 1 / cos(theta) >= 1
+  double longitude = 0.0;  // direction of the tilt, degrees in [0, 180)
+  cv::Matx23d to_view;     // model pixel centre -> view pixel centre
+  cv::Size size;           // view image size
+};
+
+// The views of a width x height model for `params`, finest first: the
+// frontal scale pyramid (scale 1, then each params.scale_step smaller until
+// the long edge reaches params.min_size), and for each tilt level the same
+// pyramid at longitudes 72 / t degrees apart. With views disabled
+// (min_size == 0) the frontal pyramid of `legacy_scales` levels, each
+// 1/sqrt(2) smaller.
+std::vector<ModelView> model_views(int width, int height, const ViewParams& params,
+                                   int legacy_scales);
+
+// Renders `view` of `gray` (8-bit), with pixels outside the model taken
+// from its nearest border (no edges that a wall behind a sign would not
+// show). `inside` gets 255 where the view shows model pixels.
+void render_view(const cv::Mat& gray, const ModelView& view, cv::Mat& out, cv::Mat& inside);
+
+}  // namespace kg
