@@ -72,6 +72,18 @@ Status read_models_json(const std::string& path, std::vector<ModelSource>& out) 
 
 }  // namespace
 
+Status load_model_image(const ModelSource& source, ImageLoader load, cv::Mat& gray) {
+  Status s = load(source.path, gray);
+  if (!s || !source.roi) return s;
+  const cv::Rect r = *source.roi;
+  if (r.x + r.width > gray.cols || r.y + r.height > gray.rows)
+    return {StatusCode::kInvalidArgument, "ROI " + rect_text(r) + " lies outside " + source.path +
+                                              " (" + std::to_string(gray.cols) + "x" +
+                                              std::to_string(gray.rows) + ")"};
+  gray = gray(r).clone();
+  return Status::ok();
+}
+
 Status build_model_set(const std::vector<ModelSource>& sources, const ModelBuildOptions& options,
                        ImageLoader load, std::vector<cv::Mat>& grays,
                        std::vector<BuiltModel>& models) {
@@ -84,16 +96,8 @@ Status build_model_set(const std::vector<ModelSource>& sources, const ModelBuild
     if (!seen.insert(source.name).second)
       return {StatusCode::kInvalidArgument, "duplicate model name '" + source.name + "'"};
     cv::Mat gray;
-    Status s = load(source.path, gray);
+    Status s = load_model_image(source, load, gray);
     if (!s) return s;
-    if (source.roi) {
-      const cv::Rect r = *source.roi;
-      if (r.x + r.width > gray.cols || r.y + r.height > gray.rows)
-        return {StatusCode::kInvalidArgument, "--roi " + rect_text(r) + " lies outside " +
-                                                  source.path + " (" + std::to_string(gray.cols) +
-                                                  "x" + std::to_string(gray.rows) + ")"};
-      gray = gray(r).clone();
-    }
     BuiltModel model;
     if (s = build_model(gray, source.name, options.params, model); !s) return s;
     grays.push_back(gray);

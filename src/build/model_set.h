@@ -29,6 +29,9 @@ struct ModelBuildOptions {
 // Loads an image file as 8-bit gray (the CLI passes its own, quieter one).
 using ImageLoader = Status (*)(const std::string& path, cv::Mat& gray);
 
+// Loads one source's image, its ROI cut out (which must lie inside it).
+Status load_model_image(const ModelSource& source, ImageLoader load, cv::Mat& gray);
+
 // Loads every source (its ROI cut out) and builds its model. Names must be
 // non-empty and distinct; an ROI must lie inside its image. `grays` gets
 // the model images (after the ROI), `models` the built models, in order.

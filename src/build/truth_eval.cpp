@@ -47,11 +47,11 @@ double grid_error(const Homography& truth, const Homography& found, const TruthM
     for (int i = 0; i < kSteps; ++i) {
       const Point2f p{static_cast<float>((m.width - 1) * (i + 0.5) / kSteps),
                       static_cast<float>((m.height - 1) * (j + 0.5) / kSteps)};
-      const Point2f t = apply(truth, p);
+      const Point2f t = kg::apply(truth, p);
       if (!(t.x >= 0 && t.y >= 0 && t.x <= static_cast<double>(scene_width) - 1 &&
             t.y <= static_cast<double>(scene_height) - 1))
         continue;
-      const Point2f f = apply(found, p);
+      const Point2f f = kg::apply(found, p);
       const double e = std::hypot(double{t.x} - f.x, double{t.y} - f.y);
       errors.push_back(std::isfinite(e) ? e : 1e9);
     }
@@ -266,13 +266,7 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
   if (!sources.empty() && grays.empty()) {
     for (const ModelSource& source : sources) {
       cv::Mat gray;
-      if (s = load_gray(source.path, gray); !s) return s;
-      if (source.roi) {
-        const cv::Rect r = *source.roi;
-        if (r.x + r.width > gray.cols || r.y + r.height > gray.rows)
-          return {StatusCode::kInvalidArgument, source.path + ": roi outside the image"};
-        gray = gray(r).clone();
-      }
+      if (s = load_model_image(source, load_gray, gray); !s) return s;
       grays.push_back(gray);
     }
   }
@@ -300,7 +294,7 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
       if (instance.has_homography) {
         Point2f outline[4];
         model_outline(results.models[static_cast<std::size_t>(q.models.front())], outline);
-        for (int c = 0; c < 4; ++c) q.corners[c] = apply(instance.homography, outline[c]);
+        for (int c = 0; c < 4; ++c) q.corners[c] = kg::apply(instance.homography, outline[c]);
       } else {
         std::copy(instance.corners, instance.corners + 4, q.corners);
       }
