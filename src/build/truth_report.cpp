@@ -200,9 +200,12 @@ std::string truth_text(const std::vector<TruthRow>& rows, const TruthEvalOptions
                   100.0 * r.found_iou / n);
     std::snprintf(negative, sizeof(negative), "%d/%d", r.negative_with_detections,
                   r.negative_scenes);
-    std::snprintf(line, sizeof(line), "%-13s %9d %13s %13s %8.2f %7d %7d %12s %8.1f %8.1f\n",
-                  r.method.c_str(), r.instances, found, found_iou, r.median_corner_error,
-                  r.wrong_identity, r.false_detections, negative, r.median_ms, r.p90_ms);
+    char error[32] = "-";
+    if (r.median_corner_error >= 0)
+      std::snprintf(error, sizeof(error), "%.2f", r.median_corner_error);
+    std::snprintf(line, sizeof(line), "%-13s %9d %13s %13s %8s %7d %7d %12s %8.1f %8.1f\n",
+                  r.method.c_str(), r.instances, found, found_iou, error, r.wrong_identity,
+                  r.false_detections, negative, r.median_ms, r.p90_ms);
     out += line;
   }
   if (!rows.empty() && rows[0].homography_instances > 0) {
