@@ -46,8 +46,9 @@ constexpr double kBurstGapSeconds = 5;
 
 Status convert_exit_signs(const std::string& dir, const std::string& manifest_path,
                           const std::string& split, ConvertedSet& out) {
-  if (!split.empty() && split != "dev" && split != "test")
-    return {StatusCode::kInvalidArgument, "--split takes dev or test, got '" + split + "'"};
+  if (!split.empty() && split != "dev" && split != "test" && split != "model-bursts")
+    return {StatusCode::kInvalidArgument,
+            "--split takes dev, test or model-bursts, got '" + split + "'"};
   const fs::path root(dir), corners = root / "corners.txt", images = root / "images";
   for (const fs::path& p :
        {corners, images, root / "model-exit-left.png", root / "model-exit-right.png"}) {
@@ -92,11 +93,9 @@ Status convert_exit_signs(const std::string& dir, const std::string& manifest_pa
     bool near_model = false;
     for (const double m : kExitModelFrames)
       near_model = near_model || std::abs(time - m) <= kExitExclusionSeconds;
-    if (near_model) {
-      ++excluded;
-      continue;
-    }
-    frames.push_back({time, "images/" + e.path().filename().string()});
+    if (near_model) ++excluded;
+    if (near_model == (split == "model-bursts"))
+      frames.push_back({time, "images/" + e.path().filename().string()});
   }
   std::sort(frames.begin(), frames.end(),
             [](const Frame& a, const Frame& b) { return a.time < b.time; });
@@ -113,7 +112,7 @@ Status convert_exit_signs(const std::string& dir, const std::string& manifest_pa
     const int count = it == signs.end() ? 0 : static_cast<int>(it->second.size());
     ++kept_frames[half];
     kept_signs[half] += count;
-    if ((split == "dev" && half != 0) || (split == "test" && half != 1)) continue;
+    if ((split == "dev" && half != 0) || (split == "test" && half != 1)) continue;  // else all
     Json line = Json::object();
     line["scene"] = relative_to(root / f.image, manifest_path);
     line["instances"] = it == signs.end() ? Json::array() : it->second;
@@ -125,6 +124,13 @@ Status convert_exit_signs(const std::string& dir, const std::string& manifest_pa
   models["exit-right"] = relative_to(root / "model-exit-right.png", manifest_path);
   out.models_json = models.dump(2) + "\n";
   std::ostringstream summary;
+  if (split == "model-bursts") {
+    summary << "exit-signs: the " << frames.size() << " frames (" << kept_signs[0] + kept_signs[1]
+            << " signs) within " << kExitExclusionSeconds
+            << " s of a model's source frame, for a sanity check only (never a score)";
+    out.summary = summary.str();
+    return Status::ok();
+  }
   summary << "exit-signs: " << frames.size() << " frames (" << kept_signs[0] + kept_signs[1]
           << " signs) kept, " << excluded << " within " << kExitExclusionSeconds
           << " s of a model's source frame left out; " << burst + 1 << " bursts: dev "

@@ -21,6 +21,8 @@ struct ConvertedSet {
 // model source frames are left out. split "dev" / "test" keeps alternate
 // bursts (frames closer than 5 s to the previous one belong to its burst),
 // starting with the first burst for dev; "" keeps every burst.
+// "model-bursts" keeps only the frames left out, instead: a sanity check
+// (a method should find the signs its models were cropped from), never a score.
 Status convert_exit_signs(const std::string& dir, const std::string& manifest_path,
                           const std::string& split, ConvertedSet& out);
 

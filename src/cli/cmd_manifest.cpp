@@ -1,4 +1,4 @@
-// keygraph manifest exit-signs DIR -o OUT.jsonl [--split dev|test]
+// keygraph manifest exit-signs DIR -o OUT.jsonl [--split dev|test|model-bursts]
 // keygraph manifest planar-pairs DIR -o OUT.jsonl
 // keygraph manifest negatives DIR -o OUT.jsonl
 //

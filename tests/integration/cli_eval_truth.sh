@@ -101,7 +101,7 @@ expect_failure "--out is a file" "not a directory" \
 expect_failure "manifest: unknown set" "unknown set" "$KG" manifest nosuch "$WORK" -o out.jsonl
 expect_failure "manifest: not the set's directory" "corners.txt: not found" \
   "$KG" manifest exit-signs "$WORK" -o out.jsonl
-expect_failure "manifest: bad split" "dev or test" \
+expect_failure "manifest: bad split" "dev, test or model-bursts" \
   "$KG" manifest exit-signs "$WORK" -o out.jsonl --split train
 
 # End to end: box (corners, clicked from the bottom left anticlockwise), graf1
