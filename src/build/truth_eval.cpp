@@ -314,15 +314,18 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
       MethodDetectors& d = m.by_search[search_key(searched)];
       if (d.models.empty()) {
         d.models = searched;
+        // The workspace for this scene's size now, not inside the timed detect().
+        const Limits limits = Limits{}.for_frame(std::max(gray.cols, Limits{}.max_width),
+                                                 std::max(gray.rows, Limits{}.max_height));
         if (m.keygraph && !options.index.empty()) {
           // The file's index as it is: other models' detections are dropped below.
-          d.keygraph = std::make_unique<DesktopDetector>(file_index);
+          d.keygraph = std::make_unique<DesktopDetector>(file_index, limits);
         } else if (m.keygraph) {
           std::vector<BuiltModel> subset;
           for (const int id : searched) subset.push_back(m.built[static_cast<std::size_t>(id)]);
           d.index = std::make_unique<EvalIndex>();
           if (s = d.index->build(subset, m.params); !s) return s;
-          d.keygraph = std::make_unique<DesktopDetector>(d.index->index());
+          d.keygraph = std::make_unique<DesktopDetector>(d.index->index(), limits);
         } else {
           std::vector<cv::Mat> subset;
           for (const int id : searched) subset.push_back(grays[static_cast<std::size_t>(id)]);
