@@ -106,14 +106,14 @@ expect_failure "manifest: bad split" "dev, test or model-bursts" \
 
 # End to end: box (corners, clicked from the bottom left anticlockwise), graf1
 # in graf3 (homography), baboon (none of them); models from models.json with
-# paths relative to it.
+# paths relative to it (graf through an ROI: the whole image).
 H=$(python3 - "$DATA/H1to3p.xml" <<'PY'
 import re, sys
 text = open(sys.argv[1]).read()
 print(", ".join(re.search(r"<data>(.*)</data>", text, re.S).group(1).split()))
 PY
 )
-printf '{"box": "box.png", "graf": {"file": "graf1.png"}}\n' >"$WORK/models/models.json"
+printf '{"box": "box.png", "graf": {"file": "graf1.png", "roi": [0, 0, 800, 640]}}\n' >"$WORK/models/models.json"
 mkdir -p "$WORK/set/frames"
 cp "$DATA/box_in_scene.png" "$DATA/graf3.png" "$WORK/set/frames/"
 cat >"$M" <<EOF2
