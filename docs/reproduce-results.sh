@@ -1,12 +1,13 @@
 #!/bin/sh
-# Reproduces every table and figure of the Oxford and sign-benchmark
-# sections of docs/RESULTS.md, in one run (about 1.5 hours on 2 busy
-# cores: the 400-crop run with every method took 36 min, the centre crops
-# 6 min, the sign benchmark 10 min):
+# Reproduces every table and figure of the Oxford, sign-benchmark and
+# real-photo sections of docs/RESULTS.md, in one run (about 1.5 hours on 2
+# busy cores: the 400-crop run with every method took 36 min, the centre
+# crops 6 min, the sign benchmark 10 min, the real photos 5 min):
 #
-#   docs/reproduce-results.sh [KEYGRAPH_BINARY] [OUT_DIR] [OXFORD_DIR]
+#   docs/reproduce-results.sh [KEYGRAPH_BINARY] [OUT_DIR] [OXFORD_DIR] [REAL_DIR]
 #
-# defaults: build/release/src/cli/keygraph, build/results, ../shared/data/oxford.
+# defaults: build/release/src/cli/keygraph, build/results, ../shared/data/oxford,
+# ../shared/data/real.
 # Writes OUT_DIR/<run>/ (summary JSON, CSV per case and per curve, PNG plots)
 # and OUT_DIR/<run>.txt (the printed tables) for the runs:
 #   oxford          10 seeded random crops per subset, every method, negatives, curves
@@ -16,11 +17,14 @@
 #                   keygraph and the MAGSAC baselines; synth-ransac the RANSAC ones
 #   ablation-*      one default changed at a time, centre crops
 #   oxford-ENC      the 400 crops with float32 and int16 descriptors
+#   real-*          the real photo sets (docs/EVAL.md): exit signs (all, dev, test),
+#                   planar pairs, negatives; manifests in OUT_DIR/real-manifests
 # Copy OUT_DIR/oxford/*.png to docs/figures/ to refresh the committed plots.
 set -eu
 KG=${1:-build/release/src/cli/keygraph}
 OUT=${2:-build/results}
 OXFORD=${3:-../shared/data/oxford}
+REAL=${4:-../shared/data/real}
 [ -x "$KG" ] || { echo "no keygraph binary at $KG (cmake --preset release && cmake --build --preset release)" >&2; exit 1; }
 mkdir -p "$OUT"
 run() {  # run NAME ARGS...: tables to OUT/NAME.txt, timing to OUT/NAME.time
@@ -56,3 +60,19 @@ for enc in float32 int16; do
   run "oxford-$enc" eval --dataset "$OXFORD" --crops 10 --seed 1 --methods keygraph \
     --set descriptor.encoding=$enc
 done
+# Real photos (RESULTS.md, "Real photos"): manifests referring to the images in place.
+M="$OUT/real-manifests"
+mkdir -p "$M"
+"$KG" manifest exit-signs "$REAL/exit-signs" -o "$M/exit-signs.jsonl"
+"$KG" manifest exit-signs "$REAL/exit-signs" -o "$M/exit-dev.jsonl" --split dev
+"$KG" manifest exit-signs "$REAL/exit-signs" -o "$M/exit-test.jsonl" --split test
+"$KG" manifest planar-pairs "$REAL/planar-pairs" -o "$M/planar-pairs.jsonl"
+"$KG" manifest negatives "$REAL/negatives" -o "$M/negatives.jsonl"
+for set in exit-signs exit-dev exit-test; do
+  run "real-$set" eval --truth "$M/$set.jsonl" --models "$M/exit-sign-models.json" \
+    --out "$OUT/real-$set" --gallery
+done
+run real-planar-pairs eval --truth "$M/planar-pairs.jsonl" --models "$M/planar-pair-models.json" \
+  --out "$OUT/real-planar-pairs" --gallery
+run real-negatives eval --truth "$M/negatives.jsonl" --models "$M/exit-sign-models.json" \
+  --out "$OUT/real-negatives" --gallery

@@ -10,11 +10,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <optional>
-#include <set>
 #include <sstream>
 
 #include "build/image_io.h"
 #include "build/model_builder.h"
+#include "build/model_set.h"
 #include "build/param_overrides.h"
 #include "cli/commands.h"
 #include "core/param_names.h"
@@ -102,34 +102,23 @@ int cmd_build(const Args& args) {
   if (paths.empty()) return fail("build: no model images given");
   if (output.empty()) return fail("build: no output given (-o OUT.kgi)");
 
+  std::vector<ModelSource> sources;
+  for (std::size_t i = 0; i < paths.size(); ++i) sources.push_back({names[i], paths[i], rois[i]});
+  ModelBuildOptions options;
+  options.params = params;
+  std::vector<cv::Mat> grays;
   std::vector<BuiltModel> models;
-  std::set<std::string> seen;
-  for (std::size_t i = 0; i < paths.size(); ++i) {
-    const std::string& name = names[i];
-    if (name.empty()) return fail("build: empty model name for " + paths[i]);
-    if (!seen.insert(name).second) return fail("build: duplicate model name '" + name + "'");
-    cv::Mat gray;
-    Status s = load_image(paths[i], gray);
-    if (!s) return fail(s.message());
-    if (rois[i]) {
-      const cv::Rect r = *rois[i];
-      if (r.x + r.width > gray.cols || r.y + r.height > gray.rows)
-        return fail("build: --roi " + std::to_string(r.x) + "," + std::to_string(r.y) + "," +
-                    std::to_string(r.width) + "," + std::to_string(r.height) + " lies outside " +
-                    paths[i] + " (" + std::to_string(gray.cols) + "x" + std::to_string(gray.rows) +
-                    ")");
-      gray = gray(r).clone();
-    }
-    BuiltModel model;
-    s = build_model(gray, name, params, model);
-    if (!s) return fail(s.message());
+  if (Status s = build_model_set(sources, options, load_image, grays, models); !s)
+    return fail("build: " + s.message());
+  for (const BuiltModel& model : models) {
+    // Its size alone: what this model adds to an index.
     std::vector<std::uint8_t> bytes;
-    if (s = serialize_index({model}, params, bytes); !s) return fail(s.message());
+    if (Status s = serialize_index({model}, options.params, bytes); !s)
+      return fail("build: " + s.message());
     std::printf("%s: %zu views, %zu keypoints, %zu arcs, %llu keygraphs, %.1f KB alone\n",
-                name.c_str(), model.views.size(), model.keypoints.size(), model.arcs.size(),
+                model.name.c_str(), model.views.size(), model.keypoints.size(), model.arcs.size(),
                 static_cast<unsigned long long>(model.keygraphs),
                 static_cast<double>(bytes.size()) / 1024.0);
-    models.push_back(std::move(model));
   }
   Status s = write_index(models, params, output);
   if (!s) return fail(s.message());

@@ -1,6 +1,7 @@
 // keygraph eval --dataset DIR [--subsets a,b] [--crops N] [--size S] [--centre]
 //               [--seed N] [--set NAME=VALUE]... [--methods m1,m2|all] [--negatives]
 //               [--curves] [--out DIR] [--csv FILE]
+// keygraph eval --truth MANIFEST ...: see cmd_eval_truth.cpp.
 // keygraph eval --synth DIR [--sizes 1,10,50] [--frames N] [--methods ...] [--set ...]
 //               [--out DIR]
 //
@@ -69,6 +70,9 @@ std::vector<std::string> expand_methods(const std::vector<std::string>& names) {
 }  // namespace
 
 int cmd_eval(const Args& args) {
+  for (const std::string& a : args) {
+    if (a == "--truth") return cmd_eval_truth(args);  // cmd_eval_truth.cpp
+  }
   OxfordEvalOptions options;
   SynthEvalOptions synth;
   std::string csv, out_dir;

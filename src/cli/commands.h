@@ -18,6 +18,8 @@ int cmd_build(const Args& args);
 int cmd_detect(const Args& args);
 int cmd_demo(const Args& args);
 int cmd_eval(const Args& args);
+int cmd_eval_truth(const Args& args);  // eval --truth (cmd_eval passes it on)
+int cmd_manifest(const Args& args);
 int cmd_synth(const Args& args);
 int cmd_repeatability(const Args& args);
 

@@ -37,6 +37,13 @@ void usage(std::FILE* out) {
       "                                    --curves: precision-recall and RANSAC iterations\n"
       "  eval --synth DIR [--sizes 1,10,50] [--methods M,...|all] [--set ...] [--out DIR]\n"
       "                                    the sign benchmark of keygraph synth\n"
+      "  eval --truth MANIFEST (--models DIR|M.json | --index I.kgi) [--methods M,...|all]\n"
+      "       [--tolerance PX] [--set NAME=VALUE]... [--out DIR] [--gallery]\n"
+      "                                    detectors against hand-marked ground truth\n"
+      "                                    (docs/EVAL.md): found, false, by size, time\n"
+      "  manifest exit-signs|planar-pairs|negatives DIR -o OUT.jsonl\n"
+      "       [--split dev|test|model-bursts]\n"
+      "                                    a ground-truth manifest for a real photo set\n"
       "  synth -o DIR [--seed N] [--signs N] [--frames N] [--sign-free F]\n"
       "                                    generate a labelled indoor-sign benchmark\n"
       "  repeatability --dataset DIR [--subsets a,b] [--detectors D,...]\n"
@@ -73,12 +80,13 @@ int run(int argc, char** argv) {
   if (command == "detect") return kg::cli::cmd_detect(args);
   if (command == "demo") return kg::cli::cmd_demo(args);
   if (command == "eval") return kg::cli::cmd_eval(args);
+  if (command == "manifest") return kg::cli::cmd_manifest(args);
   if (command == "synth") return kg::cli::cmd_synth(args);
   if (command == "repeatability") return kg::cli::cmd_repeatability(args);
 #else
   if (command == "detect") return kg::cli::cmd_detect_files(args);
   if (command == "build" || command == "demo" || command == "eval" || command == "synth" ||
-      command == "repeatability") {
+      command == "repeatability" || command == "manifest") {
     return kg::cli::fail(command +
                          ": not in this build of keygraph (a device build, without "
                          "OpenCV); use the desktop keygraph");

@@ -1,0 +1,67 @@
+// keygraph manifest exit-signs DIR -o OUT.jsonl [--split dev|test|model-bursts]
+// keygraph manifest planar-pairs DIR -o OUT.jsonl
+// keygraph manifest negatives DIR -o OUT.jsonl
+//
+// Ground-truth manifests for `keygraph eval --truth` from the real photo
+// sets of ../shared/data/real (build/real_sets.h, docs/EVAL.md). The
+// manifest refers to the images where they are; the sets with models also
+// get a models.json beside it (exit-sign-models.json, planar-pair-models.json).
+#include <cstdio>
+#include <filesystem>
+
+#include "build/real_sets.h"
+#include "build/report_io.h"
+#include "cli/commands.h"
+
+namespace kg::cli {
+
+int cmd_manifest(const Args& args) {
+  std::string set, dir, output, split;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a == "-o" || a == "--output" || a == "--split") {
+      if (i + 1 >= args.size()) return fail("manifest: " + a + " needs a value");
+      (a == "--split" ? split : output) = args[++i];
+    } else if (!a.empty() && a[0] == '-') {
+      return fail("manifest: unknown option " + a);
+    } else if (set.empty()) {
+      set = a;
+    } else if (dir.empty()) {
+      dir = a;
+    } else {
+      return fail("manifest: unexpected argument " + a);
+    }
+  }
+  if (set.empty() || dir.empty())
+    return fail(
+        "manifest: usage: keygraph manifest exit-signs|planar-pairs|negatives DIR -o OUT.jsonl");
+  if (output.empty()) return fail("manifest: no output given (-o OUT.jsonl)");
+  if (!split.empty() && set != "exit-signs") return fail("manifest: --split is for exit-signs");
+  ConvertedSet converted;
+  std::string models_name;
+  Status s;
+  if (set == "exit-signs") {
+    s = convert_exit_signs(dir, output, split, converted);
+    models_name = "exit-sign-models.json";
+  } else if (set == "planar-pairs") {
+    s = convert_planar_pairs(dir, output, converted);
+    models_name = "planar-pair-models.json";
+  } else if (set == "negatives") {
+    s = convert_negatives(dir, output, converted);
+  } else {
+    return fail("manifest: unknown set '" + set + "' (exit-signs, planar-pairs or negatives)");
+  }
+  if (!s) return fail("manifest: " + s.message());
+  const std::filesystem::path out(output);
+  if (!converted.models_json.empty()) {
+    const std::string models = (out.parent_path() / models_name).string();
+    if (s = write_text_file(models, converted.models_json); !s)
+      return fail("manifest: " + s.message());
+    std::printf("wrote %s\n", models.c_str());
+  }
+  if (s = write_text_file(output, converted.manifest); !s) return fail("manifest: " + s.message());
+  std::printf("%s\nwrote %s\n", converted.summary.c_str(), output.c_str());
+  return 0;
+}
+
+}  // namespace kg::cli
