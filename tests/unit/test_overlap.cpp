@@ -1,0 +1,68 @@
+// Overlapping detections (core/pose.h): a second instance of one model on
+// the same sign, and look-alike models on one sign, keep the best
+// supported detection; detections elsewhere are untouched.
+#include <gtest/gtest.h>
+
+#include "core/pose.h"
+#include "keygraph/detector.h"
+
+namespace kg {
+namespace {
+
+Detection at(int model, float x, float y, float size, int inliers, double score = 0.5,
+             double chance = 0.1) {
+  Detection d;
+  d.model_id = model;
+  d.corners[0] = {x, y};
+  d.corners[1] = {x + size, y};
+  d.corners[2] = {x + size, y + size};
+  d.corners[3] = {x, y + size};
+  d.inliers = inliers;
+  d.score = score;
+  d.chance = chance;
+  return d;
+}
+
+TEST(Overlap, CentreInsideEitherOutline) {
+  const Detection big = at(0, 0, 0, 100, 10), small = at(1, 40, 40, 10, 10);
+  const Detection apart = at(2, 200, 0, 100, 10), edge = at(3, 60, 0, 100, 10);
+  EXPECT_TRUE(outlines_overlap(big.corners, small.corners));  // small's centre inside big
+  EXPECT_TRUE(outlines_overlap(small.corners, big.corners));
+  EXPECT_FALSE(outlines_overlap(big.corners, apart.corners));
+  // Overlapping by 40 %, but neither centre inside the other: two signs side by side.
+  EXPECT_FALSE(outlines_overlap(big.corners, edge.corners));
+  // Either orientation of the outline.
+  Detection reversed = big;
+  std::swap(reversed.corners[1], reversed.corners[3]);
+  EXPECT_TRUE(outlines_overlap(reversed.corners, small.corners));
+}
+
+TEST(Overlap, KeepsTheBestSupportedOfEachGroup) {
+  DetectionList found;
+  found.push_back(at(0, 0, 0, 100, 14));     // exit-left on the sign
+  found.push_back(at(1, 5, 3, 100, 22));     // exit-right on the same sign: more inliers
+  found.push_back(at(2, 300, 300, 50, 12));  // another sign elsewhere
+  found.push_back(at(0, 2, 1, 98, 9));       // a repeat of the first
+  keep_best_of_overlapping(found);
+  ASSERT_EQ(found.size(), 2u);
+  EXPECT_EQ(found[0].model_id, 1);
+  EXPECT_EQ(found[1].model_id, 2);
+}
+
+TEST(Overlap, TiesGoToTheLargerMarginThenTheEarlier) {
+  DetectionList found;
+  found.push_back(at(0, 0, 0, 100, 20, 0.40, 0.10));
+  found.push_back(at(1, 0, 0, 100, 20, 0.60, 0.10));
+  keep_best_of_overlapping(found);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].model_id, 1);
+  DetectionList same;
+  same.push_back(at(4, 0, 0, 100, 20));
+  same.push_back(at(5, 0, 0, 100, 20));
+  keep_best_of_overlapping(same);
+  ASSERT_EQ(same.size(), 1u);
+  EXPECT_EQ(same[0].model_id, 4);
+}
+
+}  // namespace
+}  // namespace kg
