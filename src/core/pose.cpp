@@ -193,6 +193,28 @@ struct KeygraphEstimator {
     return is_plausible_pose(out, model_w, model_h, params);
   }
 
+  // Local optimisation: the least-squares homography through every inlier
+  // keypoint correspondence of the last score() (ransac.h).
+  bool refine(Homography& hom) {
+    std::size_t n = 0;
+    s.inlier_model_.clear();
+    s.inlier_scene_.clear();
+    for (std::size_t i = 0; i < s.pairs_.size(); ++i) {
+      if (!s.pair_inlier_[i]) continue;
+      s.inlier_model_.push_back(s.pair_model_[i]);
+      s.inlier_scene_.push_back(s.pair_scene_[i]);
+      ++n;
+    }
+    if (n < 6) return false;
+    Homography fit;
+    if (!fit_homography_hypothesis(s.inlier_model_.data(), s.inlier_scene_.data(),
+                                   static_cast<int>(n), fit))
+      return false;
+    if (!is_plausible_pose(fit, model_w, model_h, params)) return false;
+    hom = fit;
+    return true;
+  }
+
   RansacScore score(const Homography& hom) {
     RansacScore r;
     const std::size_t pairs = s.pairs_.size();

@@ -9,7 +9,16 @@
 //     int sample_size() const;                       // h in log(1-P)/log(1-p^h)
 //     bool hypothesis(const int* samples, Model& out);  // false: degenerate
 //     RansacScore score(const Model& m);             // see below
+//     bool refine(Model& m);  // optional: local optimisation (below)
 //   };
+//
+// Local optimisation (LO-RANSAC, Chum et al. 2003), as PoseLib's loop:
+// when a hypothesis beats the best so far, an estimator with `refine`
+// re-fits it on the inliers that its score() just marked; the refit is
+// scored and kept when it is better still, up to kRefineRounds times while
+// it gains. The adaptive iteration count
+// then follows the refit's inlier ratio, so good models stop the loop
+// sooner; stats.refinements counts the refits that improved the best.
 //
 // The adaptive iteration count uses the fraction of *samples* that are
 // inliers (score.sample_inliers / sample_count): for keygraphs, a keygraph
@@ -49,6 +58,7 @@ struct RansacStats {
   int iterations = 0;           // hypotheses drawn
   int valid_hypotheses = 0;     // hypotheses that were not degenerate
   int required_iterations = 0;  // adaptive bound at the end
+  int refinements = 0;          // local optimisations that improved the best
   RansacScore best;
 };
 
@@ -113,6 +123,20 @@ struct has_custom_draw<
     E, std::void_t<decltype(std::declval<E&>().draw(std::declval<Rng&>(), std::declval<int*>()))>>
     : std::true_type {};
 
+// An estimator may refine a hypothesis on its inliers: `bool refine(Model&)`.
+template <class E, class = void>
+struct has_refine : std::false_type {};
+template <class E>
+struct has_refine<E, std::void_t<decltype(std::declval<E&>().refine(
+                         std::declval<typename E::Model&>()))>> : std::true_type {};
+
+inline constexpr int kRefineRounds = 4;
+
+inline bool better_score(const RansacScore& a, const RansacScore& b) {
+  return a.point_inliers > b.point_inliers ||
+         (a.point_inliers == b.point_inliers && a.cost < b.cost);
+}
+
 template <class Estimator>
 RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
                    typename Estimator::Model& best_model) {
@@ -146,10 +170,23 @@ RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
     }
     if (!estimator.hypothesis(sample, model)) continue;
     ++stats.valid_hypotheses;
-    const RansacScore s = estimator.score(model);
-    const bool better = !have_best || s.point_inliers > stats.best.point_inliers ||
-                        (s.point_inliers == stats.best.point_inliers && s.cost < stats.best.cost);
-    if (!better) continue;
+    RansacScore s = estimator.score(model);
+    if (have_best && !better_score(s, stats.best)) continue;
+    if constexpr (has_refine<Estimator>::value) {
+      // Refit on the inliers while that gains (a few rounds at most).
+      for (int round = 0; round < kRefineRounds; ++round) {
+        typename Estimator::Model refined = model;
+        if (!estimator.refine(refined)) break;
+        const RansacScore r = estimator.score(refined);
+        if (!better_score(r, s)) {
+          estimator.score(model);  // the flags of the kept model
+          break;
+        }
+        s = r;
+        model = refined;
+        ++stats.refinements;
+      }
+    }
     have_best = true;
     stats.best = s;
     best_model = model;
