@@ -428,24 +428,12 @@ void encode_tree(const std::vector<ArcSearchPoint>& search_points, double attrib
 
 }  // namespace
 
-Params index_params(const std::vector<BuiltModel>& models, const Params& params) {
-  Params out = params;
-  if (params.views.min_size <= 0.f) return out;
-  int longest = 0;
-  for (const BuiltModel& m : models) longest = std::max({longest, m.width, m.height});
-  const double shrink = longest / static_cast<double>(params.views.min_size);
-  // Area scale of the smallest view, with a margin for the views' spacing.
-  out.ransac.max_scale_change = std::max(params.ransac.max_scale_change, 1.5 * shrink * shrink);
-  return out;
-}
-
-Status serialize_index(const std::vector<BuiltModel>& models, const Params& requested,
+Status serialize_index(const std::vector<BuiltModel>& models, const Params& params,
                        std::vector<std::uint8_t>& bytes) {
   using namespace format;
-  Status s = validate_params(requested);
+  Status s = validate_params(params);
   if (!s) return s;
   if (models.empty()) return {StatusCode::kInvalidArgument, "no models to write"};
-  const Params params = index_params(models, requested);
 
   // Gather global arrays.
   std::vector<std::uint8_t> records(models.size() * kModelRecordSize, 0);

@@ -51,14 +51,7 @@ struct BuiltModel {
 Status build_model(const cv::Mat& gray, const std::string& name, const Params& params,
                    BuiltModel& out);
 
-// The parameters an index of `models` records: `params`, with
-// ransac.max_scale_change raised (never lowered) to cover the smallest view
-// of the largest model when views are on, so that the poses the views make
-// findable are not refused as implausible.
-Params index_params(const std::vector<BuiltModel>& models, const Params& params);
-
-// Serialises models into the .kgi layout (docs/FORMAT.md), with the
-// parameters of index_params(). Deterministic.
+// Serialises models into the .kgi layout (docs/FORMAT.md). Deterministic.
 Status serialize_index(const std::vector<BuiltModel>& models, const Params& params,
                        std::vector<std::uint8_t>& bytes);
 

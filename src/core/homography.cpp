@@ -357,8 +357,21 @@ double refine_homography(const Point2f* model, const Point2f* scene, int n, Homo
   return refined_rms;
 }
 
+double smallest_area_scale(const Params& params, float model_width, float model_height) {
+  const double symmetric = 1.0 / params.ransac.max_scale_change;
+  const double long_edge = std::max(model_width, model_height);
+  if (!(params.views.min_size > 0.f) || !(long_edge > 0.0)) return symmetric;
+  const double linear = params.views.min_size / (1.5 * long_edge);
+  return std::min(symmetric, linear * linear);
+}
+
 bool is_plausible_pose(const Homography& h, float model_width, float model_height,
                        const RansacParams& params) {
+  return is_plausible_pose(h, model_width, model_height, params, 0.0);
+}
+
+bool is_plausible_pose(const Homography& h, float model_width, float model_height,
+                       const RansacParams& params, double min_area) {
   const double mw = model_width;
   const double mh = model_height;
   if (!(mw > 0.0) || !(mh > 0.0)) return false;
@@ -409,7 +422,8 @@ bool is_plausible_pose(const Homography& h, float model_width, float model_heigh
 
   const double ratio = 0.5 * area2 / (mw * mh);
   const double max_scale = params.max_scale_change;
-  return ratio >= 1.0 / max_scale && ratio <= max_scale;
+  const double lowest = min_area > 0.0 ? std::min(1.0 / max_scale, min_area) : 1.0 / max_scale;
+  return ratio >= lowest && ratio <= max_scale;
 }
 
 }  // namespace kg

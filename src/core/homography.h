@@ -52,11 +52,20 @@ double rms_reprojection_error(const Point2f* model, const Point2f* scene, int n,
 // - the mapped corners form a convex quadrilateral with the model's
 //   orientation: every turn has the model rectangle's sign (no mirroring);
 // - the mapped area over the model area lies in
-//   [1/max_scale_change, max_scale_change];
+//   [min(1/max_scale_change, min_area), max_scale_change] (min_area: the
+//   smallest area scale the model's views cover, smallest_area_scale());
 // - no side of the mapped quadrilateral shorter than 4 px (collapse);
 // - perspective: the change of w along each model side is bounded,
 //   |h31| * w <= max_perspective * max(w, h) and
 //   |h32| * h <= max_perspective * max(w, h).
+bool is_plausible_pose(const Homography& h, float model_width, float model_height,
+                       const RansacParams& params, double min_area);
+// The smallest area scale (instance area over model area) at which a model
+// of this size is to be found: the views reach views.min_size on the long
+// edge (with a margin of 1.5 for the frame's own keypoint scales); without
+// views, 1 / ransac.max_scale_change. Views only ever widen the lower
+// bound, and only for models large enough to need it.
+double smallest_area_scale(const Params& params, float model_width, float model_height);
 bool is_plausible_pose(const Homography& h, float model_width, float model_height,
                        const RansacParams& params);
 

@@ -140,6 +140,7 @@ struct KeygraphEstimator {
   int h;
   float model_w, model_h;
   const RansacParams& params;
+  double min_area;  // smallest_area_scale() of the model
   double threshold2;
 
   int sample_count() const { return static_cast<int>(s.active_.size()); }
@@ -190,7 +191,7 @@ struct KeygraphEstimator {
     }
     if (n < 4) return false;
     if (!fit_homography_hypothesis(model, scene, n, out)) return false;
-    return is_plausible_pose(out, model_w, model_h, params);
+    return is_plausible_pose(out, model_w, model_h, params, min_area);
   }
 
   // Local optimisation: the least-squares homography through every inlier
@@ -210,7 +211,7 @@ struct KeygraphEstimator {
     if (!fit_homography_hypothesis(s.inlier_model_.data(), s.inlier_scene_.data(),
                                    static_cast<int>(n), fit))
       return false;
-    if (!is_plausible_pose(fit, model_w, model_h, params)) return false;
+    if (!is_plausible_pose(fit, model_w, model_h, params, min_area)) return false;
     hom = fit;
     return true;
   }
@@ -298,7 +299,9 @@ PoseEstimator::Support PoseEstimator::guided_refine(const ModelIndex& index, con
     Homography candidate = h;
     refine_homography(guided_model_.data(), guided_scene_.data(),
                       static_cast<int>(guided_model_.size()), candidate);
-    if (!is_plausible_pose(candidate, info.width, info.height, rp)) break;
+    if (!is_plausible_pose(candidate, info.width, info.height, rp,
+                           smallest_area_scale(index.params(), info.width, info.height)))
+      break;
     h = candidate;
   }
   return support;
@@ -374,8 +377,14 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
   }
   match_active_.assign(static_cast<std::size_t>(n), 1);
 
-  KeygraphEstimator estimator{
-      *this, k, h, info.width, info.height, rp, rp.inlier_threshold * rp.inlier_threshold};
+  KeygraphEstimator estimator{*this,
+                              k,
+                              h,
+                              info.width,
+                              info.height,
+                              rp,
+                              smallest_area_scale(params, info.width, info.height),
+                              rp.inlier_threshold * rp.inlier_threshold};
   RansacOptions options;
   options.confidence = rp.confidence;
   options.max_iterations = rp.max_iterations;
@@ -450,7 +459,8 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     for (int c = 0; c < 4; ++c) corners[c] = kg::apply(refined, info.outline[c]);
     const bool accepted =
         distinct >= rp.min_inliers && final_score.sample_inliers >= rp.min_inlier_keygraphs &&
-        z >= rp.min_verification_z && is_plausible_pose(refined, info.width, info.height, rp) &&
+        z >= rp.min_verification_z &&
+        is_plausible_pose(refined, info.width, info.height, rp, estimator.min_area) &&
         !repeats_instance(out, model_id, corners);
     if (accepted && static_cast<int>(out.size()) >= max_out) {
       truncated = true;

@@ -127,8 +127,9 @@ struct has_custom_draw<
 template <class E, class = void>
 struct has_refine : std::false_type {};
 template <class E>
-struct has_refine<E, std::void_t<decltype(std::declval<E&>().refine(
-                         std::declval<typename E::Model&>()))>> : std::true_type {};
+struct has_refine<
+    E, std::void_t<decltype(std::declval<E&>().refine(std::declval<typename E::Model&>()))>>
+    : std::true_type {};
 
 inline constexpr int kRefineRounds = 4;
 

@@ -9,6 +9,7 @@
 #include "core/arc_descriptor.h"
 #include "core/arc_keys.h"
 #include "core/descriptor_encoding.h"
+#include "core/homography.h"
 #include "core/sampling.h"
 #include "core/vertex_descriptor.h"
 
@@ -18,7 +19,8 @@ namespace {
 // Whether the model -> scene map of a correspondence is a plausible local
 // distortion (GraphParams::max_anisotropy): the affine map through the
 // first three vertices, or the length ratio for arcs.
-bool plausible_local_map(const Point2f* m, const Point2f* s, int k, const Params& params) {
+bool plausible_local_map(const Point2f* m, const Point2f* s, int k, const Params& params,
+                         float min_area) {
   const float max_aniso = params.graph.max_anisotropy;
   if (max_aniso <= 0.f) return true;
   const float max_area = 2.f * static_cast<float>(params.ransac.max_scale_change);
@@ -26,7 +28,7 @@ bool plausible_local_map(const Point2f* m, const Point2f* s, int k, const Params
     const float lm = std::hypot(m[1].x - m[0].x, m[1].y - m[0].y);
     const float ls = std::hypot(s[1].x - s[0].x, s[1].y - s[0].y);
     const float r2 = (ls * ls) / (lm * lm);
-    return r2 * max_area >= 1.f && r2 <= max_area;
+    return r2 >= min_area && r2 <= max_area;
   }
   // A = S M^-1 with M, S the edge matrices of the two triangles.
   const float m00 = m[1].x - m[0].x, m01 = m[2].x - m[0].x, m10 = m[1].y - m[0].y,
@@ -39,7 +41,7 @@ bool plausible_local_map(const Point2f* m, const Point2f* s, int k, const Params
   const float a = (s00 * m11 - s01 * m10) * inv, b = (-s00 * m01 + s01 * m00) * inv;
   const float c = (s10 * m11 - s11 * m10) * inv, d = (-s10 * m01 + s11 * m00) * inv;
   const float det = a * d - b * c;  // area scale
-  if (!(det * max_area >= 1.f && det <= max_area)) return false;
+  if (!(det >= min_area && det <= max_area)) return false;
   // sigma1 / sigma2 from the Frobenius norm and the determinant.
   const float f2 = a * a + b * b + c * c + d * d;
   const float disc = std::sqrt(std::max(0.f, f2 * f2 - 4.f * det * det));
@@ -365,13 +367,22 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     }
     return true;
   };
+  // Half the smallest pose area scale of each model (homography.h): a local
+  // map may shrink twice as much as the whole pose.
+  const float symmetric_min_area = 0.5f / static_cast<float>(params.ransac.max_scale_change);
+  auto min_area_of = [&](int model_id) {
+    if (!(params.views.min_size > 0.f)) return symmetric_min_area;
+    const ModelInfo info = in.index->model(model_id);
+    return static_cast<float>(0.5 * smallest_area_scale(params, info.width, info.height));
+  };
   auto emit = [&](const std::uint32_t* model, const SceneKeygraph& g) {
     Point2f mp[kMaxVertices], sp[kMaxVertices];
     for (int i = 0; i < k; ++i) {
       mp[i] = model_points[model[i]];
       sp[i] = in.scene_points[tri[g.edges[i]]];
     }
-    if (!plausible_local_map(mp, sp, k, params)) return true;
+    const int model_id = in.index->model_of_keypoint(model[0]);
+    if (!plausible_local_map(mp, sp, k, params, min_area_of(model_id))) return true;
     if (check_vertices && !similar_vertices(model, g)) {
       ++stats.vertex_rejections;
       return true;
@@ -381,7 +392,7 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
       return false;
     }
     KeygraphMatch m;
-    m.model_id = in.index->model_of_keypoint(model[0]);
+    m.model_id = model_id;
     for (int i = 0; i < k; ++i) {
       m.model_vertices[i] = model[i];
       m.scene_vertices[i] = tri[g.edges[i]];

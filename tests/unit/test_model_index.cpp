@@ -32,6 +32,7 @@
 #include "core/arc_attributes.h"
 #include "core/crc32.h"
 #include "core/descriptor_encoding.h"
+#include "core/homography.h"
 #include "core/index_format.h"
 #include "core/kdtree.h"
 #include "core/selection.h"
@@ -999,9 +1000,12 @@ TEST(ModelViewsIndex, ViewRangesAndViewAttributesRoundTrip) {
   ModelIndex index;
   const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
   ASSERT_TRUE(s) << s.message();
-  // The pose limit covers the smallest view: box.png's long edge is 324 px.
-  const double shrink = 324.0 / params.views.min_size;
-  EXPECT_GE(index.params().ransac.max_scale_change, shrink * shrink);
+  // Poses as small as the smallest view are plausible for this model only:
+  // box.png's long edge is 324 px; a 64 px model keeps the symmetric limit.
+  const double linear = params.views.min_size / (1.5 * 324.0);
+  EXPECT_DOUBLE_EQ(smallest_area_scale(index.params(), 324.f, 223.f), linear * linear);
+  EXPECT_DOUBLE_EQ(smallest_area_scale(index.params(), 64.f, 64.f),
+                   1.0 / params.ransac.max_scale_change);
   int coarse = 0;
   for (std::uint32_t i = 0; i < index.keypoint_count(); ++i) {
     const std::uint8_t lo = index.keypoint_views()[2 * i], hi = index.keypoint_views()[2 * i + 1];
