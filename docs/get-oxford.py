@@ -3,8 +3,8 @@
 
     python3 docs/get-oxford.py [--from DIR] [DEST]
 
-DEST defaults to $KG_DATA_DIR/oxford, else ../shared/data/oxford (the tests'
-default, see README: Test data). For each of the 8 subsets the script takes
+DEST defaults to $KG_DATA_DIR/oxford, else ../shared/data/oxford beside the
+checkout (the tests' default, see README: Test data). For each of the 8 subsets the script takes
 <subset>.tar.gz from the VGG page (or from DIR with --from, for tarballs
 fetched by hand), checks every image's pixels and every homography against
 docs/oxford-SHA256SUMS, and writes DEST/<subset>/img1.png .. img6.png (lossless)
@@ -143,7 +143,9 @@ def convert_subset(subset, archive, sums, out_dir):
 
 
 def main():
-    default_root = os.environ.get("KG_DATA_DIR") or os.path.join("..", "shared", "data")
+    # The tests' default (CMakeLists.txt): ../shared/data beside the checkout.
+    repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    default_root = os.environ.get("KG_DATA_DIR") or os.path.join(os.path.dirname(repo), "shared", "data")
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("dest", nargs="?", default=os.path.join(default_root, "oxford"),
                         help="output directory (default: %(default)s)")
