@@ -3,12 +3,13 @@
 # frame sources) and a pkg-config file for the core.
 include(CMakePackageConfigHelpers)
 
+# Two install components, one Debian package each (cmake/KeygraphPackage.cmake):
+#   dev   libraries, headers, CMake package, pkg-config file
+#   tool  the keygraph command-line tool, with its own export file, so that
+#         the CMake package works whether or not the tool is installed
 set(_kg_targets keygraph_core)
 if(KG_BUILD_TOOLS)
   list(APPEND _kg_targets keygraph_build)
-endif()
-if(TARGET keygraph)  # desktop or device build of the CLI
-  list(APPEND _kg_targets keygraph)
 endif()
 # Frame sources (platform/): keygraph::platform, ::files, ::v4l2, ::libcamera.
 # Their headers go to <includedir>/keygraph/platform/ and are included as
@@ -30,24 +31,29 @@ if(KG_INSTALLED_PLATFORM)
     endif()
   endforeach()
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/platform/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/keygraph/platform
-          FILES_MATCHING PATTERN "*.h" ${_kg_skip})
+          COMPONENT dev FILES_MATCHING PATTERN "*.h" ${_kg_skip})
 endif()
 
 install(TARGETS ${_kg_targets}
   EXPORT keygraphTargets
-  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
-  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
-  RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/keygraph DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT dev
+  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT dev)
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/keygraph DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
+        COMPONENT dev)
 
 set(_kg_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/keygraph)
-install(EXPORT keygraphTargets NAMESPACE keygraph:: DESTINATION ${_kg_cmake_dir})
+install(EXPORT keygraphTargets NAMESPACE keygraph:: DESTINATION ${_kg_cmake_dir} COMPONENT dev)
+if(TARGET keygraph)  # desktop or device build of the CLI: keygraph::keygraph
+  install(TARGETS keygraph EXPORT keygraphToolTargets RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
+          COMPONENT tool)
+  install(EXPORT keygraphToolTargets NAMESPACE keygraph:: DESTINATION ${_kg_cmake_dir} COMPONENT tool)
+endif()
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/keygraphConfig.cmake.in
   ${PROJECT_BINARY_DIR}/keygraphConfig.cmake INSTALL_DESTINATION ${_kg_cmake_dir})
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/keygraphConfigVersion.cmake
   COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/keygraphConfig.cmake ${PROJECT_BINARY_DIR}/keygraphConfigVersion.cmake
-  DESTINATION ${_kg_cmake_dir})
+  DESTINATION ${_kg_cmake_dir} COMPONENT dev)
 
 # The .pc file locates the prefix from its own directory (${pcfiledir}), so
 # `cmake --install --prefix DIR` and a copied install tree both work.
@@ -66,4 +72,4 @@ foreach(_kg_dir IN ITEMS LIBDIR INCLUDEDIR)
   endif()
 endforeach()
 configure_file(${PROJECT_SOURCE_DIR}/cmake/keygraph.pc.in ${PROJECT_BINARY_DIR}/keygraph.pc @ONLY)
-install(FILES ${PROJECT_BINARY_DIR}/keygraph.pc DESTINATION ${_kg_pc_dir})
+install(FILES ${PROJECT_BINARY_DIR}/keygraph.pc DESTINATION ${_kg_pc_dir} COMPONENT dev)

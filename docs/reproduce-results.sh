@@ -6,8 +6,8 @@
 #
 #   docs/reproduce-results.sh [KEYGRAPH_BINARY] [OUT_DIR] [OXFORD_DIR] [REAL_DIR]
 #
-# defaults: build/release/src/cli/keygraph, build/results, ../shared/data/oxford,
-# ../shared/data/real.
+# defaults: build/release/src/cli/keygraph, build/results, $KG_DATA_DIR/oxford and
+# $KG_DATA_DIR/real (KG_DATA_DIR defaults to ../shared/data).
 # Writes OUT_DIR/<run>/ (summary JSON, CSV per case and per curve, PNG plots)
 # and OUT_DIR/<run>.txt (the printed tables) for the runs:
 #   oxford          10 seeded random crops per subset, every method, negatives, curves
@@ -23,8 +23,8 @@
 set -eu
 KG=${1:-build/release/src/cli/keygraph}
 OUT=${2:-build/results}
-OXFORD=${3:-../shared/data/oxford}
-REAL=${4:-../shared/data/real}
+OXFORD=${3:-${KG_DATA_DIR:-../shared/data}/oxford}
+REAL=${4:-${KG_DATA_DIR:-../shared/data}/real}
 [ -x "$KG" ] || { echo "no keygraph binary at $KG (cmake --preset release && cmake --build --preset release)" >&2; exit 1; }
 mkdir -p "$OUT"
 run() {  # run NAME ARGS...: tables to OUT/NAME.txt, timing to OUT/NAME.time

@@ -1,5 +1,6 @@
 // Paths of the real images the tests use, and a loader. A missing file is
-// a test failure (ASSERT in the caller), never a skip.
+// a test failure (ASSERT in the caller), never a skip; only a missing data
+// set (KG_REQUIRE_DATA, data_dir.h) skips a test.
 #pragma once
 
 #include <string>
@@ -7,6 +8,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "data_dir.h"
 #include "keygraph/image.h"
 
 namespace kg::test {
@@ -15,7 +17,7 @@ inline std::string opencv_data(const std::string& name) {
   return std::string(KG_OPENCV_DATA_DIR) + "/" + name;
 }
 inline std::string oxford(const std::string& subset, const std::string& name) {
-  return std::string(KG_SHARED_DATA_DIR) + "/oxford/" + subset + "/" + name;
+  return data_dir("oxford") + "/" + subset + "/" + name;
 }
 
 // Loads an image as 8-bit gray; empty Mat when unreadable.

@@ -48,8 +48,18 @@ set(ENV{PKG_CONFIG_SYSROOT_DIR} "")
 
 # Cross-built programs (tests) run under qemu-user when it is installed:
 # CMake uses this for ctest and gtest_discover_tests. -L points the emulator
-# at the target's dynamic loader and libraries.
+# at the target's dynamic loader and libraries. The dynamic loader and libc
+# must come from the same package: once the target's multiarch libc is
+# installed (libc6:arm64, pulled in by libcamera-dev:arm64), the loader finds
+# libc.so.6 in /usr/lib/<triple> through ld.so.cache, so the loader has to be
+# that package's too (-L /); with the cross root's loader and the multiarch
+# libc, programs hang. .ci/run picks the root the same way.
 find_program(KG_CROSS_QEMU_PROGRAM ${KG_CROSS_QEMU} PATHS /usr/bin NO_CMAKE_FIND_ROOT_PATH)
 if(KG_CROSS_QEMU_PROGRAM)
-  set(CMAKE_CROSSCOMPILING_EMULATOR ${KG_CROSS_QEMU_PROGRAM} -L /usr/${KG_CROSS_TRIPLE})
+  if(EXISTS /usr/lib/${KG_CROSS_TRIPLE}/libc.so.6)
+    set(KG_CROSS_QEMU_ROOT /)
+  else()
+    set(KG_CROSS_QEMU_ROOT /usr/${KG_CROSS_TRIPLE})
+  endif()
+  set(CMAKE_CROSSCOMPILING_EMULATOR ${KG_CROSS_QEMU_PROGRAM} -L ${KG_CROSS_QEMU_ROOT})
 endif()

@@ -1,20 +1,22 @@
 #!/bin/sh
 # keygraph manifest and keygraph eval --truth end to end on a few images of
-# each real photo set in $KG_SHARED_DATA_DIR/real (its README.md):
+# each real photo set in $KG_DATA_DIR/real (its README.md):
 #   exit signs: the manifest keeps 105 signs, dev and test split them; the
 #     frame model-exit-left.png was cropped from plus 3 test frames;
 #   planar pairs: adam and city, each searched with its own model;
 #   negatives: 4 photos searched with the exit-sign models.
 # Exits 77 (ctest: not run) with the reason when the sets are absent.
 #
-# usage: cli_eval_truth_real.sh PATH/TO/keygraph SHARED_DATA_DIR
+# usage: cli_eval_truth_real.sh PATH/TO/keygraph DATA_DIR
+# (the environment's KG_DATA_DIR, when set, overrides DATA_DIR, as for the
+# other tests that read the data sets)
 set -u
-KG=${1:?usage: cli_eval_truth_real.sh KEYGRAPH_BINARY SHARED_DATA_DIR}
-SHARED=${2:?usage: cli_eval_truth_real.sh KEYGRAPH_BINARY SHARED_DATA_DIR}
-REAL=$SHARED/real
+KG=${1:?usage: cli_eval_truth_real.sh KEYGRAPH_BINARY DATA_DIR}
+DATA_DIR=${KG_DATA_DIR:-${2:?usage: cli_eval_truth_real.sh KEYGRAPH_BINARY DATA_DIR}}
+REAL=$DATA_DIR/real
 for d in exit-signs planar-pairs negatives; do
   if [ ! -d "$REAL/$d" ]; then
-    echo "not run: no $REAL/$d (KG_SHARED_DATA_DIR must name the directory holding real/)"
+    echo "needs data: no directory $REAL/$d; set KG_DATA_DIR to the directory that holds real/ (README: Test data)"
     exit 77
   fi
 done

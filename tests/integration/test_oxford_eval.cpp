@@ -1,4 +1,4 @@
-// The evaluation harness on the Oxford data (../shared/data/oxford): the
+// The evaluation harness on the Oxford data (KG_DATA_DIR/oxford): the
 // paper's protocol end to end, and parameter overrides by name.
 #include <gtest/gtest.h>
 
@@ -14,13 +14,15 @@
 #include "build/oxford_report.h"
 #include "build/param_overrides.h"
 #include "core/index_format.h"
+#include "data_dir.h"
 
 namespace kg {
 namespace {
 
 TEST(OxfordEval, CentreCropsOfGrafAndBoatFoundInTheMildScenes) {
+  KG_REQUIRE_DATA("oxford");
   OxfordEvalOptions options;
-  options.dataset = std::string(KG_SHARED_DATA_DIR) + "/oxford";
+  options.dataset = test::data_dir("oxford");
   options.subsets = {"graf", "boat"};
   options.centre_crop = true;
   std::vector<OxfordCase> cases;
@@ -43,8 +45,9 @@ TEST(OxfordEval, CentreCropsOfGrafAndBoatFoundInTheMildScenes) {
 
 // The paper's precision-recall measurement on graf's centre crop.
 TEST(OxfordEval, CurvesOfKeygraphsAndKeypointsOnGraf) {
+  KG_REQUIRE_DATA("oxford");
   OxfordEvalOptions options;
-  options.dataset = std::string(KG_SHARED_DATA_DIR) + "/oxford";
+  options.dataset = test::data_dir("oxford");
   options.subsets = {"graf"};
   options.centre_crop = true;
   options.curves = true;
@@ -133,7 +136,7 @@ TEST(OxfordEval, CurvesOfKeygraphsAndKeypointsOnGraf) {
   }
 }
 
-TEST(OxfordEval, MissingDatasetIsAnError) {
+TEST(OxfordEvalErrors, MissingDatasetIsAnError) {
   OxfordEvalOptions options;
   options.dataset = "/nonexistent/oxford";
   std::vector<OxfordCase> cases;
@@ -141,8 +144,9 @@ TEST(OxfordEval, MissingDatasetIsAnError) {
 }
 
 TEST(OxfordEval, ReadsTextHomography) {
+  KG_REQUIRE_DATA("oxford");
   Homography h;
-  ASSERT_TRUE(read_homography(std::string(KG_SHARED_DATA_DIR) + "/oxford/graf/H1to3p", h).is_ok());
+  ASSERT_TRUE(read_homography(test::data_dir("oxford") + "/graf/H1to3p", h).is_ok());
   EXPECT_NEAR(h[0], 0.76285898, 1e-8);
   EXPECT_NEAR(h[2], 225.67123, 1e-5);
   EXPECT_EQ(h[8], 1.0);
