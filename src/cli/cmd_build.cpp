@@ -4,6 +4,7 @@
 // --name and --roi apply to the model image that follows them: --roi makes
 // the model that rectangle of the image (model pixel (0,0) is image pixel
 // (X,Y)); without --name the model is named after the file's stem.
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -15,6 +16,7 @@
 #include "build/param_overrides.h"
 #include "cli/commands.h"
 #include "core/param_names.h"
+#include "platform/files/output_file.h"
 
 namespace kg::cli {
 
@@ -93,6 +95,12 @@ int cmd_build(const Args& args) {
   if (paths.empty()) return fail("build: no model images given");
   if (output.empty()) return fail("build: no output given (-o OUT.kgi)");
 
+  // The output first: a device node, a directory or one of the model
+  // images as -o fails before the build, and an interrupted build leaves
+  // nothing behind (the temporary is removed on SIGINT and SIGTERM).
+  platform::OutputFile out;
+  if (Status s = out.create(output, paths); !s) return fail("build: -o " + s.message());
+
   std::vector<BuiltModel> models;
   std::set<std::string> seen;
   for (std::size_t i = 0; i < paths.size(); ++i) {
@@ -104,7 +112,8 @@ int cmd_build(const Args& args) {
     if (!s) return fail(s.message());
     if (rois[i]) {
       const cv::Rect r = *rois[i];
-      if (r.x + r.width > gray.cols || r.y + r.height > gray.rows)
+      // In 64 bits: X + W can overflow an int.
+      if (std::int64_t{r.x} + r.width > gray.cols || std::int64_t{r.y} + r.height > gray.rows)
         return fail("build: --roi " + std::to_string(r.x) + "," + std::to_string(r.y) + "," +
                     std::to_string(r.width) + "," + std::to_string(r.height) + " lies outside " +
                     paths[i] + " (" + std::to_string(gray.cols) + "x" + std::to_string(gray.rows) +
@@ -119,7 +128,7 @@ int cmd_build(const Args& args) {
                 static_cast<unsigned long long>(model.keygraphs));
     models.push_back(std::move(model));
   }
-  Status s = write_index(models, params, output);
+  Status s = write_index(models, params, out);
   if (!s) return fail(s.message());
   std::printf("wrote %s (%zu models)\n", output.c_str(), models.size());
   return 0;
