@@ -415,11 +415,13 @@ SCENES=()
 for i in $(seq 1 40); do SCENES+=("$SCENE"); done
 for change in truncate cp; do
   cp "$IN/aaaa.kgi" "$CASE/ip.kgi"
-  (cd "$CASE" && exec "$KG" detect --index ip.kgi "${SCENES[@]}") >"$LOG/stdout" 2>"$LOG/stderr" &
+  : >"$LOG/ip.out"
+  (cd "$CASE" && exec "$KG" detect --index ip.kgi "${SCENES[@]}") >"$LOG/ip.out" 2>"$LOG/stderr" &
   pid=$!
   PIDS="$PIDS $pid"
+  # The first scene's line: the index is loaded.
   for _ in $(seq 1 600); do
-    [ -s "$LOG/stdout" ] && break
+    [ -s "$LOG/ip.out" ] && break
     sleep 0.05
   done
   if [ "$change" = truncate ]; then
@@ -429,10 +431,10 @@ for change in truncate cp; do
   fi
   wait "$pid"
   rc=$?
-  n=$(grep -c 'detection(s)' "$LOG/stdout")
+  n=$(grep -c 'detection(s)' "$LOG/ip.out")
   [ "$rc" -eq 0 ] && [ "$n" -eq 40 ] ||
     bad "row 12: detect while the index is changed in place ($change): exit $rc, $n of 40 scenes"
-  if [ "$MODE" = desktop ] && grep -q bbbb "$LOG/stdout"; then
+  if [ "$MODE" = desktop ] && grep -q bbbb "$LOG/ip.out"; then
     bad "row 12: detect switched to the other index's model names after $change"
   fi
 done
@@ -469,6 +471,8 @@ for _ in $(seq 1 600); do
   sleep 0.05
 done
 [ "$(reloads)" -eq 2 ] || bad "row 12: live reloaded $(reloads) times, expected 2"
+[ "$(grep -c 'not reloaded' "$LOG/live.err")" -eq 1 ] ||
+  bad "row 12: live reported the index it could not load $(grep -c 'not reloaded' "$LOG/live.err") times, expected once"
 kill -INT "$live"
 wait "$live"
 rc=$?

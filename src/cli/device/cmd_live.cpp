@@ -199,7 +199,7 @@ Status load_index(const std::string& path, ModelIndex& index) {
 
 // The index live detects with, reloaded between frames when its file
 // changes. A file that cannot be loaded (e.g. half copied) leaves the
-// loaded index in use, with one line on stderr until the file changes again.
+// loaded index in use, with one line on stderr until a load succeeds.
 class LiveIndex {
  public:
   explicit LiveIndex(std::string path) : path_(std::move(path)) {}
@@ -217,6 +217,10 @@ class LiveIndex {
     last_seen_ = now;
     ModelIndex fresh;
     if (Status s = load_index(path_, fresh); !s) {
+      // Once until a load succeeds: a file being copied changes (and fails
+      // to load) frame after frame.
+      if (failure_reported_) return false;
+      failure_reported_ = true;
       std::fprintf(stderr,
                    "keygraph: live: index changed but not reloaded (keeping the loaded one): %s\n",
                    s.message().c_str());
@@ -225,6 +229,7 @@ class LiveIndex {
     // The file may have changed again while it was read: compare with what
     // is there now, next frame.
     loaded_ = now;
+    failure_reported_ = false;
     index_ = std::move(fresh);
     std::fprintf(stderr, "live: index %s changed: reloaded (%d models)\n", path_.c_str(),
                  index_.model_count());
@@ -235,6 +240,7 @@ class LiveIndex {
   std::string path_;
   ModelIndex index_;
   FileIdentity loaded_, last_seen_;
+  bool failure_reported_ = false;
 };
 
 // Frames per second over the last report interval (about a second).
