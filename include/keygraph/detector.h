@@ -35,7 +35,8 @@ inline constexpr int kMaxDetections = 64;  // capacity of a DetectionList
 // overflows. Detector::workspace_bytes() gives the memory they need (about
 // 17 MB for the defaults at 640x480: tests/integration/test_runtime_memory.cpp).
 struct Limits {
-  int max_width = 640;  // largest frame, pixels
+  static constexpr int kMaxSide = 16384;  // the largest max_width, max_height
+  int max_width = 640;                    // largest frame, pixels
   int max_height = 480;
   int max_keypoints = 4000;         // detector output, strongest kept
   int max_scene_keypoints = 2000;   // after Chebyshev sampling

@@ -54,13 +54,28 @@ class ModelIndex {
   ModelIndex(const ModelIndex&) = delete;
   ModelIndex& operator=(const ModelIndex&) = delete;
 
+  // Index files and running processes (the contract):
+  //  - Replacing a file by rename (write_index(), keygraph build: a new file
+  //    renamed over the old one) is safe for both open() and read(): a
+  //    process keeps the old, complete file it loaded.
+  //  - Changing a file in place (cp or scp over it, truncate, an editor
+  //    writing into it) is NOT safe for open(): the mapping then shows bytes
+  //    that were never validated, and reading a page past a shortened end
+  //    kills the process with SIGBUS. read() copies the file into memory
+  //    once, so later changes never reach the loaded index; use it whenever
+  //    the file's immutability is not guaranteed. The keygraph commands all
+  //    use read(), and `keygraph live` reloads the index between frames when
+  //    the path names a changed file (device, inode, size or mtime).
+  // Both open only regular files and never block (a FIFO is refused, not
+  // waited on).
+  //
   // Maps (POSIX mmap, read-only) and validates the file at `path`; when the
   // file cannot be mapped it is read into an aligned buffer instead. The
-  // mapping lives as long as the index; the file must not be modified in
-  // place meanwhile (write_index() replaces files by renaming, which is safe).
+  // mapping lives as long as the index; see above for changes to the file.
   static Status open(const std::string& path, ModelIndex& out);
-  // Reads the file at `path` into an aligned buffer the index owns, then
-  // validates it (what open() falls back to): for files that may change.
+  // Reads the file at `path` into an aligned buffer the index owns (one
+  // allocation of the file's size), then validates it: for files that may
+  // change while the index is in use.
   static Status read(const std::string& path, ModelIndex& out);
   // Validates and uses `size` bytes at `data`, which the caller owns and must
   // keep alive and unchanged while `out` (or a Detector using it) exists.

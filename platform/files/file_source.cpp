@@ -3,11 +3,15 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <system_error>
 #include <utility>
 
 #include "platform/convert.h"
+#include "platform/files/held_stderr.h"
+#include "platform/files/image_limits.h"
+#include "platform/files/jpeg_structure.h"
 
 #if KG_PLATFORM_FILES_OPENCV
 #include <opencv2/core.hpp>
@@ -39,18 +43,25 @@ std::uint64_t monotonic_ns() {
 }
 
 #if KG_PLATFORM_FILES_OPENCV
-Status decode_with_opencv(std::vector<std::uint8_t>& bytes, const std::string& path,
-                          cv::Mat& gray) {
-  // imdecode reports most problems with an empty result; some throw.
+Status decode_with_opencv(std::vector<std::uint8_t>& bytes, const std::string& path, cv::Mat& gray,
+                          StderrHold& decoder_messages) {
+  if (const std::string problem = problem_before_decoding(bytes, path); !problem.empty())
+    return {kBadFrameCode, "files: " + problem};
+  // imdecode reports most problems with an empty result; some throw, among
+  // them an image over OPENCV_IO_MAX_IMAGE_PIXELS (limit_image_decoders()).
+  bool too_large = false;
+  decoder_messages.hold();
   try {
     const cv::Mat raw(1, static_cast<int>(bytes.size()), CV_8U, bytes.data());
     gray = cv::imdecode(raw, cv::IMREAD_GRAYSCALE);
-  } catch (const cv::Exception&) {
+  } catch (const cv::Exception& e) {
+    too_large = is_size_limit_error(e.err);
     gray.release();
   }
-  if (gray.empty() || gray.type() != CV_8UC1) {
-    return {kBadFrameCode, "files: " + path + ": not an image OpenCV can decode"};
-  }
+  const bool ok = !gray.empty() && gray.type() == CV_8UC1;
+  decoder_messages.release(ok);
+  if (too_large) return {kBadFrameCode, "files: " + over_pixel_limit(path)};
+  if (!ok) return {kBadFrameCode, "files: " + path + ": not an image OpenCV can decode"};
   return Status::ok();
 }
 #else
@@ -66,8 +77,37 @@ Status not_decodable(const std::string& path) {
 struct FileSource::Decoded {
 #if KG_PLATFORM_FILES_OPENCV
   cv::Mat gray;
+  StderrHold decoder_messages;
 #endif
 };
+
+void limit_image_decoders() {
+  const char* set = std::getenv("OPENCV_IO_MAX_IMAGE_PIXELS");
+  char* end = nullptr;
+  const unsigned long long value = set != nullptr ? std::strtoull(set, &end, 10) : 0;
+  if (set != nullptr && end != set && *end == '\0' && value > 0 &&
+      value <= static_cast<unsigned long long>(kMaxImagePixels))
+    return;
+  ::setenv("OPENCV_IO_MAX_IMAGE_PIXELS", kMaxImagePixelsText, 1);
+}
+
+bool is_size_limit_error(const std::string& opencv_error) {
+  // The assertion in imgcodecs' validateInputImageSize() names the limit.
+  return opencv_error.find("CV_IO_MAX_IMAGE") != std::string::npos;
+}
+
+std::string over_pixel_limit(const std::string& path) {
+  return path + ": image over " + std::to_string(kMaxImagePixels) +
+         " pixels (the limit), not decoded";
+}
+
+std::string problem_before_decoding(const std::vector<std::uint8_t>& bytes,
+                                    const std::string& path) {
+  if (bytes.empty()) return path + ": empty file";
+  if (is_jpeg(bytes.data(), bytes.size()) && !jpeg_is_complete(bytes.data(), bytes.size()))
+    return path + ": truncated JPEG (the data ends before the end-of-image marker)";
+  return {};
+}
 
 bool file_source_uses_opencv() {
   return KG_PLATFORM_FILES_OPENCV != 0;
@@ -84,7 +124,8 @@ Status read_image(const std::string& path, GrayImage& out) {
   }
 #if KG_PLATFORM_FILES_OPENCV
   cv::Mat gray;
-  if (Status s = decode_with_opencv(bytes, path, gray); !s) {
+  StderrHold decoder_messages;
+  if (Status s = decode_with_opencv(bytes, path, gray, decoder_messages); !s) {
     return {StatusCode::kCorruptData, s.message()};
   }
   out.width = gray.cols;
@@ -169,7 +210,8 @@ Status FileSource::decode(const std::string& path, Frame& out) {
     return Status::ok();
   }
 #if KG_PLATFORM_FILES_OPENCV
-  if (Status s = decode_with_opencv(bytes_, path, decoded_->gray); !s) return s;
+  if (Status s = decode_with_opencv(bytes_, path, decoded_->gray, decoded_->decoder_messages); !s)
+    return s;
   const cv::Mat& g = decoded_->gray;
   out.image = ImageView(g.data, g.cols, g.rows, static_cast<std::ptrdiff_t>(g.step));
   return Status::ok();

@@ -41,6 +41,16 @@ bool file_source_uses_opencv();
 // names the file.
 Status read_image(const std::string& path, GrayImage& out);
 
+// Checks on a file's bytes before a decoder sees them: empty, or a JPEG
+// that ends before its end-of-image marker (jpeg_structure.h). Returns the
+// error message (naming `path`), or empty.
+std::string problem_before_decoding(const std::vector<std::uint8_t>& bytes,
+                                    const std::string& path);
+// Whether an OpenCV exception's text is imgcodecs refusing an image over its
+// size limits (limit_image_decoders(), image_limits.h), and the message for it.
+bool is_size_limit_error(const std::string& opencv_error);
+std::string over_pixel_limit(const std::string& path);
+
 // The image files of `dir` as described above, sorted. Errors: missing
 // directory (kNotFound), not a directory or unreadable (kIoError).
 Status list_image_files(const std::string& dir, std::vector<std::string>& out);

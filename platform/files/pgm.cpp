@@ -1,14 +1,12 @@
 #include "platform/files/pgm.h"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <string>
+
+#include "platform/files/image_limits.h"
+#include "platform/files/output_file.h"
+#include "platform/files/regular_file.h"
 
 namespace kg::platform {
 namespace {
@@ -69,6 +67,10 @@ Status decode_pgm(const std::uint8_t* data, std::size_t size, const std::string&
     return corrupt(name, "PGM size " + std::to_string(w) + "x" + std::to_string(h) +
                              " outside 1.." + std::to_string(kMaxSide));
   }
+  if (static_cast<long long>(w) * h > kMaxImagePixels) {
+    return corrupt(name, "PGM size " + std::to_string(w) + "x" + std::to_string(h) + " is over " +
+                             std::to_string(kMaxImagePixels) + " pixels (the limit)");
+  }
   if (maxval < 1 || maxval > 65535) {
     return corrupt(name, "PGM maxval " + std::to_string(maxval) + " outside 1..65535");
   }
@@ -101,34 +103,7 @@ Status decode_pgm(const std::uint8_t* data, std::size_t size, const std::string&
 }
 
 Status read_file(const std::string& path, std::vector<std::uint8_t>& bytes) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) {
-    const int err = errno;
-    return {err == ENOENT ? StatusCode::kNotFound : StatusCode::kIoError,
-            path + ": cannot open: " + std::strerror(err)};
-  }
-  struct stat st {};
-  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-    ::close(fd);
-    return {StatusCode::kIoError, path + ": not a regular file"};
-  }
-  const std::size_t size = static_cast<std::size_t>(st.st_size);
-  bytes.resize(size);
-  std::size_t got = 0;
-  while (got < size) {
-    const ssize_t r = ::read(fd, bytes.data() + got, size - got);
-    if (r < 0 && errno == EINTR) continue;
-    if (r <= 0) break;
-    got += static_cast<std::size_t>(r);
-  }
-  const int err = errno;
-  ::close(fd);
-  if (got != size) {
-    return {StatusCode::kIoError, path + ": read " + std::to_string(got) + " of " +
-                                      std::to_string(size) + " bytes" +
-                                      (got < size ? std::string(": ") + std::strerror(err) : "")};
-  }
-  return Status::ok();
+  return read_regular_file(path, bytes, kMaxImageFileBytes);
 }
 
 Status read_pgm(const std::string& path, GrayImage& out) {
@@ -137,33 +112,19 @@ Status read_pgm(const std::string& path, GrayImage& out) {
   return decode_pgm(bytes.data(), bytes.size(), path, out);
 }
 
-Status write_pgm(const std::string& path, const ImageView& image) {
+Status write_pgm(const std::string& path, const ImageView& image,
+                 const std::vector<std::string>& inputs) {
   if (image.empty()) return {StatusCode::kInvalidArgument, path + ": empty image"};
-  std::string tmp = path + ".tmp.XXXXXX";
-  const int fd = ::mkstemp(tmp.data());
-  if (fd < 0) {
-    return {StatusCode::kIoError,
-            path + ": cannot create a temporary file: " + std::strerror(errno)};
-  }
-  (void)::fchmod(fd, 0644);  // mkstemp creates 0600 files
-  std::FILE* f = ::fdopen(fd, "wb");
-  if (f == nullptr) {
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    return {StatusCode::kIoError, path + ": fdopen failed"};
-  }
-  bool ok = std::fprintf(f, "P5\n%d %d\n255\n", image.width, image.height) > 0;
-  for (int y = 0; ok && y < image.height; ++y) {
-    ok = std::fwrite(image.row(y), 1, static_cast<std::size_t>(image.width), f) ==
-         static_cast<std::size_t>(image.width);
-  }
-  ok = (std::fclose(f) == 0) && ok;
-  if (!ok || std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    ::unlink(tmp.c_str());
-    return {StatusCode::kIoError, path + ": write failed: " + std::strerror(err)};
-  }
-  return Status::ok();
+  OutputFile out;
+  if (Status s = out.create(path, inputs); !s) return s;
+  char header[48];
+  const int n =
+      std::snprintf(header, sizeof(header), "P5\n%d %d\n255\n", image.width, image.height);
+  Status s = out.write(header, static_cast<std::size_t>(n));
+  for (int y = 0; s && y < image.height; ++y)
+    s = out.write(image.row(y), static_cast<std::size_t>(image.width));
+  if (s) s = out.commit();
+  return s;
 }
 
 }  // namespace kg::platform

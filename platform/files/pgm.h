@@ -31,20 +31,25 @@ bool is_pgm(const std::uint8_t* data, std::size_t size);
 // maxval != 255 (16-bit samples by rounding v * 255 / maxval). `out` reuses
 // its capacity. `name` only labels error messages. Errors (kCorruptData):
 // wrong magic (with a hint for ASCII P2 and color P6), malformed or
-// out-of-range header fields, images over 32768 pixels a side, truncated
+// out-of-range header fields, images over 32768 pixels a side or over
+// kMaxImagePixels (image_limits.h; checked before `out` grows), truncated
 // pixel data.
 Status decode_pgm(const std::uint8_t* data, std::size_t size, const std::string& name,
                   GrayImage& out);
 
-// Reads a whole file into `bytes` (capacity reused). Errors: missing file
-// (kNotFound), unreadable or not a regular file (kIoError).
+// Reads a whole image file into `bytes` (capacity reused): a regular file
+// of at most kMaxImageFileBytes (regular_file.h). Errors: missing file
+// (kNotFound), unreadable or not a regular file (kIoError, saying what it
+// is), too large (kResourceExhausted).
 Status read_file(const std::string& path, std::vector<std::uint8_t>& bytes);
 
 // read_file + decode_pgm.
 Status read_pgm(const std::string& path, GrayImage& out);
 
-// Writes `image` as an 8-bit P5 file: to a temporary file beside `path`,
-// then renamed over it, so a failure never leaves a partial file.
-Status write_pgm(const std::string& path, const ImageView& image);
+// Writes `image` as an 8-bit P5 file through an OutputFile
+// (output_file.h): whole or not at all, never over a non-regular file or
+// one of `inputs`.
+Status write_pgm(const std::string& path, const ImageView& image,
+                 const std::vector<std::string>& inputs = {});
 
 }  // namespace kg::platform

@@ -25,6 +25,7 @@
 #include "core/keygraph.h"
 #include "core/plane.h"
 #include "core/sampling.h"
+#include "platform/files/output_file.h"
 
 namespace kg {
 
@@ -617,25 +618,19 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
 
 Status write_index(const std::vector<BuiltModel>& models, const Params& params,
                    const std::string& path) {
+  platform::OutputFile out;
+  if (Status s = out.create(path); !s) return s;
+  return write_index(models, params, out);
+}
+
+Status write_index(const std::vector<BuiltModel>& models, const Params& params,
+                   platform::OutputFile& out) {
   std::vector<std::uint8_t> bytes;
   Status s = serialize_index(models, params, bytes);
-  if (!s) return s;
-  const std::string tmp = path + ".tmp";
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (f == nullptr) return {StatusCode::kIoError, "cannot write " + path};
-  const bool written = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
-  const bool closed = std::fclose(f) == 0;
-  std::error_code ec;
-  if (!written || !closed) {
-    std::filesystem::remove(tmp, ec);
-    return {StatusCode::kIoError, "cannot write " + path + " (disk full?)"};
-  }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    return {StatusCode::kIoError, "cannot rename into " + path};
-  }
-  return Status::ok();
+  if (s) s = out.write(bytes.data(), bytes.size());
+  if (s) s = out.commit();
+  if (!s) out.discard();
+  return s;
 }
 
 }  // namespace kg

@@ -19,6 +19,10 @@
 
 namespace kg {
 
+namespace platform {
+class OutputFile;
+}  // namespace platform
+
 // What one view of a model contributed (reports, keygraph build).
 struct ViewSummary {
   double scale = 1.0, tilt = 1.0, longitude = 0.0;  // build/model_views.h
@@ -55,9 +59,15 @@ Status build_model(const cv::Mat& gray, const std::string& name, const Params& p
 Status serialize_index(const std::vector<BuiltModel>& models, const Params& params,
                        std::vector<std::uint8_t>& bytes);
 
-// Writes the index to `path` through a temporary file renamed into place,
-// so a failure never leaves a partial index behind.
+// Writes the index to `path` through a platform::OutputFile
+// (platform/files/output_file.h): a unique temporary renamed into place, so
+// a failure or an interrupt never leaves a partial index behind, and never
+// over anything but a regular file.
 Status write_index(const std::vector<BuiltModel>& models, const Params& params,
                    const std::string& path);
+// The same into an output created beforehand (e.g. before a long build, so
+// that a bad output path fails at once); commits it.
+Status write_index(const std::vector<BuiltModel>& models, const Params& params,
+                   platform::OutputFile& out);
 
 }  // namespace kg

@@ -1,5 +1,7 @@
 #include "build/model_set.h"
 
+#include <cstdint>
+
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -76,7 +78,8 @@ Status load_model_image(const ModelSource& source, ImageLoader load, cv::Mat& gr
   Status s = load(source.path, gray);
   if (!s || !source.roi) return s;
   const cv::Rect r = *source.roi;
-  if (r.x + r.width > gray.cols || r.y + r.height > gray.rows)
+  // In 64 bits: X + W can overflow an int.
+  if (std::int64_t{r.x} + r.width > gray.cols || std::int64_t{r.y} + r.height > gray.rows)
     return {StatusCode::kInvalidArgument, "ROI " + rect_text(r) + " lies outside " + source.path +
                                               " (" + std::to_string(gray.cols) + "x" +
                                               std::to_string(gray.rows) + ")"};

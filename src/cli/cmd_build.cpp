@@ -7,6 +7,7 @@
 // --name and --roi apply to the model image that follows them: --roi makes
 // the model that rectangle of the image (model pixel (0,0) is image pixel
 // (X,Y)); without --name the model is named after the file's stem.
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -18,6 +19,7 @@
 #include "build/param_overrides.h"
 #include "cli/commands.h"
 #include "core/param_names.h"
+#include "platform/files/output_file.h"
 
 namespace kg::cli {
 
@@ -102,6 +104,12 @@ int cmd_build(const Args& args) {
   if (paths.empty()) return fail("build: no model images given");
   if (output.empty()) return fail("build: no output given (-o OUT.kgi)");
 
+  // The output first: a device node, a directory or one of the model
+  // images as -o fails before the build, and an interrupted build leaves
+  // nothing behind (the temporary is removed on SIGINT and SIGTERM).
+  platform::OutputFile out;
+  if (Status s = out.create(output, paths); !s) return fail("build: -o " + s.message());
+
   std::vector<ModelSource> sources;
   for (std::size_t i = 0; i < paths.size(); ++i) sources.push_back({names[i], paths[i], rois[i]});
   ModelBuildOptions options;
@@ -120,7 +128,7 @@ int cmd_build(const Args& args) {
                 static_cast<unsigned long long>(model.keygraphs),
                 static_cast<double>(bytes.size()) / 1024.0);
   }
-  Status s = write_index(models, params, output);
+  Status s = write_index(models, params, out);
   if (!s) return fail(s.message());
   std::printf("wrote %s (%zu models)\n", output.c_str(), models.size());
   return 0;

@@ -16,7 +16,8 @@ int cmd_demo(const Args& args) {
   std::string out_dir = ".";
   std::string data_dir = KG_OPENCV_DATA_DIR;
   for (std::size_t i = 0; i < args.size(); ++i) {
-    if ((args[i] == "--out" || args[i] == "--data") && i + 1 < args.size()) {
+    if (args[i] == "--out" || args[i] == "--data") {
+      if (i + 1 >= args.size()) return fail("demo: " + args[i] + " needs a value");
       (args[i] == "--out" ? out_dir : data_dir) = args[i + 1];
       ++i;
     } else {
@@ -46,7 +47,7 @@ int cmd_demo(const Args& args) {
               static_cast<unsigned long long>(models[0].keygraphs), index_path.c_str());
 
   ModelIndex index;
-  s = ModelIndex::open(index_path, index);
+  s = ModelIndex::read(index_path, index);
   if (!s) return fail(s.message());
   DesktopDetector detector(index);
   DetectionList found;
@@ -65,7 +66,9 @@ int cmd_demo(const Args& args) {
   }
   const std::string picture = out_dir + "/demo.png";
   std::string error;
-  if (!write_image_atomically(picture, draw_detections(scene, found), error)) return fail(error);
+  if (!write_image_atomically(picture, draw_detections(scene, found), {model_path, scene_path},
+                              error))
+    return fail(error);
   std::printf("wrote %s\n", picture.c_str());
   return found.empty() ? 1 : 0;
 }

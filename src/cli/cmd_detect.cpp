@@ -1,7 +1,6 @@
 // keygraph detect --index I.kgi [--json] [--draw OUT.png] SCENE...
 #include <chrono>
 #include <cstdio>
-#include <filesystem>
 
 #include "build/desktop_detect.h"
 #include "build/image_io.h"
@@ -9,19 +8,6 @@
 #include "cli/device/json.h"
 
 namespace kg::cli {
-
-namespace {
-
-// With several scenes, --draw OUT.png becomes OUT_<scene stem>.png.
-std::string draw_path(const std::string& draw, const std::string& scene, bool several) {
-  if (!several) return draw;
-  const std::filesystem::path p(draw);
-  const std::string name = p.stem().string() + "_" + std::filesystem::path(scene).stem().string() +
-                           p.extension().string();
-  return (p.parent_path() / name).string();
-}
-
-}  // namespace
 
 int cmd_detect(const Args& args) {
   std::string index_path, draw;
@@ -42,13 +28,23 @@ int cmd_detect(const Args& args) {
   }
   if (index_path.empty()) return fail("detect: no index given (--index I.kgi)");
   if (scenes.empty()) return fail("detect: no scene images given");
+  std::vector<std::string> drawn;
+  if (!draw.empty()) {
+    if (std::string error = draw_paths(draw, scenes, drawn); !error.empty())
+      return fail("detect: " + error);
+  }
+  // The index is read into memory (not mapped): a file changed in place
+  // meanwhile cannot crash the process (model_index.h).
   ModelIndex index;
-  Status s = ModelIndex::open(index_path, index);
+  Status s = ModelIndex::read(index_path, index);
   if (!s) return fail(s.message());
+  std::vector<std::string> inputs = scenes;
+  inputs.push_back(index_path);
   DesktopDetector detector(index);
   int exit_code = 0;
   DetectionList found;
-  for (const std::string& scene : scenes) {
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    const std::string& scene = scenes[i];
     cv::Mat gray;
     s = load_image(scene, gray);
     if (!s) {
@@ -78,9 +74,8 @@ int cmd_detect(const Args& args) {
     std::fflush(stdout);
     if (!draw.empty()) {
       std::string error;
-      if (!write_image_atomically(draw_path(draw, scene, scenes.size() > 1),
-                                  draw_detections(gray, found), error))
-        exit_code = fail(error);
+      if (!write_image_atomically(drawn[i], draw_detections(gray, found), inputs, error))
+        exit_code = fail("detect: --draw " + error);
     }
   }
   return exit_code;

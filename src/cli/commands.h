@@ -26,7 +26,10 @@ int cmd_repeatability(const Args& args);
 // load_gray() with image decoders' own stderr output held back when the
 // load fails, so the failure is reported as one line.
 Status load_image(const std::string& path, cv::Mat& gray);
-// Writes an image via a temporary file and a rename (no partial output).
-bool write_image_atomically(const std::string& path, const cv::Mat& image, std::string& error);
+// Writes an image through a platform::OutputFile (a unique temporary
+// renamed into place: no partial output, never over a non-regular file or
+// one of `inputs`).
+bool write_image_atomically(const std::string& path, const cv::Mat& image,
+                            const std::vector<std::string>& inputs, std::string& error);
 
 }  // namespace kg::cli

@@ -3,16 +3,25 @@
 // One main for both builds of the tool (src/cli/CMakeLists.txt): the
 // desktop keygraph (KG_CLI_DESKTOP, with OpenCV) has every command; the
 // device keygraph has the commands of cli/device/ only.
+#include <unistd.h>
+
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <string>
 
 #include "cli/device/device_commands.h"
+#include "keygraph/detector.h"
+#include "platform/files/file_source.h"
+#include "platform/files/image_limits.h"
 #if KG_CLI_DESKTOP
 #include "cli/commands.h"
 #endif
 
 namespace {
+
+using kg::Limits;
+namespace platform = kg::platform;
 
 void usage(std::FILE* out) {
   std::fprintf(out,
@@ -65,7 +74,14 @@ void usage(std::FILE* out) {
                "                                    time detect() per stage on frames in memory\n"
                "  inspect I.kgi                     header, parameters, sections (checksums\n"
                "                                    verified), models and bytes per arc\n"
-               "  help                              this text\n");
+               "  help                              this text\n"
+               "\n"
+               "Image files must be regular files of at most %lld pixels (width x height,\n"
+               "checked on the size the file declares, before decoding) and %d pixels a\n"
+               "side for detection; live and bench skip larger frames with a warning.\n"
+               "Outputs (-o, --draw) are written whole or not at all and replace regular\n"
+               "files only, never an input.\n",
+               platform::kMaxImagePixels, Limits::kMaxSide);
 }
 
 int run(int argc, char** argv) {
@@ -102,14 +118,35 @@ int run(int argc, char** argv) {
   return kg::cli::fail("unknown command '" + command + "' (see keygraph help)");
 }
 
+// OpenCV imgcodecs reads its image size limit from the environment once,
+// while its library is loaded (image_limits.h): setting it from main() is
+// too late, and so is an ELF pre-initialiser (the C library's start-up
+// resets the environment after it). So the first time, keygraph sets the
+// variable and executes itself again (same process id, same arguments);
+// if that fails it carries on, and images are then size-checked after
+// decoding only.
+void limit_image_decoders_before_load(char** argv) {
+  if (!kg::platform::file_source_uses_opencv()) return;
+  const char* before = std::getenv("OPENCV_IO_MAX_IMAGE_PIXELS");
+  const std::string previous = before != nullptr ? before : "";
+  kg::platform::limit_image_decoders();
+  const char* after = std::getenv("OPENCV_IO_MAX_IMAGE_PIXELS");
+  if (after != nullptr && previous == after) return;  // already in force
+  ::execv("/proc/self/exe", argv);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  limit_image_decoders_before_load(argv);
   // Last resort (e.g. std::bad_alloc, cv::Exception): one line and a
   // non-zero exit instead of std::terminate's multi-line abort.
+  int exit_code = 0;
   try {
-    return run(argc, argv);
+    exit_code = run(argc, argv);
   } catch (const std::exception& e) {
-    return kg::cli::fail(std::string("internal error: ") + e.what());
+    exit_code = kg::cli::fail(std::string("internal error: ") + e.what());
   }
+  // Output that never arrived (a full disk, a closed file) is a failure.
+  return kg::cli::check_stdout(exit_code);
 }

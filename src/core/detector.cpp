@@ -45,10 +45,11 @@ Status missing_vertex_descriptors() {
 }
 
 Status check_limits(const Limits& l) {
-  const bool ok = l.max_width >= 1 && l.max_height >= 1 && l.max_width <= 16384 &&
-                  l.max_height <= 16384 && l.max_keypoints >= 1 && l.max_scene_keypoints >= 1 &&
-                  l.max_arc_matches >= 1 && l.max_arc_pool >= 1 && l.max_correspondences >= 1 &&
-                  l.max_detections >= 1 && l.max_detections <= kMaxDetections;
+  const bool ok = l.max_width >= 1 && l.max_height >= 1 && l.max_width <= Limits::kMaxSide &&
+                  l.max_height <= Limits::kMaxSide && l.max_keypoints >= 1 &&
+                  l.max_scene_keypoints >= 1 && l.max_arc_matches >= 1 && l.max_arc_pool >= 1 &&
+                  l.max_correspondences >= 1 && l.max_detections >= 1 &&
+                  l.max_detections <= kMaxDetections;
   if (ok) return Status::ok();
   return {StatusCode::kInvalidArgument,
           "detector limits out of range (frame 1..16384 px a side, every count >= 1, "

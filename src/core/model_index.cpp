@@ -1,6 +1,7 @@
 #include "keygraph/model_index.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -59,6 +60,87 @@ Status too_small(const std::string& path, std::size_t size) {
                  " bytes)");
 }
 
+const char* not_a_file(mode_t mode) {
+  if (S_ISDIR(mode)) return "is a directory";
+  if (S_ISFIFO(mode)) return "is a FIFO";
+  if (S_ISCHR(mode)) return "is a character device";
+  if (S_ISBLK(mode)) return "is a block device";
+  if (S_ISSOCK(mode)) return "is a socket";
+  return "is not a regular file";
+}
+
+// Opens the index file without blocking (a FIFO would block open() for
+// ever) and checks that it is a regular file of a plausible size.
+Status open_index_file(const std::string& path, int& fd, std::uint64_t& size) {
+  fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
+  if (fd < 0) {
+    const int err = errno;
+    const std::string what = "cannot open index " + path;
+    if (err == ENOENT) return {StatusCode::kNotFound, what + ": no such file"};
+    if (err == EACCES || err == EPERM) return {StatusCode::kIoError, what + ": permission denied"};
+    if (err == ELOOP) return {StatusCode::kIoError, what + ": too many levels of symbolic links"};
+    return {StatusCode::kIoError, what + ": " + std::strerror(err)};
+  }
+  struct stat info {};
+  if (::fstat(fd, &info) != 0) {
+    ::close(fd);
+    return read_error(path);
+  }
+  if (!S_ISREG(info.st_mode)) {
+    ::close(fd);
+    return {StatusCode::kInvalidArgument, path + ": " + not_a_file(info.st_mode)};
+  }
+  size = static_cast<std::uint64_t>(info.st_size);
+  if (size < kHeaderSize) {
+    ::close(fd);
+    return too_small(path, static_cast<std::size_t>(size));
+  }
+  if (size > static_cast<std::uint64_t>(PTRDIFF_MAX)) {
+    ::close(fd);
+    return {StatusCode::kResourceExhausted, path + ": too large to load"};
+  }
+  return Status::ok();
+}
+
+// Reads exactly `size` bytes and checks that the file ends there (one byte
+// more means it grew since fstat).
+bool read_exactly(int fd, std::uint8_t* out, std::size_t size) {
+  std::size_t got = 0;
+  while (got < size) {
+    const ssize_t r = ::read(fd, out + got, size - got);
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) return false;
+    got += static_cast<std::size_t>(r);
+  }
+  std::uint8_t extra;
+  return ::read(fd, &extra, 1) == 0;
+}
+
+void close_file(int fd) {
+  ::close(fd);
+}
+
+// Versions a damaged header is unlikely to name by chance: a few majors
+// ahead of this reader, minors below 100.
+constexpr std::uint16_t kPlausibleNewerMajors = 4;
+constexpr std::uint16_t kPlausibleMinor = 99;
+
+// Whether the header checksum (over header, parameters and section table,
+// its own field zeroed) matches, with this version's layout. False when the
+// table lies outside the file.
+bool header_crc_matches(const std::uint8_t* d, std::size_t size) {
+  const auto table_offset = load<std::uint32_t>(d + kOffTableOffset);
+  const auto section_count = load<std::uint32_t>(d + kOffSectionCount);
+  const std::uint64_t table_end = static_cast<std::uint64_t>(table_offset) +
+                                  static_cast<std::uint64_t>(section_count) * kSectionEntrySize;
+  if (table_end < kOffHeaderCrc + 4 || table_end > size) return false;
+  std::uint8_t zero[4] = {0, 0, 0, 0};
+  std::uint32_t crc = crc32(d, kOffHeaderCrc);
+  crc = crc32(zero, 4, crc);
+  crc = crc32(d + kOffHeaderCrc + 4, static_cast<std::size_t>(table_end) - kOffHeaderCrc - 4, crc);
+  return crc == load<std::uint32_t>(d + kOffHeaderCrc);
+}
+
 }  // namespace
 
 void ModelIndex::Release::operator()(std::uint8_t* p) const {
@@ -87,58 +169,29 @@ Status ModelIndex::adopt(std::unique_ptr<std::uint8_t, Release> memory, std::siz
 }
 
 Status ModelIndex::read(const std::string& path, ModelIndex& out) {
-  struct stat info {};
-  if (::stat(path.c_str(), &info) != 0) return {StatusCode::kNotFound, "cannot open index " + path};
-  if (!S_ISREG(info.st_mode)) return {StatusCode::kInvalidArgument, path + ": not a regular file"};
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) return {StatusCode::kNotFound, "cannot open index " + path};
-  const auto size = static_cast<std::uint64_t>(info.st_size);
-  if (size < kHeaderSize) {
-    std::fclose(f);
-    return too_small(path, static_cast<std::size_t>(size));
-  }
-  if (size > static_cast<std::uint64_t>(PTRDIFF_MAX)) {
-    std::fclose(f);
-    return {StatusCode::kResourceExhausted, path + ": too large to load"};
-  }
+  int fd = -1;
+  std::uint64_t size = 0;
+  if (Status s = open_index_file(path, fd, size); !s) return s;
   std::unique_ptr<std::uint8_t, Release> buffer(
       static_cast<std::uint8_t*>(::operator new[](static_cast<std::size_t>(size),
                                                   std::align_val_t(kAlignment), std::nothrow)),
       Release{0});
   if (!buffer) {
-    std::fclose(f);
+    close_file(fd);
     return {StatusCode::kResourceExhausted, path + ": not enough memory for the index"};
   }
-  const std::size_t got = std::fread(buffer.get(), 1, static_cast<std::size_t>(size), f);
-  // One byte more than stat() reported means the file grew meanwhile.
-  const bool longer = got == size && std::fgetc(f) != EOF;
-  std::fclose(f);
-  if (got != size || longer) return read_error(path + " (file changed while reading)");
+  const bool complete = read_exactly(fd, buffer.get(), static_cast<std::size_t>(size));
+  close_file(fd);
+  if (!complete) return read_error(path + " (file changed while reading)");
   return adopt(std::move(buffer), static_cast<std::size_t>(size), path, out);
 }
 
 Status ModelIndex::open(const std::string& path, ModelIndex& out) {
 #if KG_HAVE_MMAP
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return {StatusCode::kNotFound, "cannot open index " + path};
-  struct stat info {};
-  if (::fstat(fd, &info) != 0) {
-    ::close(fd);
-    return read_error(path);
-  }
-  if (!S_ISREG(info.st_mode)) {
-    ::close(fd);
-    return {StatusCode::kInvalidArgument, path + ": not a regular file"};
-  }
-  const auto size = static_cast<std::uint64_t>(info.st_size);
-  if (size < kHeaderSize) {
-    ::close(fd);
-    return too_small(path, static_cast<std::size_t>(size));
-  }
-  void* mapped =
-      size <= static_cast<std::uint64_t>(PTRDIFF_MAX)
-          ? ::mmap(nullptr, static_cast<std::size_t>(size), PROT_READ, MAP_PRIVATE, fd, 0)
-          : MAP_FAILED;
+  int fd = -1;
+  std::uint64_t size = 0;
+  if (Status s = open_index_file(path, fd, size); !s) return s;
+  void* mapped = ::mmap(nullptr, static_cast<std::size_t>(size), PROT_READ, MAP_PRIVATE, fd, 0);
   ::close(fd);  // the mapping keeps the file
   if (mapped != MAP_FAILED) {
     std::unique_ptr<std::uint8_t, Release> memory(static_cast<std::uint8_t*>(mapped),
@@ -173,6 +226,16 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   }
   const auto major = load<std::uint16_t>(d + kOffMajor);
   const auto minor = load<std::uint16_t>(d + kOffMinor);
+  // Another major version is named only when the header is believable: its
+  // checksum holds (as far as this version's layout can tell) or the version
+  // is one keygraph has written or may soon write. Random bytes after the
+  // magic are damage, not "a newer keygraph".
+  if (major != kVersionMajor && !header_crc_matches(d, size) &&
+      (major == 0 || major > kVersionMajor + kPlausibleNewerMajors || minor > kPlausibleMinor)) {
+    return corrupt("header: damaged (version field " + std::to_string(major) + "." +
+                   std::to_string(minor) + " is not a keygraph version and the header checksum " +
+                   "does not match)");
+  }
   if (major != kVersionMajor) {
     const std::string version = "index format version " + std::to_string(major) + "." +
                                 std::to_string(minor) + " is not supported (this reader reads " +
@@ -202,12 +265,7 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
                                   static_cast<std::uint64_t>(section_count) * kSectionEntrySize;
   if (table_offset < static_cast<std::uint64_t>(params_offset) + params_size || table_end > size)
     return corrupt("header: section table out of bounds");
-  // Header checksum covers header, parameters and table with its own field zeroed.
-  std::uint8_t zero[4] = {0, 0, 0, 0};
-  std::uint32_t crc = crc32(d, kOffHeaderCrc);
-  crc = crc32(zero, 4, crc);
-  crc = crc32(d + kOffHeaderCrc + 4, static_cast<std::size_t>(table_end) - kOffHeaderCrc - 4, crc);
-  if (crc != load<std::uint32_t>(d + kOffHeaderCrc)) return corrupt("header: checksum mismatch");
+  if (!header_crc_matches(d, size)) return corrupt("header: checksum mismatch");
 
   Status s = parse_params(d + params_offset, params_size, params_);
   if (!s) return s;

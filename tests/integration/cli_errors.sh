@@ -122,7 +122,9 @@ if "$KG" build "$DATA/box.png" -o "$INDEX" >"$LOG/stdout" 2>"$LOG/stderr"; then
     bad "build: no 'box: N views, N keypoints, N arcs, N keygraphs, N KB alone' line in: $(cat "$LOG/stdout")"
   [ -s "$LOG/stderr" ] && bad "build: succeeded but wrote to stderr: $(cat "$LOG/stderr")"
   [ -s "$INDEX" ] || bad "build: $INDEX missing or empty"
-  [ -e "$INDEX.tmp" ] && bad "build: $INDEX.tmp left behind"
+  for f in "$INDEX.tmp" "$WORK"/.box.kgi.*; do
+    [ -e "$f" ] && bad "build: temporary $f left behind"
+  done
 else
   bad "build box.png failed: $(cat "$LOG/stderr")"
 fi
@@ -263,7 +265,7 @@ checks=$((checks + 1))
 DRAWN=$WORK/drawn.png
 if "$KG" detect --index "$INDEX" --draw "$DRAWN" "$SCENE" >"$LOG/stdout" 2>"$LOG/stderr"; then
   [ "$(head -c 4 "$DRAWN" 2>/dev/null | tail -c 3)" = PNG ] || bad "detect --draw: $DRAWN is not a PNG"
-  for f in "$WORK"/.tmp-*; do
+  for f in "$WORK"/.tmp-* "$WORK"/.drawn.png.*; do
     [ -e "$f" ] && bad "detect --draw: temporary image $f left behind"
   done
 else

@@ -1210,6 +1210,32 @@ TEST_F(ModelIndexTest, RejectsOtherMajorVersion) {
   EXPECT_EQ(index.version_minor(), 9);
 }
 
+TEST_F(ModelIndexTest, RandomBytesAfterMagicAreDamageNotANewerVersion) {
+  // The magic followed by noise (issue 15: reported as "version 57974.33130
+  // written by a newer keygraph"): the version is implausible and the header
+  // checksum fails, so it is damage.
+  std::uint32_t lcg = 2024;
+  for (int trial = 0; trial < 50; ++trial) {
+    Bytes b = bytes();
+    for (std::size_t i = sizeof(format::kMagic); i < b.size(); ++i)
+      b[i] = static_cast<std::uint8_t>((lcg = lcg * 1664525u + 1013904223u) >> 24);
+    if (load<std::uint16_t>(b.data() + format::kOffMajor) == format::kVersionMajor) continue;
+    const Status s = try_view(b);
+    ASSERT_FALSE(s.is_ok());
+    EXPECT_EQ(s.message().find("newer keygraph"), std::string::npos) << s.message();
+    EXPECT_EQ(s.message().find("rebuild"), std::string::npos) << s.message();
+  }
+  // The case of the report: version 57974.33130, header checksum wrong.
+  Bytes b = bytes();
+  store<std::uint16_t>(b.data() + format::kOffMajor, 57974);
+  store<std::uint16_t>(b.data() + format::kOffMinor, 33130);
+  EXPECT_TRUE(rejected(b, "header: damaged (version field 57974.33130 is not a keygraph version"));
+  // A plausible newer version with a broken checksum is still named.
+  b = bytes();
+  store<std::uint16_t>(b.data() + format::kOffMajor, format::kVersionMajor + 1);
+  EXPECT_TRUE(rejected(b, "newer keygraph", StatusCode::kUnsupportedVersion));
+}
+
 TEST_F(ModelIndexTest, RejectsHeaderDamage) {
   // Without a fixed CRC, any header, parameter or table byte is caught.
   for (std::size_t at : {std::size_t{format::kOffFileSize + 7}, std::size_t{format::kOffHeaderCrc},

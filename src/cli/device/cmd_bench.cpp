@@ -138,13 +138,27 @@ int cmd_bench(const Args& args) {
   if (paths.empty()) return fail("bench: no frames given (image files or directories)");
 
   ModelIndex index;
-  if (Status s = ModelIndex::open(index_path, index); !s) return fail(s.message());
+  if (Status s = ModelIndex::read(index_path, index); !s) return fail(s.message());
   if (const std::string problem = core_detector_problem(index); !problem.empty())
     return fail("bench: " + index_path + ": " + problem);
   std::vector<LoadedFrame> frames;
   if (std::string error = load_frames(paths, frames); !error.empty())
     return fail("bench: " + error);
 
+  // A frame beyond the detector's limits is skipped with a warning.
+  const auto beyond = [](const LoadedFrame& f) {
+    return f.image.width > Limits::kMaxSide || f.image.height > Limits::kMaxSide;
+  };
+  for (const LoadedFrame& f : frames) {
+    if (beyond(f)) {
+      std::fprintf(stderr,
+                   "keygraph: bench: %s: frame %dx%d is beyond the detector's limits (%d pixels "
+                   "a side), skipped\n",
+                   f.name.c_str(), f.image.width, f.image.height, Limits::kMaxSide);
+    }
+  }
+  frames.erase(std::remove_if(frames.begin(), frames.end(), beyond), frames.end());
+  if (frames.empty()) return fail("bench: no frame within the detector's limits");
   // One workspace for the largest frame, allocated before any timing.
   int width = 1, height = 1;
   for (const LoadedFrame& f : frames) {

@@ -14,19 +14,6 @@
 
 namespace kg::cli {
 
-namespace {
-
-// With several scenes, --draw OUT.pgm becomes OUT_<scene stem>.pgm.
-std::string draw_path(const std::string& draw, const std::string& scene, bool several) {
-  if (!several) return draw;
-  const std::filesystem::path p(draw);
-  return (p.parent_path() /
-          (p.stem().string() + "_" + std::filesystem::path(scene).stem().string() + ".pgm"))
-      .string();
-}
-
-}  // namespace
-
 int cmd_detect_files(const Args& args) {
   std::string index_path, draw;
   bool json = false;
@@ -48,8 +35,17 @@ int cmd_detect_files(const Args& args) {
   if (scenes.empty()) return fail("detect: no scene images given");
   if (!draw.empty() && std::filesystem::path(draw).extension() != ".pgm")
     return fail("detect: --draw " + draw + ": this build writes PGM only (use a .pgm name)");
+  std::vector<std::string> drawn;
+  if (!draw.empty()) {
+    if (std::string error = draw_paths(draw, scenes, drawn); !error.empty())
+      return fail("detect: " + error);
+  }
+  // Read into memory, not mapped: an index changed in place meanwhile
+  // cannot crash the process (model_index.h).
   ModelIndex index;
-  if (Status s = ModelIndex::open(index_path, index); !s) return fail(s.message());
+  if (Status s = ModelIndex::read(index_path, index); !s) return fail(s.message());
+  std::vector<std::string> inputs = scenes;
+  inputs.push_back(index_path);
   if (const std::string problem = core_detector_problem(index); !problem.empty())
     return fail("detect: " + index_path + ": " + problem);
 
@@ -57,13 +53,17 @@ int cmd_detect_files(const Args& args) {
   DetectionList found;
   platform::GrayImage scene_image, canvas;
   int exit_code = 0;
-  for (const std::string& scene : scenes) {
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    const std::string& scene = scenes[i];
     if (Status s = platform::read_image(scene, scene_image); !s) {
       exit_code = fail(s.message());
       continue;
     }
     const ImageView view = scene_image.view();
-    if (const Status& fit = fit_detector(detector, view); !fit) return fail(fit.message());
+    if (const Status fit = fit_detector(detector, view); !fit) {
+      exit_code = fail(scene + ": " + fit.message());
+      continue;
+    }
     const auto start = std::chrono::steady_clock::now();
     const Status s = detector.detect(view, found);
     const double ms =
@@ -76,9 +76,8 @@ int cmd_detect_files(const Args& args) {
     std::fflush(stdout);
     if (!draw.empty()) {
       draw_outlines(view, found, canvas);
-      if (Status w = platform::write_pgm(draw_path(draw, scene, scenes.size() > 1), canvas.view());
-          !w)
-        exit_code = fail(w.message());
+      if (Status w = platform::write_pgm(drawn[i], canvas.view(), inputs); !w)
+        exit_code = fail("detect: --draw " + w.message());
     }
   }
   return exit_code;

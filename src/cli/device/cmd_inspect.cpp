@@ -8,8 +8,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
-#include <iterator>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -20,12 +18,16 @@
 #include "core/index_format.h"
 #include "core/param_names.h"
 #include "keygraph/model_index.h"
+#include "platform/files/regular_file.h"
 
 namespace kg::cli {
 
 namespace {
 
 using namespace format;
+
+// The most of a damaged file read to show its layout.
+constexpr std::size_t kMaxRawBytes = std::size_t{1} << 30;
 
 template <class E, class = std::enable_if_t<std::is_enum_v<E>>>
 std::string value_text(E v) {
@@ -174,18 +176,22 @@ int cmd_inspect(const Args& args) {
   // Validation first, through the reader the detector uses (it also rejects
   // directories and missing files with a clear message).
   ModelIndex index;
-  const Status status = ModelIndex::open(path, index);
+  // Read into memory, never mapped: no SIGBUS if the file shrinks meanwhile.
+  const Status status = ModelIndex::read(path, index);
+  // The raw bytes of a file the reader could open (never a FIFO or device,
+  // which it refuses), to show its layout even when it is damaged.
   std::vector<std::uint8_t> bytes;
-  if (status.code() != StatusCode::kNotFound && status.code() != StatusCode::kInvalidArgument) {
-    std::ifstream in(path, std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  if (status || status.code() == StatusCode::kCorruptData ||
+      status.code() == StatusCode::kUnsupportedVersion) {
+    if (!platform::read_regular_file(path, bytes,
+                                     index.byte_size() > 0 ? index.byte_size() : kMaxRawBytes))
+      bytes.clear();
   }
   std::printf("index: %s\n", path.c_str());
   const bool shown = print_layout(bytes);
   std::fflush(stdout);
   if (!status) return fail(status.message());
   if (!shown) return fail(path + ": cannot read the section table");
-  std::printf("mapped: %s\n", index.is_mapped() ? "yes" : "no (read into memory)");
   print_index(index);
   return 0;
 }

@@ -11,8 +11,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <system_error>
+
+#include <sys/stat.h>
 
 #include "cli/device/detector_fit.h"
 #include "cli/device/device_commands.h"
@@ -85,7 +88,8 @@ std::string parse(const Args& args, LiveOptions& o) {
       } else if (a == "--draw") {
         o.draw_dir = v;
       } else if (a == "--frames") {
-        if (!parse_int(v, 1, 1 << 30, o.max_frames)) return "--frames " + v + ": not a count >= 1";
+        if (!parse_int(v, 1, 1 << 30, o.max_frames))
+          return "--frames " + v + ": not a count in 1.." + std::to_string(1 << 30);
       } else if (!parse_size(v, o.width, o.height)) {
         return "--size " + v + ": expected WIDTHxHEIGHT, e.g. 640x480";
       } else {
@@ -163,6 +167,82 @@ std::unique_ptr<platform::FrameSource> make_source(const LiveOptions& o, std::st
   return nullptr;
 }
 
+// What names the index file: when the path names another file (replaced by
+// a rename, or rewritten in place by cp or scp), live loads it again.
+struct FileIdentity {
+  dev_t device = 0;
+  ino_t inode = 0;
+  off_t size = 0;
+  timespec modified{};
+  bool operator==(const FileIdentity& o) const {
+    return device == o.device && inode == o.inode && size == o.size &&
+           modified.tv_sec == o.modified.tv_sec && modified.tv_nsec == o.modified.tv_nsec;
+  }
+};
+
+FileIdentity identity_of(const std::string& path) {
+  struct stat info {};
+  if (::stat(path.c_str(), &info) != 0) return {};
+  return {info.st_dev, info.st_ino, info.st_size, info.st_mtim};
+}
+
+// Loads the index at `path` into `index` (read into memory, never mapped:
+// the file may be rewritten in place while live runs; model_index.h).
+Status load_index(const std::string& path, ModelIndex& index) {
+  ModelIndex loaded;
+  if (Status s = ModelIndex::read(path, loaded); !s) return s;
+  if (const std::string problem = core_detector_problem(loaded); !problem.empty())
+    return {StatusCode::kInvalidArgument, path + ": " + problem};
+  index = std::move(loaded);
+  return Status::ok();
+}
+
+// The index live detects with, reloaded between frames when its file
+// changes. A file that cannot be loaded (e.g. half copied) leaves the
+// loaded index in use, with one line on stderr until a load succeeds.
+class LiveIndex {
+ public:
+  explicit LiveIndex(std::string path) : path_(std::move(path)) {}
+  Status load() {
+    loaded_ = identity_of(path_);
+    last_seen_ = loaded_;
+    return load_index(path_, index_);
+  }
+  const ModelIndex& index() const { return index_; }
+  // Between frames: true when the index was reloaded (the detector must be
+  // rebuilt on it). One stat() call when nothing changed.
+  bool reload_if_changed() {
+    const FileIdentity now = identity_of(path_);
+    if (now == loaded_ || now == last_seen_) return false;
+    last_seen_ = now;
+    ModelIndex fresh;
+    if (Status s = load_index(path_, fresh); !s) {
+      // Once until a load succeeds: a file being copied changes (and fails
+      // to load) frame after frame.
+      if (failure_reported_) return false;
+      failure_reported_ = true;
+      std::fprintf(stderr,
+                   "keygraph: live: index changed but not reloaded (keeping the loaded one): %s\n",
+                   s.message().c_str());
+      return false;
+    }
+    // The file may have changed again while it was read: compare with what
+    // is there now, next frame.
+    loaded_ = now;
+    failure_reported_ = false;
+    index_ = std::move(fresh);
+    std::fprintf(stderr, "live: index %s changed: reloaded (%d models)\n", path_.c_str(),
+                 index_.model_count());
+    return true;
+  }
+
+ private:
+  std::string path_;
+  ModelIndex index_;
+  FileIdentity loaded_, last_seen_;
+  bool failure_reported_ = false;
+};
+
 // Frames per second over the last report interval (about a second).
 class RateMeter {
  public:
@@ -193,10 +273,8 @@ class RateMeter {
 int cmd_live(const Args& args) {
   LiveOptions o;
   if (std::string error = parse(args, o); !error.empty()) return fail("live: " + error);
-  ModelIndex index;
-  if (Status s = ModelIndex::open(o.index_path, index); !s) return fail(s.message());
-  if (const std::string problem = core_detector_problem(index); !problem.empty())
-    return fail("live: " + o.index_path + ": " + problem);
+  LiveIndex live_index(o.index_path);
+  if (Status s = live_index.load(); !s) return fail("live: " + s.message());
   std::string error;
   std::unique_ptr<platform::FrameSource> source = make_source(o, error);
   if (source == nullptr) return fail("live: " + error);
@@ -205,13 +283,25 @@ int cmd_live(const Args& args) {
   // Everything the loop needs is allocated here, before the first frame.
   // The workspace is allocated here for 640x480 and again, once, if the
   // first frame (or a later, larger one) needs more.
-  Detector detector(index);
+  Detector detector(live_index.index());
   DetectionList found;
   platform::GrayImage canvas;
   std::string name;
 
   const StopSignal stop;
   if (Status s = source->start(); !s) return fail("live: " + s.message());
+  if (files != nullptr && !o.draw_dir.empty()) {
+    // One picture per image file, named after its stem: two files with one
+    // stem (x.png, x.pgm) would overwrite each other's picture.
+    std::map<std::string, const std::string*> by_stem;
+    for (const std::string& f : files->files()) {
+      const auto [it, inserted] = by_stem.emplace(fs::path(f).stem().string(), &f);
+      if (!inserted && *it->second != f)
+        return fail("live: --draw: " + *it->second + " and " + f + " would both be drawn to " +
+                    (fs::path(o.draw_dir) / (it->first + ".pgm")).string() +
+                    "; give the images distinct names");
+    }
+  }
   std::fprintf(stderr, "live: %s\n", source->description().c_str());
 
   const Clock::time_point start = Clock::now();
@@ -219,7 +309,19 @@ int cmd_live(const Args& args) {
   Clock::time_point last_frame = start;
   std::uint64_t frames = 0, with_detections = 0;
   int bad_frames = 0;
+  // Bad frames in a row: a whole pass of a looping file source without one
+  // good frame would otherwise loop for ever.
+  std::size_t bad_in_a_row = 0;
   std::string stopped_by = "end of the images";
+  // Counts and shows a skipped frame; true when, with --loop, a whole pass
+  // of the image files had no usable frame (the loop would never end).
+  auto skip_frame = [&](const std::string& why) {
+    if (++bad_frames <= kShownBadFrames) {
+      std::fprintf(stderr, "keygraph: live: %s (frame skipped%s)\n", why.c_str(),
+                   bad_frames == kShownBadFrames ? "; further bad frames are only counted" : "");
+    }
+    return files != nullptr && o.loop && ++bad_in_a_row >= files->files().size();
+  };
   int exit_code = 0;
   for (;;) {
     if (const int sig = StopSignal::received(); sig != 0) {
@@ -241,9 +343,11 @@ int cmd_live(const Args& args) {
     }
     if (platform::is_end_of_stream(s)) break;
     if (platform::is_bad_frame(s)) {
-      if (++bad_frames <= kShownBadFrames) {
-        std::fprintf(stderr, "keygraph: live: %s (frame skipped%s)\n", s.message().c_str(),
-                     bad_frames == kShownBadFrames ? "; further bad frames are only counted" : "");
+      if (skip_frame(s.message())) {
+        exit_code = fail("live: none of the " + std::to_string(files->files().size()) +
+                         " image files could be read");
+        stopped_by.clear();
+        break;
       }
       continue;
     }
@@ -254,8 +358,25 @@ int cmd_live(const Args& args) {
     }
     last_frame = Clock::now();
 
-    if (const Status& fit = fit_detector(detector, frame.image); !fit)
-      return fail("live: " + fit.message());
+    if (live_index.reload_if_changed()) {
+      detector = Detector(live_index.index(), detector.limits());
+      if (!detector.status()) {
+        exit_code = fail("live: " + detector.status().message());
+        stopped_by.clear();
+        break;
+      }
+    }
+    if (const Status fit = fit_detector(detector, frame.image); !fit) {
+      if (skip_frame((files != nullptr ? files->last_path() + ": " : std::string()) +
+                     fit.message())) {
+        exit_code = fail("live: none of the " + std::to_string(files->files().size()) +
+                         " image files is within the detector's limits");
+        stopped_by.clear();
+        break;
+      }
+      continue;
+    }
+    bad_in_a_row = 0;
     const Status d = detector.detect(frame.image, found);
     const Clock::time_point done = Clock::now();
     const double ms = std::chrono::duration<double, std::milli>(done - last_frame).count();
@@ -276,7 +397,11 @@ int cmd_live(const Args& args) {
     if (std::fflush(stdout) != 0) {
       // A closed pipe (e.g. `| head`) is a normal way to stop.
       stopped_by = "stdout closed";
-      if (errno != EPIPE) exit_code = fail("live: cannot write to stdout");
+      if (errno != EPIPE) {
+        exit_code = fail("live: cannot write to stdout");
+      } else {
+        stdout_closed_by_reader();
+      }
       break;
     }
     if (!o.draw_dir.empty()) {
@@ -285,7 +410,10 @@ int cmd_live(const Args& args) {
       std::snprintf(numbered, sizeof(numbered), "frame_%06" PRIu64 ".pgm", frame.sequence);
       const fs::path out = fs::path(o.draw_dir) /
                            (files != nullptr ? fs::path(name).stem().string() + ".pgm" : numbered);
-      if (Status w = platform::write_pgm(out.string(), canvas.view()); !w) {
+      const std::vector<std::string> inputs = files != nullptr
+                                                  ? std::vector<std::string>{name, o.index_path}
+                                                  : std::vector<std::string>{o.index_path};
+      if (Status w = platform::write_pgm(out.string(), canvas.view(), inputs); !w) {
         exit_code = fail("live: " + w.message());
         stopped_by.clear();
         break;

@@ -1,7 +1,11 @@
 #include "cli/device/command_line.h"
 
+#include <cerrno>
 #include <charconv>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <map>
 
 namespace kg::cli {
 
@@ -24,6 +28,49 @@ bool parse_size(const std::string& text, int& width, int& height) {
   if (x == std::string::npos) return false;
   return parse_int(text.substr(0, x), 1, 32768, width) &&
          parse_int(text.substr(x + 1), 1, 32768, height);
+}
+
+std::string draw_paths(const std::string& draw, const std::vector<std::string>& scenes,
+                       std::vector<std::string>& out) {
+  namespace fs = std::filesystem;
+  out.clear();
+  std::map<std::string, const std::string*> drawn_from;
+  for (const std::string& scene : scenes) {
+    std::string path = draw;
+    if (scenes.size() > 1) {
+      const fs::path p(draw);
+      path = (p.parent_path() /
+              (p.stem().string() + "_" + fs::path(scene).stem().string() + p.extension().string()))
+                 .string();
+    }
+    const auto [it, inserted] = drawn_from.emplace(path, &scene);
+    if (!inserted && *it->second != scene) {
+      return "--draw: " + *it->second + " and " + scene + " would both be drawn to " + path +
+             "; give the scenes distinct names";
+    }
+    out.push_back(std::move(path));
+  }
+  return {};
+}
+
+namespace {
+bool g_stdout_closed = false;
+}  // namespace
+
+void stdout_closed_by_reader() {
+  g_stdout_closed = true;
+}
+
+int check_stdout(int exit_code) {
+  if (g_stdout_closed) return exit_code;
+  errno = 0;
+  const bool flushed = std::fflush(stdout) == 0;
+  const int err = errno;
+  if (flushed && !std::ferror(stdout)) return exit_code;
+  if (exit_code != 0) return exit_code;  // the command's own error line stands
+  return fail(std::string("cannot write to stdout") +
+              (!flushed && err != 0 ? std::string(": ") + std::strerror(err) : "") +
+              " (output lost)");
 }
 
 }  // namespace kg::cli

@@ -18,4 +18,19 @@ bool parse_int(const std::string& text, int min, int max, int& out);
 // "WIDTHxHEIGHT", both in 1..32768.
 bool parse_size(const std::string& text, int& width, int& height);
 
+// The --draw file of each scene: `draw` itself for one scene; with several,
+// OUT_<scene stem><ext> for --draw OUT<ext>. Returns an error message when
+// two scenes would be drawn to one file (same stem in two directories),
+// else empty.
+std::string draw_paths(const std::string& draw, const std::vector<std::string>& scenes,
+                       std::vector<std::string>& out);
+
+// To call when stdout was closed by its reader (EPIPE), a normal way to
+// stop: check_stdout() then neither writes nor reports.
+void stdout_closed_by_reader();
+// Flushes stdout and checks that everything written to it arrived. Returns
+// `exit_code`, or 1 after one error line when the command succeeded but its
+// output was lost (e.g. a full disk).
+int check_stdout(int exit_code);
+
 }  // namespace kg::cli

@@ -1,0 +1,185 @@
+// The file helpers behind the CLI's guarantees (issue 15): inputs opened
+// only as regular files, never blocking; PGM sizes checked before pixels are
+// allocated; truncated JPEGs told from whole ones (real opencv-doc JPEGs cut
+// at every 5 %); outputs written whole or not at all, never over a device
+// node or an input.
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "platform/files/image_limits.h"
+#include "platform/files/jpeg_structure.h"
+#include "platform/files/output_file.h"
+#include "platform/files/pgm.h"
+#include "platform/files/regular_file.h"
+
+namespace kg::platform {
+namespace {
+namespace fs = std::filesystem;
+
+class TempDir {
+ public:
+  TempDir() {
+    std::string tmpl = (fs::temp_directory_path() / "kg-safety-XXXXXX").string();
+    const char* made = ::mkdtemp(tmpl.data());
+    if (made != nullptr) path_ = made;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    if (!path_.empty()) fs::remove_all(path_, ec);
+  }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+  // Every entry's name, sorted.
+  std::vector<std::string> names() const {
+    std::vector<std::string> out;
+    for (const auto& e : fs::directory_iterator(path_)) out.push_back(e.path().filename());
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+
+ private:
+  fs::path path_;
+};
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TEST(RegularFile, NamesWhatAPathIsWithoutBlocking) {
+  TempDir dir;
+  ASSERT_EQ(::mkfifo(dir.file("fifo").c_str(), 0600), 0);
+  fs::create_directory(dir.file("dir"));
+  fs::create_symlink("loop_b", dir.file("loop_a"));
+  fs::create_symlink("loop_a", dir.file("loop_b"));
+  std::vector<std::uint8_t> bytes;
+  const struct {
+    std::string path;
+    const char* says;
+  } cases[] = {{dir.file("fifo"), ": is a FIFO"},
+               {dir.file("dir"), ": is a directory"},
+               {"/dev/zero", ": is a character device"},
+               {dir.file("loop_a"), ": too many levels of symbolic links"},
+               {dir.file("missing"), ": no such file"}};
+  for (const auto& c : cases) {
+    const Status s = read_regular_file(c.path, bytes, 1000);
+    ASSERT_FALSE(s) << c.path;
+    EXPECT_EQ(s.message(), c.path + c.says);
+  }
+  std::ofstream(dir.file("big"), std::ios::binary) << std::string(1001, 'x');
+  const Status s = read_regular_file(dir.file("big"), bytes, 1000);
+  EXPECT_EQ(s.code(), StatusCode::kResourceExhausted) << s.message();
+  ASSERT_TRUE(read_regular_file(dir.file("big"), bytes, 1001));
+  EXPECT_EQ(bytes.size(), 1001u);
+}
+
+TEST(Pgm, DeclaredSizeOverTheLimitIsRefusedBeforeAllocating) {
+  // 16384 x 16384 declared, 10 bytes of pixels: refused for its size (not
+  // as truncated), and `out` never grew.
+  const std::string file = "P5\n16384 16384\n255\n" + std::string(10, '\0');
+  GrayImage out;
+  const Status s =
+      decode_pgm(reinterpret_cast<const std::uint8_t*>(file.data()), file.size(), "bomb.pgm", out);
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.message(), "bomb.pgm: PGM size 16384x16384 is over " +
+                             std::to_string(kMaxImagePixels) + " pixels (the limit)");
+  EXPECT_EQ(out.pixels.capacity(), 0u);
+  // At the limit (4096 x 4096) the size is fine and the missing pixels are
+  // what is wrong.
+  const std::string at_limit = "P5\n4096 4096\n255\n" + std::string(10, '\0');
+  const Status t = decode_pgm(reinterpret_cast<const std::uint8_t*>(at_limit.data()),
+                              at_limit.size(), "limit.pgm", out);
+  EXPECT_NE(t.message().find("truncated PGM"), std::string::npos) << t.message();
+}
+
+TEST(Jpeg, TruncatedFilesAreToldFromWholeOnes) {
+  const fs::path data = KG_OPENCV_DATA_DIR;
+  int files = 0;
+  for (const char* name : {"fruits.jpg", "blox.jpg", "leuvenA.jpg", "baboon.jpg"}) {
+    std::vector<std::uint8_t> jpeg;
+    if (!read_regular_file((data / name).string(), jpeg, 1 << 24)) continue;
+    ++files;
+    ASSERT_TRUE(is_jpeg(jpeg.data(), jpeg.size())) << name;
+    EXPECT_TRUE(jpeg_is_complete(jpeg.data(), jpeg.size())) << name;
+    for (int pct = 5; pct < 100; pct += 5) {
+      const std::size_t cut = jpeg.size() * static_cast<std::size_t>(pct) / 100;
+      EXPECT_FALSE(jpeg_is_complete(jpeg.data(), cut)) << name << " cut at " << pct << " %";
+    }
+    EXPECT_FALSE(jpeg_is_complete(jpeg.data(), jpeg.size() - 1))
+        << name << " without its last byte";
+    // Data after the end-of-image marker (e.g. a motion photo's video).
+    std::vector<std::uint8_t> trailing = jpeg;
+    trailing.insert(trailing.end(), 1000, 0xAB);
+    EXPECT_TRUE(jpeg_is_complete(trailing.data(), trailing.size()))
+        << name << " with trailing data";
+  }
+  EXPECT_GE(files, 2) << "opencv-doc JPEGs missing from " << data;
+}
+
+TEST(OutputFile, WritesWholeOrNothingThroughAUniqueTemporary) {
+  TempDir dir;
+  const std::string target = dir.file("out.kgi");
+  std::ofstream(dir.file("out.kgi.tmp")) << "user's file";
+  {
+    OutputFile out;
+    ASSERT_TRUE(out.create(target));
+    EXPECT_EQ(fs::path(out.temp_path()).parent_path(), fs::path(target).parent_path());
+    ASSERT_TRUE(out.write("abc", 3));
+    EXPECT_FALSE(fs::exists(target)) << "visible before commit";
+  }  // destroyed uncommitted: discarded
+  EXPECT_EQ(dir.names(), std::vector<std::string>{"out.kgi.tmp"});
+  OutputFile a, b;  // two writers to one target: two temporaries
+  ASSERT_TRUE(a.create(target));
+  ASSERT_TRUE(b.create(target));
+  EXPECT_NE(a.temp_path(), b.temp_path());
+  ASSERT_TRUE(a.write("first", 5));
+  ASSERT_TRUE(b.write("second", 6));
+  ASSERT_TRUE(a.commit());
+  EXPECT_EQ(read_text(target), "first");
+  ASSERT_TRUE(b.commit());
+  EXPECT_EQ(read_text(target), "second");
+  EXPECT_EQ(read_text(dir.file("out.kgi.tmp")), "user's file");
+  EXPECT_EQ(dir.names(), (std::vector<std::string>{"out.kgi", "out.kgi.tmp"}));
+}
+
+TEST(OutputFile, NeverReplacesANonRegularFileOrAnInput) {
+  TempDir dir;
+  ASSERT_EQ(::mkfifo(dir.file("fifo").c_str(), 0600), 0);
+  fs::create_directory(dir.file("dir"));
+  OutputFile out;
+  Status s = out.create(dir.file("fifo"));
+  EXPECT_EQ(s.message(), dir.file("fifo") + ": is a FIFO; outputs replace regular files only");
+  s = out.create(dir.file("dir"));
+  EXPECT_NE(s.message().find(": is a directory"), std::string::npos) << s.message();
+  std::ofstream(dir.file("in.png")) << "input";
+  fs::create_symlink("in.png", dir.file("link.png"));
+  s = out.create(dir.file("link.png"), {dir.file("other.png"), dir.file("in.png")});
+  EXPECT_EQ(s.message(), dir.file("link.png") + ": is also an input (" + dir.file("in.png") +
+                             "); choose another output");
+  EXPECT_EQ(read_text(dir.file("in.png")), "input");
+  EXPECT_EQ(dir.names(), (std::vector<std::string>{"dir", "fifo", "in.png", "link.png"}));
+  if (::geteuid() == 0) {
+    // A character device (as /dev/null is): refused, not replaced.
+    ASSERT_EQ(::mknod(dir.file("null").c_str(), S_IFCHR | 0666, makedev(1, 3)), 0);
+    s = out.create(dir.file("null"));
+    EXPECT_NE(s.message().find(": is a character device"), std::string::npos) << s.message();
+    struct stat st {};
+    ASSERT_EQ(::stat(dir.file("null").c_str(), &st), 0);
+    EXPECT_TRUE(S_ISCHR(st.st_mode));
+  } else {
+    GTEST_SKIP() << "device node case needs root (mknod)";
+  }
+}
+
+}  // namespace
+}  // namespace kg::platform
