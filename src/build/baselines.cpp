@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <sstream>
 
 #include <opencv2/calib3d.hpp>
 
@@ -35,6 +36,20 @@ std::string baseline_name(const BaselineOptions& o) {
                   : o.features == BaselineFeatures::kOrb ? "orb"
                                                          : "akaze";
   return std::string(f) + (o.estimator == BaselineEstimator::kRansac ? "-ransac" : "-magsac");
+}
+
+std::vector<std::string> method_list(const std::string& comma_separated) {
+  std::vector<std::string> out;
+  std::stringstream in(comma_separated);
+  for (std::string m; std::getline(in, m, ',');) {
+    if (m != "all") {
+      out.push_back(m);
+      continue;
+    }
+    out.push_back("keygraph");
+    for (const std::string& b : baseline_names()) out.push_back(b);
+  }
+  return out;
 }
 
 std::vector<std::string> baseline_names() {

@@ -37,6 +37,9 @@ struct BaselineOptions {
 bool parse_baseline(const std::string& name, BaselineOptions& out);
 std::string baseline_name(const BaselineOptions& options);
 std::vector<std::string> baseline_names();
+// The methods of a comma-separated --methods list, "all" standing for
+// keygraph and every baseline.
+std::vector<std::string> method_list(const std::string& comma_separated);
 
 // One model found in a frame.
 struct BaselineDetection {

@@ -53,20 +53,6 @@ std::vector<std::string> split(const std::string& v) {
   return out;
 }
 
-// "all": keygraph and every baseline.
-std::vector<std::string> expand_methods(const std::vector<std::string>& names) {
-  std::vector<std::string> out;
-  for (const std::string& m : names) {
-    if (m != "all") {
-      out.push_back(m);
-      continue;
-    }
-    out.push_back("keygraph");
-    for (const std::string& b : baseline_names()) out.push_back(b);
-  }
-  return out;
-}
-
 }  // namespace
 
 int cmd_eval(const Args& args) {
@@ -109,7 +95,7 @@ int cmd_eval(const Args& args) {
         Status s = apply_param_override(v, options.params);
         if (!s) return fail("eval: " + s.message());
       } else if (a == "--methods") {
-        methods = expand_methods(split(v));
+        methods = method_list(v);
       } else if (a == "--csv") {
         csv = v;
       } else if (a == "--out") {

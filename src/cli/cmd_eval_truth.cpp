@@ -8,7 +8,6 @@
 // whole run succeeds.
 #include <cstdio>
 #include <filesystem>
-#include <sstream>
 
 #include "build/baselines.h"
 #include "build/param_overrides.h"
@@ -33,20 +32,6 @@ void clear_progress() {
   progress_shown = false;
 }
 
-std::vector<std::string> methods_from(const std::string& list) {
-  std::vector<std::string> out;
-  std::stringstream in(list);
-  for (std::string m; std::getline(in, m, ',');) {
-    if (m != "all") {
-      out.push_back(m);
-      continue;
-    }
-    out.push_back("keygraph");
-    for (const std::string& b : baseline_names()) out.push_back(b);
-  }
-  return out;
-}
-
 }  // namespace
 
 int cmd_eval_truth(const Args& args) {
@@ -67,7 +52,7 @@ int cmd_eval_truth(const Args& args) {
     } else if (a == "--index") {
       options.index = v;
     } else if (a == "--methods") {
-      options.methods = methods_from(v);
+      options.methods = method_list(v);
     } else if (a == "--tolerance") {
       char* end = nullptr;
       options.tolerance = std::strtod(v.c_str(), &end);
