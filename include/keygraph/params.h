@@ -67,9 +67,9 @@ struct GraphParams {
   // Chebyshev distances, pixels. Paper: 10, 100 and 10. The shorter minimum
   // arc and sampling distance (7) let a small sign carry enough keypoints
   // and arcs for several 3-circuits; with model views, on the project's
-  // sign benchmark (seed 1, 100 frames) they find 53.8 % of the signs
-  // within 10 px against 41.0 % at 10, with as few false detections
-  // (docs/RESULTS.md, "Model views and small signs").
+  // sign benchmark (seed 1, 100 frames, one sign in the index) they find
+  // 51.3 % of the signs within 10 px against 46.2 % at 10, with as few
+  // false detections (docs/RESULTS.md, "Model views and small signs").
   float min_distance = 7.f;           // model arcs (in view pixels) and scene arcs
   float max_distance = 100.f;         // model arcs only
   float scene_sample_distance = 7.f;  // scene keypoint sampling
