@@ -163,7 +163,6 @@ void add_arcs(const std::vector<Keypoint>& points, const std::vector<std::uint32
 // views that land within a view-dependent radius.
 class ModelKeypointSet {
  public:
-  ModelKeypointSet(int width, int height) : width_(width), height_(height) {}
   // The model keypoint within `radius` model pixels of p, or a new one.
   std::uint32_t add(Point2f p, float sigma, float radius, std::uint8_t code, bool& added) {
     const int cx = cell(p.x), cy = cell(p.y);
@@ -205,7 +204,6 @@ class ModelKeypointSet {
   std::int64_t key(int x, int y) const {
     return (static_cast<std::int64_t>(y) << 32) ^ static_cast<std::uint32_t>(x);
   }
-  int width_, height_;
   std::vector<Point2f> points_;
   std::vector<float> sigmas_;
   std::vector<std::array<std::uint8_t, 2>> views_;
@@ -218,7 +216,7 @@ class ModelKeypointSet {
 // attributes in view pixels, between model keypoint ids.
 Status build_views(const cv::Mat& gray, const Params& params, BuiltModel& out) {
   const std::vector<ModelView> views = model_views(gray.cols, gray.rows, params.views, 1);
-  ModelKeypointSet set(gray.cols, gray.rows);
+  ModelKeypointSet set;
   KeypointExtractor extractor;
   ArcDescriber describer(params.descriptor);
   std::vector<std::vector<std::uint32_t>> arcs_by_from;
