@@ -21,84 +21,23 @@
 
 #include "build/desktop_detect.h"
 #include "build/model_builder.h"
+#include "opencv_scenes.h"
 #include "test_data.h"
 
 namespace kg {
 namespace {
 
-// The graf model: a 300x300 crop of graf1.png at (200, 150).
-constexpr int kCropX = 200, kCropY = 150, kCropSize = 300;
-
-struct AlignedIndex {
-  std::unique_ptr<std::uint8_t[]> storage;
-  ModelIndex index;
-};
+using test::graf_crop;
+using test::graf_truth;
+using test::max_corner_error;
+using test::sift_reference;
+using AlignedIndex = test::InMemoryIndex;
 
 // Builds models into an in-memory index (viewed from aligned memory).
 void build_index(const std::vector<std::pair<std::string, cv::Mat>>& images, const Params& params,
                  AlignedIndex& out) {
-  std::vector<BuiltModel> models(images.size());
-  for (std::size_t i = 0; i < images.size(); ++i)
-    ASSERT_TRUE(build_model(images[i].second, images[i].first, params, models[i]).is_ok());
-  std::vector<std::uint8_t> bytes;
-  ASSERT_TRUE(serialize_index(models, params, bytes).is_ok());
-  out.storage.reset(new std::uint8_t[bytes.size() + 64]);
-  auto addr = reinterpret_cast<std::uintptr_t>(out.storage.get());
-  std::uint8_t* aligned = out.storage.get() + ((64 - addr % 64) % 64);
-  std::memcpy(aligned, bytes.data(), bytes.size());
-  const Status s = ModelIndex::view(aligned, bytes.size(), out.index);
+  const Status s = test::build_in_memory(images, params, out);
   ASSERT_TRUE(s.is_ok()) << s.message();
-}
-
-cv::Mat graf_crop() {
-  const cv::Mat graf1 = test::load_gray(test::opencv_data("graf1.png"));
-  return graf1(cv::Rect(kCropX, kCropY, kCropSize, kCropSize)).clone();
-}
-
-// Ground truth model -> graf3: H1to3p * T(crop offset).
-Homography graf_truth() {
-  cv::FileStorage fs(test::opencv_data("H1to3p.xml"), cv::FileStorage::READ);
-  cv::Mat h;
-  fs["H13"] >> h;
-  h.convertTo(h, CV_64F);
-  const cv::Mat t = (cv::Mat_<double>(3, 3) << 1, 0, kCropX, 0, 1, kCropY, 0, 0, 1);
-  const cv::Mat g = h * t;
-  Homography out;
-  for (int i = 0; i < 9; ++i) out[i] = g.at<double>(i / 3, i % 3);
-  return out;
-}
-
-double max_corner_error(const Detection& d, const Homography& truth, const ModelInfo& m) {
-  double worst = 0.0;
-  for (int c = 0; c < 4; ++c) {
-    const Point2f g = kg::apply(truth, m.outline[c]);
-    worst = std::max(worst, std::hypot(double{g.x} - d.corners[c].x, double{g.y} - d.corners[c].y));
-  }
-  return worst;
-}
-
-// Independent reference for box -> box_in_scene: SIFT, ratio test, RANSAC.
-Homography sift_reference(const cv::Mat& model, const cv::Mat& scene) {
-  cv::Ptr<cv::SIFT> sift = cv::SIFT::create();
-  std::vector<cv::KeyPoint> km, ks;
-  cv::Mat dm, ds;
-  sift->detectAndCompute(model, cv::noArray(), km, dm);
-  sift->detectAndCompute(scene, cv::noArray(), ks, ds);
-  cv::BFMatcher matcher(cv::NORM_L2);
-  std::vector<std::vector<cv::DMatch>> knn;
-  matcher.knnMatch(dm, ds, knn, 2);
-  std::vector<cv::Point2f> pm, ps;
-  for (const auto& m : knn) {
-    if (m.size() == 2 && m[0].distance < 0.7f * m[1].distance) {
-      pm.push_back(km[m[0].queryIdx].pt);
-      ps.push_back(ks[m[0].trainIdx].pt);
-    }
-  }
-  cv::Mat h = cv::findHomography(pm, ps, cv::RANSAC, 3.0);
-  Homography out{};
-  if (h.empty()) return out;
-  for (int i = 0; i < 9; ++i) out[i] = h.at<double>(i / 3, i % 3);
-  return out;
 }
 
 class Detection2Models : public ::testing::Test {

@@ -1,0 +1,129 @@
+// Recall must not fall with the size of the index (issue 13, point 3): the
+// same two objects (the graf crop, with ground truth in graf3, and box,
+// against an independent SIFT + RANSAC pose in box_in_scene) are found, at
+// the same place and under their own names, with 0, 10, 50 and 200 other
+// models in the index (240x240 tiles of unrelated opencv-doc photos), and
+// once each with 20 copies of themselves. Each case prints the index's
+// arcs and the frame's keygraph correspondences, which fall as the index
+// grows (the search visits a fixed number of tree leaves per query:
+// docs/RESULTS.md, "Index size and recall"); what is asserted is the
+// detection. Timing per index size: tests/bench/bench_index_size.cpp.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "build/desktop_detect.h"
+#include "build/model_builder.h"
+#include "opencv_scenes.h"
+#include "test_data.h"
+
+namespace kg {
+namespace {
+
+constexpr int kMostOthers = 200;
+
+struct Target {
+  const char* name;
+  const char* scene;
+  double tolerance;  // px, against the reference pose
+};
+// Graf against ground truth; box against SIFT + RANSAC (itself good to a
+// few pixels: test_detection.cpp allows 8).
+constexpr Target kTargets[] = {{"graf-crop", "graf3.png", 5.0}, {"box", "box_in_scene.png", 8.0}};
+
+class SearchRecall : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+    const cv::Mat graf = test::graf_crop();
+    ASSERT_FALSE(box.empty() || graf.empty());
+    targets_ = new std::vector<BuiltModel>(2);
+    ASSERT_TRUE(build_model(graf, "graf-crop", Params{}, (*targets_)[0]).is_ok());
+    ASSERT_TRUE(build_model(box, "box", Params{}, (*targets_)[1]).is_ok());
+    // The first 200 tiles the builder accepts (it refuses the few without
+    // keypoints, e.g. chessboard squares).
+    const auto tiles = test::distractor_tiles(kMostOthers + 40);
+    others_ = new std::vector<BuiltModel>;
+    for (std::size_t i = 0; i < tiles.size() && others_->size() < kMostOthers; ++i) {
+      BuiltModel model;
+      if (build_model(tiles[i].second, tiles[i].first, Params{}, model).is_ok())
+        others_->push_back(std::move(model));
+    }
+    ASSERT_EQ(others_->size(), static_cast<std::size_t>(kMostOthers)) << "opencv-doc photos";
+    scenes_ = new std::vector<cv::Mat>;
+    references_ = new std::vector<Homography>;
+    for (const Target& t : kTargets) {
+      scenes_->push_back(test::load_gray(test::opencv_data(t.scene)));
+      ASSERT_FALSE(scenes_->back().empty()) << t.scene;
+    }
+    references_->push_back(test::graf_truth());
+    references_->push_back(test::sift_reference(box, (*scenes_)[1]));
+  }
+  static void TearDownTestSuite() {
+    delete targets_;
+    delete others_;
+    delete scenes_;
+    delete references_;
+  }
+
+  // Detects each target's scene with `models`; every detection must be a
+  // model whose name starts with the target's name, exactly one, within
+  // the target's tolerance.
+  static void expect_found(const std::vector<BuiltModel>& models, const std::string& label) {
+    test::InMemoryIndex index;
+    const Status s = test::view_in_memory(models, Params{}, index);
+    ASSERT_TRUE(s.is_ok()) << s.message();
+    DesktopDetector detector(index.index);
+    for (std::size_t t = 0; t < std::size(kTargets); ++t) {
+      const Target& target = kTargets[t];
+      DetectionList found;
+      ASSERT_TRUE(detector.detect((*scenes_)[t], found).is_ok());
+      const DetectStats& stats = detector.stats();
+      ASSERT_EQ(found.size(), 1u) << label << ", " << target.scene << ": " << found.size()
+                                  << " detections, " << stats.correspondences << " correspondences";
+      const Detection& d = found[0];
+      EXPECT_EQ(std::string(d.model_name).rfind(target.name, 0), 0u)
+          << label << ", " << target.scene << ": found " << d.model_name;
+      const double err =
+          test::max_corner_error(d, (*references_)[t], index.index.model(d.model_id));
+      EXPECT_LT(err, target.tolerance) << label << ", " << target.scene;
+      std::printf("%-12s %-16s %9u arcs %6d correspondences %4d inliers %5.2f px\n", label.c_str(),
+                  target.scene, index.index.arc_count(), stats.correspondences, d.inliers, err);
+    }
+  }
+
+  static std::vector<BuiltModel>* targets_;
+  static std::vector<BuiltModel>* others_;
+  static std::vector<cv::Mat>* scenes_;
+  static std::vector<Homography>* references_;
+};
+std::vector<BuiltModel>* SearchRecall::targets_ = nullptr;
+std::vector<BuiltModel>* SearchRecall::others_ = nullptr;
+std::vector<cv::Mat>* SearchRecall::scenes_ = nullptr;
+std::vector<Homography>* SearchRecall::references_ = nullptr;
+
+TEST_F(SearchRecall, FoundWith0To200OtherModels) {
+  for (int others : {0, 10, 50, kMostOthers}) {
+    std::vector<BuiltModel> models = *targets_;
+    models.insert(models.end(), others_->begin(), others_->begin() + others);
+    expect_found(models, std::to_string(others) + " others");
+  }
+}
+
+TEST_F(SearchRecall, FoundOnceAmong20CopiesOfItself) {
+  constexpr int kCopies = 20;
+  std::vector<BuiltModel> models;
+  for (int c = 0; c < kCopies; ++c) {
+    for (const BuiltModel& m : *targets_) {
+      models.push_back(m);
+      models.back().name += "-copy" + std::to_string(c);
+    }
+  }
+  expect_found(models, "20 copies");
+}
+
+}  // namespace
+}  // namespace kg
