@@ -66,6 +66,14 @@ struct Detection {
   double score = 0.0;
   double chance = 0.0;     // the same fraction for the pose shifted by 3 thresholds
   double rms_error = 0.0;  // refined reprojection error of the inliers, pixels
+  // Binomial z-score of `score` against `chance` (over the model keypoints
+  // the views say the pose's scale should show): the verification's test.
+  double verification_z = 0.0;
+  // Estimated probability, in [0, 1], that the detection is right (the right
+  // model, every corner within 10 px): a logistic model of the support
+  // above, fitted on the sign benchmark (core/confidence.h). Threshold it to
+  // trade detections for fewer false ones (docs/RESULTS.md, "Confidence").
+  double confidence = 0.0;
   int ransac_iterations = 0;
 };
 

@@ -69,20 +69,36 @@ void score_synth_frame(const std::vector<SynthDetection>& detections, const Synt
   c.false_detections = c.detections;
   c.found = false;
   c.corner_error = -1;
-  if (truth.sign < 0) return;
+  c.scored.clear();
   Point2f outline[4];
-  sign_outline(sign_size, outline);
+  if (truth.sign >= 0) sign_outline(sign_size, outline);
   double best = -1;
   for (const SynthDetection& d : detections) {
-    if (d.model != truth.sign - group_begin) continue;
-    double worst = 0;
-    for (const Point2f& p : outline) {
-      const Point2f g = kg::apply(truth.homography, p), e = kg::apply(d.homography, p);
-      const double error = std::hypot(double{g.x} - e.x, double{g.y} - e.y);
-      worst = std::isfinite(error) ? std::max(worst, error) : 1e9;
+    SynthScoredDetection scored;
+    scored.model = d.model;
+    if (d.has_detail) {
+      scored.inliers = d.detail.inliers;
+      scored.inlier_keygraphs = d.detail.inlier_keygraphs;
+      scored.verification_z = d.detail.verification_z;
+      scored.score = d.detail.score;
+      scored.chance = d.detail.chance;
+      scored.rms_error = d.detail.rms_error;
+      scored.confidence = d.detail.confidence;
     }
-    if (best < 0 || worst < best) best = worst;
+    if (truth.sign >= 0 && d.model == truth.sign - group_begin) {
+      double worst = 0;
+      for (const Point2f& p : outline) {
+        const Point2f g = kg::apply(truth.homography, p), e = kg::apply(d.homography, p);
+        const double error = std::hypot(double{g.x} - e.x, double{g.y} - e.y);
+        worst = std::isfinite(error) ? std::max(worst, error) : 1e9;
+      }
+      scored.corner_error = worst;
+      scored.right = worst <= 10.0;
+      if (best < 0 || worst < best) best = worst;
+    }
+    c.scored.push_back(scored);
   }
+  if (truth.sign < 0) return;
   c.corner_error = best;
   c.found = best >= 0 && best <= 10.0;
   if (c.found) --c.false_detections;
@@ -195,7 +211,7 @@ Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& c
             s = detectors[m]->detect(frame, list);
             c.time_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
             if (!s) return {s.code(), entry.file + ": " + s.message()};
-            for (const Detection& d : list) found.push_back({d.model_id, d.homography});
+            for (const Detection& d : list) found.push_back({d.model_id, d.homography, d, true});
             if (sign != nullptr) {
               count_sign_keypoints(detectors[m]->core().last_keypoints(),
                                    keygraphs[m].models[static_cast<std::size_t>(entry.info.sign)],
@@ -207,7 +223,13 @@ Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& c
             std::vector<BaselineDetection> list;
             base[b].detect(frame, list);
             c.time_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-            for (const BaselineDetection& d : list) found.push_back({d.model_id, d.homography});
+            for (const BaselineDetection& d : list) {
+              SynthDetection sd;
+              sd.model = d.model_id;
+              sd.homography = d.homography;
+              sd.detail.inliers = d.inliers;
+              found.push_back(sd);
+            }
           }
           score_synth_frame(found, entry.info,
                             sign != nullptr ? cv::Size(sign->width, sign->height) : cv::Size(),
@@ -306,8 +328,43 @@ std::vector<SynthScaleRow> synth_by_scale(const std::vector<SynthCase>& cases,
   return rows;
 }
 
+const std::vector<double>& synth_confidence_thresholds() {
+  static const std::vector<double> thresholds = {0.0, 0.5, 0.7, 0.8, 0.9};
+  return thresholds;
+}
+
+std::vector<SynthConfidenceRow> synth_by_confidence(const std::vector<SynthCase>& cases) {
+  std::vector<SynthConfidenceRow> rows;
+  for (const SynthCase& c : cases) {
+    // Baselines have no confidence (-1 on every detection they make).
+    bool baseline = false;
+    for (const SynthScoredDetection& d : c.scored) baseline = baseline || d.confidence < 0;
+    if (baseline) continue;
+    for (const double t : synth_confidence_thresholds()) {
+      auto it = std::find_if(rows.begin(), rows.end(), [&](const SynthConfidenceRow& r) {
+        return r.method == c.method && r.index_size == c.index_size && r.threshold == t;
+      });
+      if (it == rows.end()) {
+        rows.push_back({c.method, c.index_size, t});
+        it = rows.end() - 1;
+      }
+      ++it->frames;
+      it->sign_frames += c.sign >= 0 ? 1 : 0;
+      bool found = false;
+      for (const SynthScoredDetection& d : c.scored) {
+        if (d.confidence < t) continue;
+        found = found || d.right;
+        it->false_detections += d.right ? 0 : 1;
+      }
+      it->found += found ? 1 : 0;
+    }
+  }
+  return rows;
+}
+
 std::string synth_text(const std::vector<SynthRow>& rows,
-                       const std::vector<SynthScaleRow>& by_scale) {
+                       const std::vector<SynthScaleRow>& by_scale,
+                       const std::vector<SynthConfidenceRow>& by_confidence) {
   std::string out;
   char line[256];
   std::snprintf(line, sizeof(line), "%-13s %5s %6s %8s %8s %9s %10s %11s %10s\n", "method", "index",
@@ -321,6 +378,31 @@ std::string synth_text(const std::vector<SynthRow>& rows,
                   r.median_corner_error, r.false_detections / frames, r.sign_free_with_false,
                   r.sign_free_frames, r.median_ms);
     out += line;
+  }
+  if (!by_confidence.empty()) {
+    out += "\nKept at detection confidence >= threshold: signs found within 10 px, false / frame\n";
+    std::snprintf(line, sizeof(line), "%-13s %5s", "method", "index");
+    out += line;
+    for (const double t : synth_confidence_thresholds()) {
+      std::snprintf(line, sizeof(line), "   >= %.1f        ", t);
+      out += line;
+    }
+    out += "\n";
+    for (std::size_t i = 0; i < by_confidence.size();) {
+      const SynthConfidenceRow& first = by_confidence[i];
+      std::snprintf(line, sizeof(line), "%-13s %5d", first.method.c_str(), first.index_size);
+      out += line;
+      for (; i < by_confidence.size() && by_confidence[i].method == first.method &&
+             by_confidence[i].index_size == first.index_size;
+           ++i) {
+        const SynthConfidenceRow& r = by_confidence[i];
+        std::snprintf(line, sizeof(line), "  %5.1f%% %6.3f  ",
+                      100.0 * r.found / std::max(1, r.sign_frames),
+                      static_cast<double>(r.false_detections) / std::max(1, r.frames));
+        out += line;
+      }
+      out += "\n";
+    }
   }
   if (by_scale.empty()) return out;
   const std::vector<double>& b = synth_scale_buckets();
@@ -379,6 +461,19 @@ Status write_synth_report(const std::string& dir, const SynthEvalOptions& option
         << ',' << c.repeated_keypoints << '\n';
   }
   if (s = write_text_file(dir + "/synth-cases.csv", csv.str()); !s) return s;
+  // Every detection with its support, for precision-recall by confidence.
+  std::ostringstream det;
+  det << "method,index_size,frame,sign,model,right,corner_error,inliers,inlier_keygraphs,"
+         "verification_z,score,chance,rms_error,confidence\n";
+  for (const SynthCase& c : cases) {
+    for (const SynthScoredDetection& d : c.scored) {
+      det << c.method << ',' << c.index_size << ',' << c.frame << ',' << c.sign << ',' << d.model
+          << ',' << d.right << ',' << d.corner_error << ',' << d.inliers << ','
+          << d.inlier_keygraphs << ',' << d.verification_z << ',' << d.score << ',' << d.chance
+          << ',' << d.rms_error << ',' << d.confidence << '\n';
+    }
+  }
+  if (s = write_text_file(dir + "/synth-detections.csv", det.str()); !s) return s;
   const std::vector<SynthRow> rows = synth_tallies(cases, options);
   std::ostringstream j;
   j << "{\n  \"protocol\": \"synth\",\n  \"directory\": " << json_quote(options.directory)
@@ -394,6 +489,16 @@ Status write_synth_report(const std::string& dir, const SynthEvalOptions& option
       << ", \"sign_free_frames_with_detections\": " << r.sign_free_with_false
       << ", \"median_ms\": " << json_value(r.median_ms)
       << ", \"mean_ms\": " << json_value(r.mean_ms) << "}" << (i + 1 < rows.size() ? ",\n" : "\n");
+  }
+  j << "  ],\n  \"by_confidence\": [\n";
+  const std::vector<SynthConfidenceRow> confidence = synth_by_confidence(cases);
+  for (std::size_t i = 0; i < confidence.size(); ++i) {
+    const SynthConfidenceRow& r = confidence[i];
+    j << "    {\"method\": " << json_quote(r.method) << ", \"index_size\": " << r.index_size
+      << ", \"threshold\": " << r.threshold << ", \"frames\": " << r.frames
+      << ", \"sign_frames\": " << r.sign_frames << ", \"within_10px\": " << r.found
+      << ", \"false_detections\": " << r.false_detections << "}"
+      << (i + 1 < confidence.size() ? ",\n" : "\n");
   }
   j << "  ]\n}\n";
   return write_text_file(dir + "/synth-summary.json", j.str());

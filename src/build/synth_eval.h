@@ -15,6 +15,7 @@
 #include <opencv2/core.hpp>
 
 #include "build/synth_frame.h"
+#include "keygraph/detector.h"
 #include "keygraph/params.h"
 #include "keygraph/status.h"
 
@@ -27,6 +28,16 @@ struct SynthEvalOptions {
   std::vector<std::string> methods = {"keygraph"};
   Params params;
   int max_frames = 0;  // 0: every frame
+};
+
+// One detection as scored: right when of the frame's sign within 10 px.
+struct SynthScoredDetection {
+  int model = -1;
+  bool right = false;
+  double corner_error = -1;  // px, against the frame's sign (-1: another model)
+  int inliers = 0, inlier_keygraphs = 0;
+  double verification_z = 0, score = 0, chance = 0, rms_error = 0;
+  double confidence = -1;
 };
 
 struct SynthCase {
@@ -48,15 +59,20 @@ struct SynthCase {
   // inside the sign's outline, and of those the ones within 3 px of a
   // model keypoint of the sign under the ground truth (-1: not measured).
   int sign_keypoints = -1, repeated_keypoints = -1;
+  std::vector<SynthScoredDetection> scored{};  // every detection of the frame
 };
 
 // A detection of model `model` (an id within the searched index).
 struct SynthDetection {
   int model = -1;
   Homography homography{};  // model pixels -> frame pixels
+  // Keygraph methods: the detector's support and confidence (unset for
+  // baselines: confidence -1).
+  Detection detail{};
+  bool has_detail = false;
 };
 // Scores one frame's detections against its ground truth: fills found,
-// corner_error, detections and false_detections of `c`. The index searched
+// corner_error, detections, false_detections and scored of `c`. The index searched
 // holds signs group_begin, group_begin + 1, ...; `sign_size` is the size of
 // the frame's sign (unused for a sign-free frame).
 void score_synth_frame(const std::vector<SynthDetection>& detections, const SynthFrameInfo& truth,
@@ -92,10 +108,24 @@ const std::vector<double>& synth_scale_buckets();  // upper bounds, last is infi
 std::vector<SynthScaleRow> synth_by_scale(const std::vector<SynthCase>& cases,
                                           const SynthEvalOptions& options);
 
-std::string synth_text(const std::vector<SynthRow>& rows,
-                       const std::vector<SynthScaleRow>& by_scale = {});
+// Keygraph methods: signs found and false detections per frame when only
+// the detections of confidence >= threshold are kept (Detection::confidence).
+struct SynthConfidenceRow {
+  std::string method;
+  int index_size = 0;
+  double threshold = 0;
+  int frames = 0, sign_frames = 0;
+  int found = 0;             // frames whose sign has a right detection kept
+  int false_detections = 0;  // kept detections that are not right
+};
+const std::vector<double>& synth_confidence_thresholds();
+std::vector<SynthConfidenceRow> synth_by_confidence(const std::vector<SynthCase>& cases);
 
-// summary.json and cases.csv in `dir`.
+std::string synth_text(const std::vector<SynthRow>& rows,
+                       const std::vector<SynthScaleRow>& by_scale = {},
+                       const std::vector<SynthConfidenceRow>& by_confidence = {});
+
+// synth-summary.json, synth-cases.csv and synth-detections.csv in `dir`.
 Status write_synth_report(const std::string& dir, const SynthEvalOptions& options,
                           const std::vector<SynthCase>& cases);
 

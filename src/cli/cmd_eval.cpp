@@ -126,7 +126,8 @@ int cmd_eval(const Args& args) {
     clear_progress();
     if (!s) return fail(s.message());
     const std::vector<SynthRow> rows = synth_tallies(cases, synth);
-    std::fputs(synth_text(rows, synth_by_scale(cases, synth)).c_str(), stdout);
+    std::fputs(synth_text(rows, synth_by_scale(cases, synth), synth_by_confidence(cases)).c_str(),
+               stdout);
     if (!out_dir.empty()) {
       if (s = write_synth_report(out_dir, synth, cases); !s) return fail("eval: " + s.message());
     }

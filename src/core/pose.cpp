@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/confidence.h"
 #include "core/homography.h"
 #include "core/index_format.h"
 #include "core/keygraph.h"
@@ -477,6 +478,8 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
       d.score = support.fraction;
       d.chance = chance;
       d.rms_error = rms;
+      d.verification_z = z;
+      d.confidence = detection_confidence(d);
       d.ransac_iterations = stats.iterations;
       out.push_back(d);
     }

@@ -70,6 +70,7 @@ TEST_F(Detection2Models, GrafCropFoundInGraf3WithinFivePixels) {
   const double err = max_corner_error(found[0], graf_truth(), index_->index.model(0));
   EXPECT_LT(err, 5.0);
   EXPECT_GE(found[0].inliers, 12);
+  EXPECT_GT(found[0].confidence, 0.9);  // 100+ inliers
   std::printf("graf crop -> graf3: max corner error %.2f px, %d inliers, %d iterations\n", err,
               found[0].inliers, detector.stats().ransac_iterations);
 }
@@ -85,6 +86,7 @@ TEST_F(Detection2Models, BoxFoundInBoxInScene) {
   const Homography reference = sift_reference(*box_, scene);
   const double err = max_corner_error(found[0], reference, index_->index.model(1));
   EXPECT_LT(err, 8.0) << "against SIFT + RANSAC";
+  EXPECT_GT(found[0].confidence, 0.9);  // about 50 inliers
   std::printf("box -> box_in_scene: max corner distance to SIFT reference %.2f px, %d inliers\n",
               err, found[0].inliers);
 }

@@ -230,6 +230,45 @@ TEST(SynthEval, ScoresFollowTheRules) {
   EXPECT_DOUBLE_EQ(rows[0].mean_ms, 25.0);
 }
 
+TEST(SynthEval, ConfidenceThresholdsKeepTheConfidentDetections) {
+  // Frame 0: its sign found at confidence 0.95 and a wrong model at 0.6;
+  // frame 1: its sign found at 0.75; frame 2 (sign-free): a false one at 0.85.
+  auto scored = [](bool right, double confidence) {
+    SynthScoredDetection d;
+    d.right = right;
+    d.confidence = confidence;
+    return d;
+  };
+  std::vector<SynthCase> cases(3);
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    cases[i].method = "keygraph";
+    cases[i].index_size = 10;
+    cases[i].frame = static_cast<int>(i);
+    cases[i].sign = i < 2 ? static_cast<int>(i) : -1;
+  }
+  cases[0].scored = {scored(true, 0.95), scored(false, 0.6)};
+  cases[1].scored = {scored(true, 0.75)};
+  cases[2].scored = {scored(false, 0.85)};
+  // A baseline's detections carry no confidence: not tallied.
+  SynthCase baseline = cases[0];
+  baseline.method = "orb";
+  baseline.scored = {scored(true, -1)};
+  cases.push_back(baseline);
+  const std::vector<SynthConfidenceRow> rows = synth_by_confidence(cases);
+  const std::vector<double>& thresholds = synth_confidence_thresholds();
+  ASSERT_EQ(rows.size(), thresholds.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const SynthConfidenceRow& r = rows[i];
+    const double t = thresholds[i];
+    EXPECT_EQ(r.method, "keygraph");
+    EXPECT_DOUBLE_EQ(r.threshold, t);
+    EXPECT_EQ(r.frames, 3);
+    EXPECT_EQ(r.sign_frames, 2);
+    EXPECT_EQ(r.found, (0.95 >= t ? 1 : 0) + (0.75 >= t ? 1 : 0)) << t;
+    EXPECT_EQ(r.false_detections, (0.6 >= t ? 1 : 0) + (0.85 >= t ? 1 : 0)) << t;
+  }
+}
+
 TEST(SynthEval, KeygraphFindsTheSignsOfASmallGeneratedSet) {
   namespace fs = std::filesystem;
   const std::string dir = std::string(KG_TEST_OUTPUT_DIR) + "/synth_tiny";

@@ -1,0 +1,42 @@
+// A detection's confidence: the estimated probability that it is right (the
+// right model, every corner within 10 px of the truth), from the support
+// the pose estimator measured. A logistic model, fitted offline on the sign
+// benchmark's tuning frames (docs/RESULTS.md, "Confidence"), so that a user
+// can threshold one number instead of four.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "keygraph/detector.h"
+
+namespace kg {
+
+// Coefficients of logit(P(right)) = bias + sum of weight * feature.
+struct ConfidenceModel {
+  double bias;
+  double log_inliers;        // log(distinct inlier keypoints)
+  double inlier_keygraphs;   // min(keygraphs all inlier, 50) / 10
+  double verification_z;     // min(z, 40) / 10
+  double score_over_chance;  // score - chance
+  double rms_error;          // pixels
+};
+
+// Fitted by docs/fit-confidence.py on the 344 detections (310 right) of
+// the sign benchmark's tuning set, seed 1, 300 frames, indexes of 1, 10 and
+// 50 signs (`keygraph synth -o SIGNS --seed 1 --signs 50 --frames 300`,
+// `keygraph eval --synth SIGNS --methods keygraph --out OUT`); the support
+// above chance and the number of inliers carry it.
+inline constexpr ConfidenceModel kConfidenceModel = {-5.3556, 1.7664, -0.0354,
+                                                     -0.0491, 8.0887, -0.7759};
+
+inline double detection_confidence(const Detection& d,
+                                   const ConfidenceModel& m = kConfidenceModel) {
+  const double logit = m.bias + m.log_inliers * std::log(std::max(1, d.inliers)) +
+                       m.inlier_keygraphs * std::min(d.inlier_keygraphs, 50) / 10.0 +
+                       m.verification_z * std::min(d.verification_z, 40.0) / 10.0 +
+                       m.score_over_chance * (d.score - d.chance) + m.rms_error * d.rms_error;
+  return 1.0 / (1.0 + std::exp(-logit));
+}
+
+}  // namespace kg
