@@ -8,7 +8,7 @@
 # usage: cli_hostile.sh KEYGRAPH DATA_DIR desktop|device [GOLDEN_INDEX]
 #   desktop: the desktop keygraph (OpenCV); DATA_DIR is opencv-doc's data.
 #   device:  the device keygraph (PGM only); GOLDEN_INDEX is an index built
-#            with the core's detector (tests/data/golden-5.0-int8.kgi).
+#            with the core's detector (tests/data/golden-6.0-int8.kgi).
 # The device-node case (row 8) and the permission case (row 14) need root
 # (mknod, and setpriv to run as nobody); without root they are reported as
 # SKIPPED, never silently passed.
@@ -180,7 +180,7 @@ if [ "$MODE" = desktop ]; then
   "$KG" build "$DATA/box.png" -o "$INDEX" >/dev/null 2>"$LOG/stderr" ||
     die "keygraph build box.png failed: $(cat "$LOG/stderr")"
 else
-  [ -f "$GOLDEN" ] || die "device mode needs an index (tests/data/golden-5.0-int8.kgi)"
+  [ -f "$GOLDEN" ] || die "device mode needs an index (tests/data/golden-6.0-int8.kgi)"
   EXT=pgm
   SCENE=$IN/scene.pgm
   make_pgm "$SCENE" 320 240
