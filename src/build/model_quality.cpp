@@ -230,7 +230,7 @@ cv::Mat draw_model(const cv::Mat& gray, const BuiltModel& model, int max_keygrap
                     triangles.end(), [](const Triangle& x, const Triangle& y) {
                       return x.span != y.span ? x.span > y.span : x.area > y.area;
                     });
-  const double thickness = std::max(1.0, std::max(gray.cols, gray.rows) / 300.0);
+  const double thickness = std::max(2.0, std::max(gray.cols, gray.rows) / 200.0);
   for (std::size_t i = 0; i < shown; ++i) {
     const Triangle& t = triangles[i];
     cv::Point corners[3];
@@ -243,13 +243,16 @@ cv::Mat draw_model(const cv::Mat& gray, const BuiltModel& model, int max_keygrap
     cv::polylines(picture, std::vector<cv::Point>(corners, corners + 3), true, colour,
                   static_cast<int>(thickness), cv::LINE_AA);
   }
+  // Keypoints as dots, with a thin circle of their detector scale.
+  const int dot = std::max(2, static_cast<int>(thickness) + 1);
   for (std::size_t k = 0; k < n; ++k) {
+    const cv::Point at(static_cast<int>(std::lround(model.keypoints[k].x)),
+                       static_cast<int>(std::lround(model.keypoints[k].y)));
     const float sigma = k < model.keypoint_scales.size() ? model.keypoint_scales[k] : 0.f;
-    const int radius = std::max(2, static_cast<int>(std::lround(2.0 * sigma)));
-    cv::circle(picture,
-               cv::Point(static_cast<int>(std::lround(model.keypoints[k].x)),
-                         static_cast<int>(std::lround(model.keypoints[k].y))),
-               radius, cv::Scalar(255, 160, 0), 1, cv::LINE_AA);
+    if (sigma > static_cast<float>(dot))
+      cv::circle(picture, at, static_cast<int>(std::lround(sigma)), cv::Scalar(230, 200, 150), 1,
+                 cv::LINE_AA);
+    cv::circle(picture, at, dot, cv::Scalar(255, 90, 0), cv::FILLED, cv::LINE_AA);
   }
   return picture;
 }

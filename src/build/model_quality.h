@@ -52,8 +52,9 @@ Status measure_quality(const std::vector<BuiltModel>& models, const std::vector<
 cv::Mat render_quality_scene(const cv::Mat& gray, int long_edge, cv::Point2f outline[4]);
 
 // A picture of the model (keygraph build --draw-model): the image in grey,
-// its keypoints as circles of their detector scale, and its strongest
-// keygraphs (3-circuits whose keypoints the most views detected) in colour.
-cv::Mat draw_model(const cv::Mat& gray, const BuiltModel& model, int max_keygraphs = 30);
+// its keypoints as dots (a thin circle of their detector scale around),
+// and its strongest keygraphs (3-circuits whose keypoints the most views
+// detected, the larger first) in red to orange.
+cv::Mat draw_model(const cv::Mat& gray, const BuiltModel& model, int max_keygraphs = 20);
 
 }  // namespace kg
