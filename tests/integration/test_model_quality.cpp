@@ -137,6 +137,23 @@ TEST(ModelQuality, FlatAndTinyModelsAreWarned) {
   EXPECT_LT(flat.keygraphs, 100u);
 }
 
+// Without views (the paper's model) there is one view, the model image:
+// its size is no smallest size, and the rating says so instead of warning
+// that the model is only found when large.
+TEST(ModelQuality, WithoutViewsTheSmallestSizeIsNotMeasured) {
+  const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+  ASSERT_FALSE(box.empty()) << "box.png missing (install opencv-doc)";
+  Params params;
+  params.views.min_size = 0.f;
+  Built b;
+  build_all({"box"}, {box}, b, params);
+  EXPECT_EQ(b.index.model_quality(0).view_count, 1u);
+  const cli::ModelRating r = cli::rate_model(b.index, 0);
+  EXPECT_TRUE(has_warning(r, "smallest size not measured"));
+  EXPECT_FALSE(has_warning(r, "only be found when large"));
+  EXPECT_EQ(r.stars, 5);
+}
+
 // Signs that differ only by the arrow's direction, and a distinct sign:
 // the report lists a pair exactly when the detector, run again here, finds
 // one model in the other's scene; the distinct pair is never listed. What

@@ -43,6 +43,9 @@ ModelRating rate_model(const ModelIndex& index, int m) {
                          std::to_string(full.keygraphs) + " keygraphs at full size; a detection" +
                          " needs " + std::to_string(params.ransac.min_inliers) + " and " +
                          std::to_string(params.ransac.min_inlier_keygraphs) + " of them to match)");
+  } else if (params.views.min_size <= 0.f) {
+    // One view (the model image): nothing says how small it can get.
+    r.warnings.push_back("smallest size not measured (built without views: --min-size 0)");
   } else if (q.smallest_size > kLargeOnlySize) {
     stars -= q.smallest_size > 2.f * kLargeOnlySize ? 2 : 1;
     r.warnings.push_back("can only be found when large (long edge >= " +
