@@ -39,6 +39,38 @@ struct ModelInfo {
   std::uint64_t keygraph_count = 0;  // model keygraphs (for reports)
 };
 
+// The quality report `keygraph build` stores with the models (format 6.1,
+// docs/FORMAT.md sections 12-14; measured by build/model_quality.h, rated
+// and printed by `keygraph inspect`). Informational: detection never reads it.
+struct ViewQuality {
+  float scale = 1.f;            // uniform scale of the simulated view (build/model_views.h)
+  float tilt = 1.f;             // 1 / cos(tilt angle)
+  float longitude = 0.f;        // direction of the tilt, degrees
+  std::uint32_t keypoints = 0;  // keypoints the view's image showed inside the model
+  std::uint32_t arcs = 0;       // arcs described in the view (before deduplication)
+  std::uint32_t keygraphs = 0;  // keygraphs over those arcs (saturated)
+};
+struct ModelQuality {
+  std::uint32_t view_begin = 0;  // its views: view_quality(view_begin ..)
+  std::uint32_t view_count = 0;
+  // Arcs with a near-identical arc (descriptor and scale attributes) in
+  // another model of the index.
+  std::uint32_t shared_arcs = 0;
+  // Long edge in frame pixels of the smallest view that still carries
+  // enough keypoints and keygraphs to be found; 0 when no view does.
+  float smallest_size = 0.f;
+  // Long edge of the scene the model was rendered into to look for
+  // look-alikes; 0 when that check was not run.
+  float scene_size = 0.f;
+  bool found_in_scene = false;  // the detector found the model in that scene
+};
+// The model `shown` was rendered as a scene and the detector, with the
+// whole index, found model `detected` in it.
+struct LookAlike {
+  std::uint32_t shown = 0;
+  std::uint32_t detected = 0;
+};
+
 // A directed model arc between two keypoints of the same model (global ids).
 struct ModelArc {
   std::uint32_t from = 0;
@@ -156,6 +188,22 @@ class ModelIndex {
     return tree_depth_;
   }
 
+  // The quality report (see ModelQuality); false for files of format 6.0
+  // and indexes written without one.
+  bool has_quality() const {
+    return model_quality_ != nullptr;
+  }
+  // Model i's record (has_quality() and 0 <= i < model_count(); else empty).
+  ModelQuality model_quality(int i) const;
+  std::uint32_t view_quality_count() const {
+    return view_quality_count_;
+  }
+  ViewQuality view_quality(std::uint32_t i) const;  // i < view_quality_count()
+  std::uint32_t look_alike_count() const {
+    return look_alike_count_;
+  }
+  LookAlike look_alike(std::uint32_t i) const;  // i < look_alike_count()
+
   // The whole index: size in bytes and its first byte (mapped, owned or the
   // caller's buffer).
   const std::uint8_t* data() const {
@@ -167,6 +215,9 @@ class ModelIndex {
 
  private:
   Status validate(const std::uint8_t* data, std::size_t size);
+  Status validate_quality(const std::uint8_t* quality, std::uint32_t quality_count,
+                          const std::uint8_t* views, std::uint32_t view_count,
+                          const std::uint8_t* pairs, std::uint32_t pair_count) const;
 
   // Releases open()'s memory: unmaps a mapping of `mapped` bytes, or frees
   // the aligned fallback buffer when `mapped` is 0.
@@ -202,6 +253,11 @@ class ModelIndex {
   const std::uint8_t* vertex_descriptors_ = nullptr;
   const float* keypoint_scales_ = nullptr;
   const std::uint8_t* keypoint_views_ = nullptr;
+  const std::uint8_t* model_quality_ = nullptr;
+  const std::uint8_t* view_quality_ = nullptr;
+  std::uint32_t view_quality_count_ = 0;
+  const std::uint8_t* look_alikes_ = nullptr;
+  std::uint32_t look_alike_count_ = 0;
 };
 
 }  // namespace kg

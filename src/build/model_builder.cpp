@@ -117,11 +117,24 @@ class ArcDescriber {
 
 // Arcs of one keypoint set in one image: every pair within the Chebyshev
 // range, described on that image. ids map local keypoints to model ids.
+// `described` (optional) gets, per local keypoint a, the local targets of
+// the arcs described from it (duplicates of other views' arcs included):
+// offsets (n + 1) and targets, as count_model_keygraphs() reads them.
+struct LocalArcs {
+  std::vector<std::uint32_t> offsets, to;
+};
 void add_arcs(const std::vector<Keypoint>& points, const std::vector<std::uint32_t>& ids,
               const Params& params, ArcDescriber& describer, BuiltModel& out,
-              std::vector<std::vector<std::uint32_t>>& arcs_by_pair_from) {
+              std::vector<std::vector<std::uint32_t>>& arcs_by_pair_from,
+              LocalArcs* described = nullptr) {
   const std::size_t n = points.size();
+  if (described != nullptr) {
+    described->offsets.assign(n + 1, 0);
+    described->to.clear();
+  }
   for (std::size_t a = 0; a < n; ++a) {
+    if (described != nullptr)
+      described->offsets[a] = static_cast<std::uint32_t>(described->to.size());
     const Point2f pa{points[a].x, points[a].y};
     for (std::size_t b = 0; b < n; ++b) {
       if (a == b || ids[a] == ids[b]) continue;
@@ -129,6 +142,7 @@ void add_arcs(const std::vector<Keypoint>& points, const std::vector<std::uint32
       if (!is_model_arc(pa, pb, points[a].scale, points[b].scale, params.graph)) continue;
       ArcDescriptor d;
       if (!describer.describe(pa, pb, d)) continue;
+      if (described != nullptr) described->to.push_back(static_cast<std::uint32_t>(b));
       float attributes[kArcAttributes];
       arc_attributes(pa, pb, points[a].scale, points[b].scale, attributes);
       // Stored once when another view already described it alike.
@@ -157,6 +171,8 @@ void add_arcs(const std::vector<Keypoint>& points, const std::vector<std::uint32
       out.arc_attributes.push_back({attributes[0], attributes[1]});
     }
   }
+  if (described != nullptr)
+    described->offsets[n] = static_cast<std::uint32_t>(described->to.size());
 }
 
 // Model keypoints found so far, with a grid for merging those of later
@@ -222,6 +238,8 @@ Status build_views(const cv::Mat& gray, const Params& params, BuiltModel& out) {
   std::vector<std::vector<std::uint32_t>> arcs_by_from;
   std::vector<Keypoint> detected, kept;
   std::vector<std::uint32_t> ids;
+  LocalArcs described;
+  std::vector<Point2f> view_points;
   cv::Mat image, inside;
   for (const ModelView& view : views) {
     render_view(gray, view, image, inside);
@@ -261,7 +279,10 @@ Status build_views(const cv::Mat& gray, const Params& params, BuiltModel& out) {
     arcs_by_from.resize(set.points().size());
     describer.set_image(image);
     const std::size_t arcs_before = out.arcs.size();
-    add_arcs(kept, ids, params, describer, out, arcs_by_from);
+    add_arcs(kept, ids, params, describer, out, arcs_by_from, &described);
+    // What a frame showing the model at this view's size could match.
+    view_points.clear();
+    for (const Keypoint& k : kept) view_points.push_back({k.x, k.y});
     ViewSummary summary;
     summary.scale = view.scale;
     summary.tilt = view.tilt;
@@ -270,6 +291,10 @@ Status build_views(const cv::Mat& gray, const Params& params, BuiltModel& out) {
     summary.height = view.size.height;
     summary.keypoints = static_cast<int>(kept.size());
     summary.arcs = static_cast<int>(out.arcs.size() - arcs_before);
+    summary.view_arcs = static_cast<int>(described.to.size());
+    summary.keygraphs =
+        count_model_keygraphs(view_points.data(), static_cast<int>(view_points.size()),
+                              described.offsets.data(), described.to.data(), params.graph);
     out.views.push_back(summary);
   }
   out.keypoints = set.points();
@@ -332,7 +357,8 @@ Status build_model(const cv::Mat& gray, const std::string& name, const Params& p
     summary.height = gray.rows;
     summary.keypoints = static_cast<int>(keypoints.size());
     summary.arcs = static_cast<int>(out.arcs.size());
-    out.views.push_back(summary);
+    summary.view_arcs = summary.arcs;
+    out.views.push_back(summary);  // keygraphs: the model's, below
   }
   // Arcs sorted by (from, to): files do not depend on the views' order.
   {
@@ -373,6 +399,7 @@ Status build_model(const cv::Mat& gray, const std::string& name, const Params& p
   // Keygraphs over arcs that have descriptors (the ones selection can find).
   out.keygraphs = count_model_keygraphs(out.keypoints.data(), static_cast<int>(n),
                                         unique_offsets.data(), to.data(), params.graph);
+  if (params.views.min_size <= 0.f && !out.views.empty()) out.views[0].keygraphs = out.keygraphs;
   if (out.arcs.empty())
     return {StatusCode::kInvalidArgument, name + ": no model arcs (" + std::to_string(n) +
                                               " keypoints); image too small or flat"};
@@ -427,12 +454,77 @@ void encode_tree(const std::vector<ArcSearchPoint>& search_points, double attrib
 
 }  // namespace
 
+namespace {
+
+// Sections 12-14 of `quality` (empty without one), checked against the
+// models as the reader will check them.
+Status encode_quality(const std::vector<BuiltModel>& models, const QualityReport* quality,
+                      std::vector<std::uint8_t>& model_bytes, std::vector<std::uint8_t>& view_bytes,
+                      std::vector<std::uint8_t>& pair_bytes) {
+  using namespace format;
+  model_bytes.clear();
+  view_bytes.clear();
+  pair_bytes.clear();
+  if (quality == nullptr) return Status::ok();
+  const auto invalid = [](const std::string& what) {
+    return Status{StatusCode::kInvalidArgument, "quality report: " + what};
+  };
+  if (quality->models.size() != models.size()) return invalid("one record per model expected");
+  std::uint32_t next_view = 0;
+  model_bytes.assign(models.size() * kModelQualitySize, 0);
+  for (std::size_t m = 0; m < models.size(); ++m) {
+    const ModelQuality& q = quality->models[m];
+    if (q.view_begin != next_view || q.view_count > quality->views.size() - next_view)
+      return invalid("view ranges not consecutive");
+    if (q.shared_arcs > models[m].arcs.size()) return invalid("more shared arcs than arcs");
+    next_view += q.view_count;
+    std::uint8_t* r = model_bytes.data() + m * kModelQualitySize;
+    store<std::uint32_t>(r + kMqViewBegin, q.view_begin);
+    store<std::uint32_t>(r + kMqViewCount, q.view_count);
+    store<std::uint32_t>(r + kMqSharedArcs, q.shared_arcs);
+    store<float>(r + kMqSmallestSize, q.smallest_size);
+    store<float>(r + kMqSceneSize, q.scene_size);
+    store<std::uint32_t>(r + kMqFlags, q.found_in_scene ? kQualityFoundInScene : 0u);
+  }
+  if (next_view != quality->views.size()) return invalid("views not covered by the models");
+  view_bytes.assign(quality->views.size() * kViewQualitySize, 0);
+  for (std::size_t v = 0; v < quality->views.size(); ++v) {
+    const ViewQuality& q = quality->views[v];
+    std::uint8_t* r = view_bytes.data() + v * kViewQualitySize;
+    store<float>(r + kVqScale, q.scale);
+    store<float>(r + kVqTilt, q.tilt);
+    store<float>(r + kVqLongitude, q.longitude);
+    store<std::uint32_t>(r + kVqKeypoints, q.keypoints);
+    store<std::uint32_t>(r + kVqArcs, q.arcs);
+    store<std::uint32_t>(r + kVqKeygraphs, q.keygraphs);
+  }
+  pair_bytes.assign(quality->look_alikes.size() * kLookAlikeSize, 0);
+  for (std::size_t i = 0; i < quality->look_alikes.size(); ++i) {
+    const LookAlike& p = quality->look_alikes[i];
+    if (p.shown >= models.size() || p.detected >= models.size() || p.shown == p.detected)
+      return invalid("look-alike of an unknown model or of itself");
+    if (i > 0) {
+      const LookAlike& prev = quality->look_alikes[i - 1];
+      if (prev.shown > p.shown || (prev.shown == p.shown && prev.detected >= p.detected))
+        return invalid("look-alikes not sorted or repeated");
+    }
+    store<std::uint32_t>(pair_bytes.data() + i * kLookAlikeSize, p.shown);
+    store<std::uint32_t>(pair_bytes.data() + i * kLookAlikeSize + 4, p.detected);
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
 Status serialize_index(const std::vector<BuiltModel>& models, const Params& params,
-                       std::vector<std::uint8_t>& bytes) {
+                       std::vector<std::uint8_t>& bytes, const QualityReport* quality) {
   using namespace format;
   Status s = validate_params(params);
   if (!s) return s;
   if (models.empty()) return {StatusCode::kInvalidArgument, "no models to write"};
+  std::vector<std::uint8_t> quality_bytes, view_quality_bytes, look_alike_bytes;
+  s = encode_quality(models, quality, quality_bytes, view_quality_bytes, look_alike_bytes);
+  if (!s) return s;
 
   // Gather global arrays.
   std::vector<std::uint8_t> records(models.size() * kModelRecordSize, 0);
@@ -577,6 +669,12 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
        static_cast<std::uint32_t>(leaf_bounds.size() / encoded_point_size(encoding))},
       {kSectionKeypointViews, 0, keypoint_views.data(), keypoint_views.size(),
        static_cast<std::uint32_t>(keypoint_views.size() / 2)},
+      {kSectionModelQuality, 0, quality_bytes.data(), quality_bytes.size(),
+       static_cast<std::uint32_t>(quality_bytes.size() / kModelQualitySize)},
+      {kSectionViewQuality, 0, view_quality_bytes.data(), view_quality_bytes.size(),
+       static_cast<std::uint32_t>(view_quality_bytes.size() / kViewQualitySize)},
+      {kSectionLookAlikes, 0, look_alike_bytes.data(), look_alike_bytes.size(),
+       static_cast<std::uint32_t>(look_alike_bytes.size() / kLookAlikeSize)},
   };
   const std::size_t params_offset = kHeaderSize;
   const std::size_t table_offset = params_offset + kParamsSize;
@@ -615,16 +713,16 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
 }
 
 Status write_index(const std::vector<BuiltModel>& models, const Params& params,
-                   const std::string& path) {
+                   const std::string& path, const QualityReport* quality) {
   platform::OutputFile out;
   if (Status s = out.create(path); !s) return s;
-  return write_index(models, params, out);
+  return write_index(models, params, out, quality);
 }
 
 Status write_index(const std::vector<BuiltModel>& models, const Params& params,
-                   platform::OutputFile& out) {
+                   platform::OutputFile& out, const QualityReport* quality) {
   std::vector<std::uint8_t> bytes;
-  Status s = serialize_index(models, params, bytes);
+  Status s = serialize_index(models, params, bytes, quality);
   if (s) s = out.write(bytes.data(), bytes.size());
   if (s) s = out.commit();
   if (!s) out.discard();

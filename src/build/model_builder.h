@@ -29,6 +29,8 @@ struct ViewSummary {
   int width = 0, height = 0;                        // view image size
   int keypoints = 0;                                // detected inside the model
   int arcs = 0;                                     // stored (after deduplication)
+  int view_arcs = 0;                                // described in it (before deduplication)
+  std::uint64_t keygraphs = 0;                      // keygraphs over the view's own arcs
 };
 
 struct BuiltModel {
@@ -55,19 +57,29 @@ struct BuiltModel {
 Status build_model(const cv::Mat& gray, const std::string& name, const Params& params,
                    BuiltModel& out);
 
+// The quality report of an index's models (format sections 12-14;
+// build/model_quality.h measures it): one record per model, the views of
+// all models consecutive, look-alike pairs sorted.
+struct QualityReport {
+  std::vector<ModelQuality> models;
+  std::vector<ViewQuality> views;
+  std::vector<LookAlike> look_alikes;
+};
+
 // Serialises models into the .kgi layout (docs/FORMAT.md). Deterministic.
+// Without `quality` the quality sections are written empty (no report).
 Status serialize_index(const std::vector<BuiltModel>& models, const Params& params,
-                       std::vector<std::uint8_t>& bytes);
+                       std::vector<std::uint8_t>& bytes, const QualityReport* quality = nullptr);
 
 // Writes the index to `path` through a platform::OutputFile
 // (platform/files/output_file.h): a unique temporary renamed into place, so
 // a failure or an interrupt never leaves a partial index behind, and never
 // over anything but a regular file.
 Status write_index(const std::vector<BuiltModel>& models, const Params& params,
-                   const std::string& path);
+                   const std::string& path, const QualityReport* quality = nullptr);
 // The same into an output created beforehand (e.g. before a long build, so
 // that a bad output path fails at once); commits it.
 Status write_index(const std::vector<BuiltModel>& models, const Params& params,
-                   platform::OutputFile& out);
+                   platform::OutputFile& out, const QualityReport* quality = nullptr);
 
 }  // namespace kg

@@ -1,23 +1,34 @@
 // keygraph build [--name NAME]... [--detector hessian|mser] [--structure 2|3|4]
 //                [--vertex-descriptor none|sift] [--encoding float32|int16|int8]
 //                [--min-size PX] [--max-tilt DEG] [--roi X,Y,W,H]
-//                [--set NAME=VALUE]... MODEL... -o OUT.kgi
+//                [--set NAME=VALUE]... [--draw-model DIR] [--no-look-alikes]
+//                MODEL... -o OUT.kgi
 // --min-size and --max-tilt set the simulated views (views.min_size,
 // views.max_tilt; --max-tilt also asks for two tilt levels when none is set).
 // --name and --roi apply to the model image that follows them: --roi makes
 // the model that rectangle of the image (model pixel (0,0) is image pixel
 // (X,Y)); without --name the model is named after the file's stem.
+// Every build measures the model quality report (build/model_quality.h),
+// stores it in the index and prints it; --no-look-alikes skips rendering
+// each model as a scene. --draw-model DIR writes DIR/NAME.png per model:
+// its keypoints and strongest keygraphs.
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <sstream>
+#include <system_error>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include "build/image_io.h"
 #include "build/model_builder.h"
+#include "build/model_quality.h"
 #include "build/model_set.h"
 #include "build/param_overrides.h"
 #include "cli/commands.h"
+#include "cli/device/quality_report.h"
 #include "core/param_names.h"
 #include "platform/files/output_file.h"
 
@@ -33,6 +44,50 @@ bool parse_roi(const std::string& text, cv::Rect& roi) {
          roi.y >= 0 && roi.width > 0 && roi.height > 0;
 }
 
+// A file name for a model name: characters other than letters, digits,
+// '-', '_' and '.' become '_' (a name may hold '/'), never hidden.
+std::string picture_name(const std::string& model) {
+  std::string name;
+  for (char c : model) {
+    const bool safe = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                      c == '-' || c == '_' || c == '.';
+    name += safe ? c : '_';
+  }
+  if (name.empty() || name[0] == '.') name.insert(name.begin(), '_');
+  return name + ".png";
+}
+
+// One PNG per model into `dir` (created if missing), each written to a
+// temporary name and renamed: no half-written picture is left behind.
+Status draw_models(const std::string& dir, const std::vector<BuiltModel>& models,
+                   const std::vector<cv::Mat>& grays) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (!fs::is_directory(dir, ec))
+    return {StatusCode::kIoError, "--draw-model " + dir + ": not a directory"};
+  for (std::size_t m = 0; m < models.size(); ++m) {
+    const fs::path target = fs::path(dir) / picture_name(models[m].name);
+    const fs::path temporary = fs::path(dir) / (".kg-tmp-" + picture_name(models[m].name));
+    bool written = false;
+    try {
+      written = cv::imwrite(temporary.string(), draw_model(grays[m], models[m]));
+    } catch (const cv::Exception&) {
+      written = false;
+    }
+    if (!written) {
+      fs::remove(temporary, ec);
+      return {StatusCode::kIoError, "--draw-model: cannot write " + target.string()};
+    }
+    fs::rename(temporary, target, ec);
+    if (ec) {
+      fs::remove(temporary, ec);
+      return {StatusCode::kIoError, "--draw-model: cannot write " + target.string()};
+    }
+  }
+  return Status::ok();
+}
+
 }  // namespace
 
 int cmd_build(const Args& args) {
@@ -40,17 +95,20 @@ int cmd_build(const Args& args) {
   std::vector<std::optional<cv::Rect>> rois;
   std::optional<cv::Rect> pending_roi;
   std::optional<std::string> pending_name;
-  std::string output;
+  std::string output, draw_dir;
+  bool look_alikes = true;
   Params params;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     const bool has_value = i + 1 < args.size();
     if (a == "--name" || a == "-o" || a == "--output" || a == "--detector" || a == "--structure" ||
         a == "--vertex-descriptor" || a == "--encoding" || a == "--roi" || a == "--set" ||
-        a == "--min-size" || a == "--max-tilt") {
+        a == "--min-size" || a == "--max-tilt" || a == "--draw-model") {
       if (!has_value) return fail("build: " + a + " needs a value");
       const std::string& v = args[++i];
-      if (a == "--name") {
+      if (a == "--draw-model") {
+        draw_dir = v;
+      } else if (a == "--name") {
         if (pending_name) return fail("build: two --name options for one model image");
         pending_name = v;
       } else if (a == "--roi") {
@@ -89,6 +147,8 @@ int cmd_build(const Args& args) {
       } else {
         output = v;
       }
+    } else if (a == "--no-look-alikes") {
+      look_alikes = false;
     } else if (!a.empty() && a[0] == '-') {
       return fail("build: unknown option " + a);
     } else {
@@ -128,7 +188,28 @@ int cmd_build(const Args& args) {
                 static_cast<unsigned long long>(model.keygraphs),
                 static_cast<double>(bytes.size()) / 1024.0);
   }
-  Status s = write_index(models, params, out);
+  QualityOptions quality_options;
+  quality_options.look_alikes = look_alikes;
+  QualityReport quality;
+  if (Status s = measure_quality(models, grays, options.params, quality_options, quality); !s)
+    return fail("build: " + s.message());
+  // The report as inspect prints it: from the index's own bytes.
+  std::vector<std::uint8_t> bytes;
+  if (Status s = serialize_index(models, options.params, bytes, &quality); !s)
+    return fail("build: " + s.message());
+  const std::unique_ptr<std::uint8_t[]> storage(new std::uint8_t[bytes.size() + 64]);
+  std::uint8_t* aligned =
+      storage.get() + (64 - reinterpret_cast<std::uintptr_t>(storage.get()) % 64) % 64;
+  std::copy(bytes.begin(), bytes.end(), aligned);
+  ModelIndex index;
+  if (Status s = ModelIndex::view(aligned, bytes.size(), index); !s)
+    return fail("build: " + s.message());
+  print_quality_report(index, false, stdout);
+  if (!draw_dir.empty()) {
+    if (Status s = draw_models(draw_dir, models, grays); !s) return fail("build: " + s.message());
+  }
+  Status s = out.write(bytes.data(), bytes.size());
+  if (s) s = out.commit();
   if (!s) return fail(s.message());
   std::printf("wrote %s (%zu models)\n", output.c_str(), models.size());
   return 0;

@@ -33,8 +33,8 @@ void usage(std::FILE* out) {
       out,
       "  build [--name NAME]... [--roi X,Y,W,H] [--detector hessian|mser]\n"
       "        [--structure 2|3|4] [--vertex-descriptor none|sift]\n"
-      "        [--encoding float32|int16|int8]\n"
-      "        MODEL.png... -o OUT.kgi     compile model images into one index\n"
+      "        [--encoding float32|int16|int8] [--draw-model DIR] [--no-look-alikes]\n"
+      "        MODEL.png... -o OUT.kgi     compile model images into one index, rate them\n"
       "  detect --index I.kgi [--json] [--draw OUT.png] SCENE...\n"
       "                                    find the index's models in scene images\n"
       "  demo [--out DIR]                  build box.png from opencv-doc and find it\n"

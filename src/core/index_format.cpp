@@ -54,6 +54,12 @@ const char* section_name(std::uint32_t id) {
       return "leaf bounds";
     case kSectionKeypointViews:
       return "keypoint views";
+    case kSectionModelQuality:
+      return "model quality";
+    case kSectionViewQuality:
+      return "view quality";
+    case kSectionLookAlikes:
+      return "look-alikes";
     default:
       return "(unknown)";
   }

@@ -23,8 +23,9 @@ inline constexpr std::uint8_t kMagic[8] = {0x89, 'K', 'G', 'I', '\r', '\n', 0x1A
 // 5.0: search-tree leaves of up to 64 arcs (kLeafSize; 4.x: 32).
 // 6.0: model views (parameters views.*; arcs and their scale attributes
 // from simulated views) and the keypoint views section (11).
+// 6.1: the model quality report (sections 12-14); 6.0 files have none.
 inline constexpr std::uint16_t kVersionMajor = 6;
-inline constexpr std::uint16_t kVersionMinor = 0;
+inline constexpr std::uint16_t kVersionMinor = 1;
 inline constexpr std::size_t kAlignment = 64;
 
 inline constexpr std::size_t kHeaderSize = 64;
@@ -62,11 +63,16 @@ enum SectionId : std::uint32_t {
   kSectionTreeArcTargets = 9,     // int16 `to - from` per tree slot
   kSectionLeafBounds = 10,        // per tree leaf: minimum and maximum tree point, encoded
   kSectionKeypointViews = 11,     // u8 finest, u8 coarsest view scale code per keypoint
+  kSectionModelQuality = 12,      // quality record per model (6.1), or empty: no report
+  kSectionViewQuality = 13,       // quality record per model view (6.1)
+  kSectionLookAlikes = 14,        // (shown, detected) model pairs (6.1)
 };
 // Sections 1..kSectionCount are in every index and required (empty ones
-// included). Ids above are skipped by the reader: room for minor versions.
+// included); from minor version 1 on, sections 12..kLastSectionId too.
+// Ids above are skipped by the reader: room for later minor versions.
 inline constexpr std::uint32_t kSectionCount = 11;
-inline constexpr std::uint32_t kLastSectionId = 11;
+inline constexpr std::uint32_t kFirstQualitySection = 12;
+inline constexpr std::uint32_t kLastSectionId = 14;
 
 // View scale codes (section 11): code = round(-log2(scale) * 8), 0 for the
 // model image's own scale, one step per eighth of an octave; the scale of a
@@ -99,6 +105,30 @@ inline constexpr std::size_t kModArcCount = 24;  // arcs leaving the model's key
 inline constexpr std::size_t kModReserved = 28;  // u32, zero
 inline constexpr std::size_t kModKeygraphCount = 32;
 inline constexpr std::size_t kModOutline = 40;  // 8 x float32, then 8 reserved bytes
+
+// Model quality record (section 12, kModelQualitySize bytes), one per model
+// in model order.
+inline constexpr std::size_t kModelQualitySize = 32;
+inline constexpr std::size_t kMqViewBegin = 0;      // u32, first record of section 13
+inline constexpr std::size_t kMqViewCount = 4;      // u32
+inline constexpr std::size_t kMqSharedArcs = 8;     // u32, arcs with a near-identical arc elsewhere
+inline constexpr std::size_t kMqSmallestSize = 12;  // f32, long edge in px (0: no view)
+inline constexpr std::size_t kMqSceneSize = 16;     // f32, long edge of its scene (0: not rendered)
+inline constexpr std::size_t kMqFlags = 20;         // u32, kQuality* bits
+inline constexpr std::size_t kMqReserved = 24;      // 8 bytes, zero
+inline constexpr std::uint32_t kQualityFoundInScene = 1;  // detected in its own scene
+inline constexpr std::uint32_t kQualityFlagsKnown = kQualityFoundInScene;
+// View quality record (section 13, kViewQualitySize bytes).
+inline constexpr std::size_t kViewQualitySize = 24;
+inline constexpr std::size_t kVqScale = 0;       // f32, (0, 1]
+inline constexpr std::size_t kVqTilt = 4;        // f32, >= 1
+inline constexpr std::size_t kVqLongitude = 8;   // f32, degrees in [0, 180)
+inline constexpr std::size_t kVqKeypoints = 12;  // u32
+inline constexpr std::size_t kVqArcs = 16;       // u32
+inline constexpr std::size_t kVqKeygraphs = 20;  // u32, saturated
+// Look-alike record (section 14, kLookAlikeSize bytes): u32 the model whose
+// scene was rendered, u32 the other model detected in it; sorted, distinct.
+inline constexpr std::size_t kLookAlikeSize = 8;
 
 inline std::size_t align_up(std::size_t v) {
   return (v + kAlignment - 1) & ~(kAlignment - 1);

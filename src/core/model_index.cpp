@@ -293,7 +293,9 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
     if (crc32(d + sec.offset, static_cast<std::size_t>(sec.size)) != sec.crc)
       return corrupt(std::string(name) + " section: checksum mismatch");
   }
-  for (std::uint32_t id = 1; id <= kSectionCount; ++id) {
+  // Minor version 1 added the quality sections: required from then on.
+  const std::uint32_t required = minor >= 1 ? kLastSectionId : kSectionCount;
+  for (std::uint32_t id = 1; id <= required; ++id) {
     if (!sections[id].present) return corrupt(std::string(section_name(id)) + " section missing");
   }
   auto expect_size = [&](std::uint32_t id, std::uint64_t element) -> Status {
@@ -498,6 +500,27 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
     }
   }
 
+  if (sections[kSectionModelQuality].present) {
+    const Section& quality = sections[kSectionModelQuality];
+    const Section& view_quality = sections[kSectionViewQuality];
+    const Section& look_alikes = sections[kSectionLookAlikes];
+    if (!view_quality.present || !look_alikes.present)
+      return corrupt("model quality section without the view quality and look-alikes sections");
+    if (!(s = expect_size(kSectionModelQuality, kModelQualitySize))) return s;
+    if (!(s = expect_size(kSectionViewQuality, kViewQualitySize))) return s;
+    if (!(s = expect_size(kSectionLookAlikes, kLookAlikeSize))) return s;
+    if (!(s = validate_quality(d + quality.offset, quality.count, d + view_quality.offset,
+                               view_quality.count, d + look_alikes.offset, look_alikes.count)))
+      return s;
+    if (quality.count > 0) {
+      model_quality_ = d + quality.offset;
+      view_quality_ = d + view_quality.offset;
+      view_quality_count_ = view_quality.count;
+      look_alikes_ = d + look_alikes.offset;
+      look_alike_count_ = look_alikes.count;
+    }
+  }
+
   data_ = d;
   size_ = size;
   version_major_ = major;
@@ -516,6 +539,99 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   keypoint_scales_ = kp_scales;
   keypoint_views_ = kp_views;
   return Status::ok();
+}
+
+// The quality sections (12-14) against the models (validate() has checked
+// the model records and their arc counts): one record per model or none at
+// all, view ranges consecutive and covering section 13, values finite and in
+// range, look-alike pairs of two distinct models, sorted and distinct.
+Status ModelIndex::validate_quality(const std::uint8_t* quality, std::uint32_t quality_count,
+                                    const std::uint8_t* views, std::uint32_t view_count,
+                                    const std::uint8_t* pairs, std::uint32_t pair_count) const {
+  if (quality_count == 0) {
+    if (view_count != 0 || pair_count != 0)
+      return corrupt("view quality and look-alikes sections: not empty without model quality");
+    return Status::ok();
+  }
+  if (quality_count != model_count_)
+    return corrupt("model quality section: count " + std::to_string(quality_count) + ", expected " +
+                   std::to_string(model_count_) + " (one per model, or none)");
+  std::uint32_t next_view = 0;
+  for (std::uint32_t m = 0; m < quality_count; ++m) {
+    const std::uint8_t* q = quality + static_cast<std::size_t>(m) * kModelQualitySize;
+    auto bad = [m](const char* what) {
+      return corrupt("model quality " + std::to_string(m) + ": " + what);
+    };
+    if (load<std::uint32_t>(q + kMqViewBegin) != next_view) return bad("view range not contiguous");
+    const auto count = load<std::uint32_t>(q + kMqViewCount);
+    if (count > view_count - next_view) return bad("view range out of bounds");
+    next_view += count;
+    const auto arcs = load<std::uint32_t>(models_ + m * kModelRecordSize + kModArcCount);
+    if (load<std::uint32_t>(q + kMqSharedArcs) > arcs) return bad("more shared arcs than arcs");
+    const float smallest = load<float>(q + kMqSmallestSize);
+    const float scene = load<float>(q + kMqSceneSize);
+    if (!(smallest >= 0.f && smallest < 1e6f) || !(scene >= 0.f && scene < 1e6f))
+      return bad("bad size");
+    const auto flags = load<std::uint32_t>(q + kMqFlags);
+    if ((flags & ~kQualityFlagsKnown) != 0 || load<std::uint64_t>(q + kMqReserved) != 0)
+      return bad("unknown flags or reserved bytes set");
+  }
+  if (next_view != view_count)
+    return corrupt("model quality section: view ranges do not cover all view records");
+  for (std::uint32_t v = 0; v < view_count; ++v) {
+    const std::uint8_t* r = views + static_cast<std::size_t>(v) * kViewQualitySize;
+    const float scale = load<float>(r + kVqScale), tilt = load<float>(r + kVqTilt),
+                longitude = load<float>(r + kVqLongitude);
+    if (!(scale > 0.f && scale <= 1.f) || !(tilt >= 1.f && tilt < 1e3f) ||
+        !(longitude >= 0.f && longitude < 180.f))
+      return corrupt("view quality " + std::to_string(v) + ": bad scale, tilt or longitude");
+  }
+  for (std::uint32_t i = 0; i < pair_count; ++i) {
+    const std::uint8_t* p = pairs + static_cast<std::size_t>(i) * kLookAlikeSize;
+    const auto shown = load<std::uint32_t>(p), detected = load<std::uint32_t>(p + 4);
+    if (shown >= model_count_ || detected >= model_count_ || shown == detected)
+      return corrupt("look-alike " + std::to_string(i) + ": model ids " + std::to_string(shown) +
+                     ", " + std::to_string(detected) + " invalid");
+    if (i > 0) {
+      const auto prev_shown = load<std::uint32_t>(p - kLookAlikeSize);
+      const auto prev_detected = load<std::uint32_t>(p - kLookAlikeSize + 4);
+      if (prev_shown > shown || (prev_shown == shown && prev_detected >= detected))
+        return corrupt("look-alike " + std::to_string(i) + ": pairs not sorted or repeated");
+    }
+  }
+  return Status::ok();
+}
+
+ModelQuality ModelIndex::model_quality(int i) const {
+  ModelQuality q;
+  if (model_quality_ == nullptr || i < 0 || static_cast<std::uint32_t>(i) >= model_count_) return q;
+  const std::uint8_t* r = model_quality_ + static_cast<std::size_t>(i) * kModelQualitySize;
+  q.view_begin = load<std::uint32_t>(r + kMqViewBegin);
+  q.view_count = load<std::uint32_t>(r + kMqViewCount);
+  q.shared_arcs = load<std::uint32_t>(r + kMqSharedArcs);
+  q.smallest_size = load<float>(r + kMqSmallestSize);
+  q.scene_size = load<float>(r + kMqSceneSize);
+  q.found_in_scene = (load<std::uint32_t>(r + kMqFlags) & kQualityFoundInScene) != 0;
+  return q;
+}
+
+ViewQuality ModelIndex::view_quality(std::uint32_t i) const {
+  ViewQuality v;
+  if (i >= view_quality_count_) return v;
+  const std::uint8_t* r = view_quality_ + static_cast<std::size_t>(i) * kViewQualitySize;
+  v.scale = load<float>(r + kVqScale);
+  v.tilt = load<float>(r + kVqTilt);
+  v.longitude = load<float>(r + kVqLongitude);
+  v.keypoints = load<std::uint32_t>(r + kVqKeypoints);
+  v.arcs = load<std::uint32_t>(r + kVqArcs);
+  v.keygraphs = load<std::uint32_t>(r + kVqKeygraphs);
+  return v;
+}
+
+LookAlike ModelIndex::look_alike(std::uint32_t i) const {
+  if (i >= look_alike_count_) return {};
+  const std::uint8_t* r = look_alikes_ + static_cast<std::size_t>(i) * kLookAlikeSize;
+  return {load<std::uint32_t>(r), load<std::uint32_t>(r + 4)};
 }
 
 ModelInfo ModelIndex::model(int i) const {

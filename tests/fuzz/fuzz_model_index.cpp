@@ -134,6 +134,23 @@ void exercise(const kg::ModelIndex& index) {
     const kg::ModelArc arc = index.arc(i);
     require(arc.from < keypoints && arc.to < keypoints, "arc keypoint id out of bounds");
   }
+  // The quality report (format 6.1): what inspect reads of it is in range.
+  if (index.has_quality()) {
+    for (int i = 0; i < index.model_count(); ++i) {
+      const kg::ModelQuality q = index.model_quality(i);
+      require(std::uint64_t{q.view_begin} + q.view_count <= index.view_quality_count(),
+              "quality view range out of bounds");
+      require(q.shared_arcs <= index.model(i).arc_count, "more shared arcs than arcs");
+      for (std::uint32_t v = q.view_begin; v < q.view_begin + q.view_count; ++v)
+        name_bytes += index.view_quality(v).keypoints & 1u;
+    }
+    for (std::uint32_t i = 0; i < index.look_alike_count(); ++i) {
+      const kg::LookAlike p = index.look_alike(i);
+      require(p.shown < static_cast<std::uint32_t>(index.model_count()) &&
+                  p.detected < static_cast<std::uint32_t>(index.model_count()),
+              "look-alike model id out of bounds");
+    }
+  }
   counts.name_bytes += name_bytes;
   if (reader_only) return;
 

@@ -183,8 +183,8 @@ if "$KG" inspect "$INDEX" >"$LOG/stdout" 2>"$LOG/stderr"; then
   grep -Eq '^ +[0-9]+ +box +[0-9]+ +[0-9]+ ' "$LOG/stdout" ||
     bad "inspect: no model line for 'box' in: $(cat "$LOG/stdout")"
   # Every section, every checksum verified.
-  [ "$(grep -Ec '^ +[0-9]+ .* crc ok$' "$LOG/stdout")" -eq 11 ] ||
-    bad "inspect: expected 11 'crc ok' sections in: $(cat "$LOG/stdout")"
+  [ "$(grep -Ec '^ +[0-9]+ .* crc ok$' "$LOG/stdout")" -eq 14 ] ||
+    bad "inspect: expected 14 'crc ok' sections in: $(cat "$LOG/stdout")"
   grep -q 'crc BAD' "$LOG/stdout" && bad "inspect: a good index shows 'crc BAD'"
   grep -Eq '^format 6\.[0-9]+, ' "$LOG/stdout" || bad "inspect: no format line"
   grep -Eq '^  descriptor\.encoding +(float32|int16|int8)$' "$LOG/stdout" ||

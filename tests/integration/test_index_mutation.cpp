@@ -6,8 +6,8 @@
 // the `sanitize` preset's AddressSanitizer and UBSan catch: every mutant sits
 // in a buffer of exactly its size, so a read past its end is reported.
 //
-// Only the public API (ModelIndex::view, Detector) and serialize_index are
-// used, and no mutation knows the layout (docs/FORMAT.md): positions are
+// Only the public API (ModelIndex::view, Detector), serialize_index and
+// measure_quality are used, and no mutation knows the layout (docs/FORMAT.md): positions are
 // chosen densely over the first bytes of a file (where any layout keeps its
 // fixed-size structures) and at random over the rest.
 #include <gtest/gtest.h>
@@ -24,6 +24,7 @@
 #include <opencv2/core.hpp>
 
 #include "build/model_builder.h"
+#include "build/model_quality.h"
 #include "keygraph/detector.h"
 #include "keygraph/model_index.h"
 #include "test_data.h"
@@ -67,8 +68,12 @@ Bytes build_index(const cv::Mat& gray, const std::string& name) {
   BuiltModel model;
   Status s = build_model(gray, name, params, model);
   EXPECT_TRUE(s.is_ok()) << s.message();
+  // With the quality report keygraph build stores (format 6.1).
+  QualityReport quality;
+  s = measure_quality({model}, {gray}, params, QualityOptions{}, quality);
+  EXPECT_TRUE(s.is_ok()) << s.message();
   Bytes bytes;
-  s = serialize_index({model}, params, bytes);
+  s = serialize_index({model}, params, bytes, &quality);
   EXPECT_TRUE(s.is_ok()) << s.message();
   return bytes;
 }

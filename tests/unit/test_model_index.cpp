@@ -29,6 +29,7 @@
 #include "alloc_counter.h"
 #include "build/desktop_detect.h"
 #include "build/model_builder.h"
+#include "build/model_quality.h"
 #include "core/arc_attributes.h"
 #include "core/crc32.h"
 #include "core/descriptor_encoding.h"
@@ -126,7 +127,7 @@ void fix_header_crc(Bytes& b) {
 // Recomputes every section CRC, then the header CRC: after this only the
 // semantic checks can reject the file.
 void reseal(Bytes& b) {
-  for (std::uint32_t id = 1; id <= format::kSectionCount; ++id) {
+  for (std::uint32_t id = 1; id <= format::kLastSectionId; ++id) {
     const std::size_t e = entry(b, id);
     store<std::uint32_t>(b.data() + e + format::kEntCrc,
                          crc32(b.data() + section_offset(b, id), section_size(b, id)));
@@ -158,8 +159,12 @@ struct Corpus {
   std::vector<BuiltModel> models;  // box.png, a 200x200 crop of graf1.png
   Bytes bytes;                     // serialize_index(models, params): the default encoding
   Bytes encoded[3];                // the same in each encoding (index: DescriptorEncoding)
-  Bytes small;                     // two small crops (box.png, graf1.png): for the bit-flip sweep
-  Bytes small_encoded[3];          // the same in each encoding
+  // Two small crops (box.png, graf1.png) with their measured quality
+  // report: for the bit-flip sweep.
+  Bytes small;
+  Bytes small_encoded[3];  // the same in each encoding
+  QualityReport small_quality;
+  std::vector<BuiltModel> small_models;
 };
 
 std::string build(const cv::Mat& gray, const std::string& name, BuiltModel& out) {
@@ -194,13 +199,17 @@ const Corpus& corpus() {
     if (k.error.empty())
       k.error = build(graf(cv::Rect(350, 250, 80, 80)).clone(), "graf1_small", small[1]);
     if (k.error.empty()) {
-      const Status s = serialize_index(small, k.params, k.small);
+      const std::vector<cv::Mat> grays = {box(cv::Rect(100, 50, 96, 96)).clone(),
+                                          graf(cv::Rect(350, 250, 80, 80)).clone()};
+      k.small_models = small;
+      Status s = measure_quality(small, grays, k.params, QualityOptions{}, k.small_quality);
+      if (s) s = serialize_index(small, k.params, k.small, &k.small_quality);
       if (!s) k.error = s.message();
     }
     for (DescriptorEncoding e : kEncodings) {
       if (!k.error.empty()) break;
-      const Status s =
-          serialize_index(small, with_encoding(e), k.small_encoded[static_cast<int>(e)]);
+      const Status s = serialize_index(small, with_encoding(e),
+                                       k.small_encoded[static_cast<int>(e)], &k.small_quality);
       if (!s) k.error = s.message();
     }
     return k;
@@ -1045,10 +1054,13 @@ TEST(Golden, RebuildIsByteIdentical) {
     const Params params = with_encoding(e, Params{});  // the defaults: views on
     std::vector<BuiltModel> models(1);
     ASSERT_TRUE(build_model(box(kGoldenCrop).clone(), "box_crop", params, models[0]));
+    // With its quality report, as keygraph build writes it.
+    QualityReport quality;
+    ASSERT_TRUE(measure_quality(models, {box(kGoldenCrop).clone()}, params, {}, quality));
     Bytes rebuilt;
-    ASSERT_TRUE(serialize_index(models, params, rebuilt));
+    ASSERT_TRUE(serialize_index(models, params, rebuilt, &quality));
     if (update != nullptr && std::string(update) == "1") {
-      const Status s = write_index(models, params, golden_path(e).string());
+      const Status s = write_index(models, params, golden_path(e).string(), &quality);
       ASSERT_TRUE(s) << s.message();
       std::printf("wrote %s (%zu bytes)\n", golden_path(e).string().c_str(), rebuilt.size());
       continue;
@@ -1617,7 +1629,7 @@ TEST_F(ModelIndexTest, BitFlipSweep) {
     const std::size_t n = good.size();
     std::vector<bool> covered(n, false);
     for (std::size_t i = 0; i < table_end(good); ++i) covered[i] = true;
-    for (std::uint32_t id = 1; id <= format::kSectionCount; ++id) {
+    for (std::uint32_t id = 1; id <= format::kLastSectionId; ++id) {
       const std::size_t off = section_offset(good, id), size = section_size(good, id);
       for (std::size_t i = off; i < off + size; ++i) covered[i] = true;
     }
@@ -1686,8 +1698,10 @@ TEST_F(ModelIndexTest, ResealedMutationsAreRejectedOrHarmless) {
     int rejected_count = 0, loaded = 0, detected = 0;
     for (int k = 0; k < 1500; ++k) {
       Bytes b = good;
-      // A section with bytes (1..6: models to tree nodes), a byte in it.
-      const auto id = static_cast<std::uint32_t>(1 + next() % 6);
+      // A section with bytes (1..6: models to tree nodes; 12..14: the
+      // quality report), a byte in it.
+      constexpr std::uint32_t kIds[] = {1, 2, 3, 4, 5, 6, 12, 13, 14};
+      const std::uint32_t id = kIds[next() % std::size(kIds)];
       const std::size_t size = section_size(b, id);
       if (size == 0) continue;
       const std::size_t at = section_offset(b, id) + next() % size;
@@ -1726,6 +1740,183 @@ TEST_F(ModelIndexTest, ResealedMutationsAreRejectedOrHarmless) {
     EXPECT_GT(rejected_count, 0);
     EXPECT_GT(loaded, 0);
   }
+}
+
+// --- The quality report (format 6.1, sections 12-14) ----------------------
+
+TEST_F(ModelIndexTest, QualityReportRoundTrips) {
+  {
+    // Written without a report: empty sections, none read back.
+    AlignedBytes buffer(bytes());
+    ModelIndex index;
+    ASSERT_TRUE(ModelIndex::view(buffer.data(), buffer.size(), index));
+    EXPECT_FALSE(index.has_quality());
+    EXPECT_EQ(index.view_quality_count(), 0u);
+    EXPECT_EQ(index.look_alike_count(), 0u);
+  }
+  const QualityReport& q = corpus().small_quality;
+  const std::vector<BuiltModel>& small = corpus().small_models;
+  ASSERT_EQ(q.models.size(), 2u);
+  AlignedBytes buffer(corpus().small);
+  ModelIndex index;
+  const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
+  ASSERT_TRUE(s) << s.message();
+  ASSERT_TRUE(index.has_quality());
+  ASSERT_EQ(index.view_quality_count(), q.views.size());
+  for (int m = 0; m < 2; ++m) {
+    const ModelQuality got = index.model_quality(m), want = q.models[m];
+    EXPECT_EQ(got.view_begin, want.view_begin);
+    EXPECT_EQ(got.view_count, small[m].views.size());
+    EXPECT_EQ(got.shared_arcs, want.shared_arcs);
+    EXPECT_LE(got.shared_arcs, small[m].arcs.size());
+    EXPECT_EQ(got.smallest_size, want.smallest_size);
+    EXPECT_GT(got.scene_size, 0.f);  // the look-alike check ran
+    EXPECT_EQ(got.found_in_scene, want.found_in_scene);
+    for (std::uint32_t v = 0; v < got.view_count; ++v) {
+      const ViewQuality vq = index.view_quality(got.view_begin + v);
+      const ViewSummary& built = small[m].views[v];
+      EXPECT_EQ(vq.scale, static_cast<float>(built.scale));
+      EXPECT_EQ(vq.keypoints, static_cast<std::uint32_t>(built.keypoints));
+      EXPECT_EQ(vq.arcs, static_cast<std::uint32_t>(built.view_arcs));
+      EXPECT_EQ(vq.keygraphs, built.keygraphs);
+      EXPECT_GE(vq.arcs, static_cast<std::uint32_t>(built.arcs));  // before deduplication
+    }
+  }
+  ASSERT_EQ(index.look_alike_count(), q.look_alikes.size());
+  // Out-of-range requests give empty records, never a read out of bounds.
+  EXPECT_EQ(index.model_quality(2).view_count, 0u);
+  EXPECT_EQ(index.view_quality(index.view_quality_count()).keypoints, 0u);
+}
+
+// The small corpus with look-alike pairs written in (the writer takes any
+// valid report), so that the look-alikes section has bytes to damage.
+Bytes with_look_alikes(const std::vector<LookAlike>& pairs) {
+  QualityReport q = corpus().small_quality;
+  q.look_alikes = pairs;
+  Bytes b;
+  EXPECT_TRUE(serialize_index(corpus().small_models, corpus().params, b, &q));
+  return b;
+}
+
+TEST_F(ModelIndexTest, RejectsBadQualitySections) {
+  using namespace format;
+  const Bytes good = with_look_alikes({{0, 1}, {1, 0}});
+  ASSERT_TRUE(try_view(good));
+  const std::size_t mq = section_offset(good, kSectionModelQuality);
+  const std::size_t vq = section_offset(good, kSectionViewQuality);
+  const std::size_t la = section_offset(good, kSectionLookAlikes);
+  const std::size_t second = mq + kModelQualitySize;
+  auto damaged = [&](auto&& change) {
+    Bytes b = good;
+    change(b);
+    reseal(b);
+    return b;
+  };
+  EXPECT_TRUE(rejected(damaged([&](Bytes& b) {
+                         store<std::uint32_t>(b.data() + second + kMqViewBegin,
+                                              load<std::uint32_t>(b.data() + second) + 1);
+                       }),
+                       "model quality 1: view range not contiguous"));
+  EXPECT_TRUE(rejected(damaged([&](Bytes& b) {
+                         store<std::uint32_t>(b.data() + second + kMqViewCount, 0xFFFFFFFFu);
+                       }),
+                       "model quality 1: view range out of bounds"));
+  EXPECT_TRUE(rejected(damaged([&](Bytes& b) {
+                         store<std::uint32_t>(b.data() + second + kMqViewCount,
+                                              load<std::uint32_t>(b.data() + second + 4) - 1);
+                       }),
+                       "view ranges do not cover all view records"));
+  EXPECT_TRUE(rejected(
+      damaged([&](Bytes& b) { store<std::uint32_t>(b.data() + mq + kMqSharedArcs, 0xFFFFFFF0u); }),
+      "model quality 0: more shared arcs than arcs"));
+  for (const float size : {std::nanf(""), -1.f, std::numeric_limits<float>::infinity()}) {
+    EXPECT_TRUE(
+        rejected(damaged([&](Bytes& b) { store<float>(b.data() + mq + kMqSmallestSize, size); }),
+                 "model quality 0: bad size"));
+    EXPECT_TRUE(
+        rejected(damaged([&](Bytes& b) { store<float>(b.data() + second + kMqSceneSize, size); }),
+                 "model quality 1: bad size"));
+  }
+  EXPECT_TRUE(
+      rejected(damaged([&](Bytes& b) { store<std::uint32_t>(b.data() + mq + kMqFlags, 2); }),
+               "unknown flags or reserved bytes set"));
+  EXPECT_TRUE(rejected(damaged([&](Bytes& b) { b[mq + kMqReserved + 7] = 1; }),
+                       "unknown flags or reserved bytes set"));
+  EXPECT_TRUE(rejected(damaged([&](Bytes& b) { store<float>(b.data() + vq + kVqScale, 0.f); }),
+                       "view quality 0: bad scale, tilt or longitude"));
+  EXPECT_TRUE(rejected(damaged([&](Bytes& b) { store<float>(b.data() + vq + kVqTilt, 0.5f); }),
+                       "view quality 0: bad scale, tilt or longitude"));
+  EXPECT_TRUE(
+      rejected(damaged([&](Bytes& b) { store<float>(b.data() + vq + kVqLongitude, 180.f); }),
+               "view quality 0: bad scale, tilt or longitude"));
+  EXPECT_TRUE(
+      rejected(damaged([&](Bytes& b) { store<std::uint32_t>(b.data() + la, 2); }),  // 2 models
+               "look-alike 0: model ids 2, 1 invalid"));
+  EXPECT_TRUE(
+      rejected(damaged([&](Bytes& b) { store<std::uint32_t>(b.data() + la + 4, 0); }),  // itself
+               "look-alike 0: model ids 0, 0 invalid"));
+  EXPECT_TRUE(rejected(damaged([&](Bytes& b) {
+                         store<std::uint32_t>(b.data() + la + kLookAlikeSize, 0);
+                         store<std::uint32_t>(b.data() + la + kLookAlikeSize + 4, 1);
+                       }),
+                       "look-alike 1: pairs not sorted or repeated"));
+  // Counts against sizes and against the models.
+  EXPECT_TRUE(rejected(damaged([&](Bytes& b) {
+                         const std::size_t e = entry(b, kSectionModelQuality);
+                         store<std::uint32_t>(b.data() + e + kEntCount, 1);
+                         store<std::uint64_t>(b.data() + e + kEntSize, kModelQualitySize);
+                       }),
+                       "model quality section: count 1, expected 2"));
+  EXPECT_TRUE(rejected(damaged([&](Bytes& b) {
+                         const std::size_t e = entry(b, kSectionModelQuality);
+                         store<std::uint32_t>(b.data() + e + kEntCount, 0);
+                         store<std::uint64_t>(b.data() + e + kEntSize, 0);
+                       }),
+                       "not empty without model quality"));
+  EXPECT_TRUE(rejected(damaged([&](Bytes& b) {
+                         store<std::uint32_t>(b.data() + entry(b, kSectionLookAlikes) + kEntCount,
+                                              3);
+                       }),
+                       "look-alikes section: size 16 does not match count 3"));
+  // A 6.1 file must have the three sections; a 6.0 file has none and loads
+  // without a report.
+  Bytes renamed = good;
+  store<std::uint32_t>(renamed.data() + entry(renamed, kSectionViewQuality) + kEntId, 99);
+  fix_header_crc(renamed);
+  EXPECT_TRUE(rejected(renamed, "view quality section missing"));
+  Bytes older = good;
+  for (std::uint32_t id : {kSectionModelQuality, kSectionViewQuality, kSectionLookAlikes})
+    store<std::uint32_t>(older.data() + entry(older, id) + kEntId, 90 + id);
+  store<std::uint16_t>(older.data() + kOffMinor, 0);
+  fix_header_crc(older);
+  AlignedBytes buffer(older);
+  ModelIndex index;
+  const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_FALSE(index.has_quality());
+  EXPECT_EQ(index.version_minor(), 0);
+  // A flipped byte in each quality section fails its checksum.
+  for (std::uint32_t id : {kSectionModelQuality, kSectionViewQuality, kSectionLookAlikes}) {
+    Bytes b = good;
+    b[section_offset(b, id) + section_size(b, id) - 1] ^= 0x40;
+    EXPECT_TRUE(rejected(b, std::string(section_name(id)) + " section: checksum mismatch"));
+  }
+}
+
+TEST_F(ModelIndexTest, SerializeRejectsBadQualityReport) {
+  const std::vector<BuiltModel>& small = corpus().small_models;
+  Bytes b;
+  QualityReport q = corpus().small_quality;
+  q.models.pop_back();
+  EXPECT_FALSE(serialize_index(small, corpus().params, b, &q));
+  q = corpus().small_quality;
+  q.look_alikes = {{1, 1}};
+  EXPECT_FALSE(serialize_index(small, corpus().params, b, &q));
+  q.look_alikes = {{1, 0}, {0, 1}};  // not sorted
+  EXPECT_FALSE(serialize_index(small, corpus().params, b, &q));
+  q = corpus().small_quality;
+  q.views.pop_back();
+  EXPECT_FALSE(serialize_index(small, corpus().params, b, &q));
 }
 
 }  // namespace

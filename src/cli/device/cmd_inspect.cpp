@@ -1,6 +1,7 @@
 // keygraph inspect I.kgi
 // Prints the header, every parameter, the section table with each section's
-// checksum verified, per-model counts and sizes, and the bytes per arc.
+// checksum verified, per-model counts and sizes, the bytes per arc, and
+// the model quality report (cli/device/quality_report.h).
 // A file the reader rejects exits 1 with the reader's message on one stderr
 // line (after the header and table, when those could be read, so that the
 // damaged section shows as "crc BAD").
@@ -13,6 +14,7 @@
 #include <vector>
 
 #include "cli/device/device_commands.h"
+#include "cli/device/quality_report.h"
 #include "core/crc32.h"
 #include "core/descriptor_encoding.h"
 #include "core/index_format.h"
@@ -193,6 +195,7 @@ int cmd_inspect(const Args& args) {
   if (!status) return fail(status.message());
   if (!shown) return fail(path + ": cannot read the section table");
   print_index(index);
+  print_quality_report(index, true, stdout);
   return 0;
 }
 
