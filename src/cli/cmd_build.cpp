@@ -17,6 +17,7 @@
 #include "build/model_builder.h"
 #include "build/model_set.h"
 #include "build/param_overrides.h"
+#include "build/progress.h"
 #include "cli/commands.h"
 #include "cli/device/options.h"
 #include "core/param_names.h"
@@ -43,6 +44,7 @@ int cmd_build(const Args& args) {
   std::optional<std::string> pending_name;
   std::string output;
   Params params;
+  bool quiet = false;
   // A value of `params` (the defaults of the options below) as text.
   auto param_text = [&params](const char* name) {
     std::string text;
@@ -139,6 +141,9 @@ int cmd_build(const Args& args) {
                if (Status s = apply_param_override(v, params); !s) return s.message();
                return {};
              })
+      .flag("-q, --quiet", quiet,
+            "no progress on stderr (by default one line rewritten in place on a\n"
+            "terminal, otherwise a line per model)")
       .example("keygraph build --name exit --roi 10,10,200,120 exit.png stairs.png -o signs.kgi");
   if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
   if (pending_roi) return table.usage_error("--roi must come before the model image it applies to");
@@ -159,8 +164,11 @@ int cmd_build(const Args& args) {
   options.params = params;
   std::vector<cv::Mat> grays;
   std::vector<BuiltModel> models;
-  if (Status s = build_model_set(sources, options, load_image, grays, models); !s)
-    return fail("build: " + s.message());
+  ProgressReporter progress({"build", "model", is_terminal(stderr), true},
+                            quiet ? nullptr : stderr);
+  Status built = build_model_set(sources, options, load_image, grays, models, progress.callback());
+  progress.finish();
+  if (!built) return fail("build: " + built.message());
   for (const BuiltModel& model : models) {
     // Its size alone: what this model adds to an index.
     std::vector<std::uint8_t> bytes;

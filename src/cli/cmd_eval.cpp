@@ -18,6 +18,7 @@
 #include "build/oxford.h"
 #include "build/oxford_report.h"
 #include "build/param_overrides.h"
+#include "build/progress.h"
 #include "build/report_io.h"
 #include "build/synth_eval.h"
 #include "cli/commands.h"
@@ -28,25 +29,6 @@
 namespace kg::cli {
 
 namespace {
-
-bool progress_shown = false;
-
-// Clears the progress line, if any, before results or an error.
-void clear_progress() {
-  if (progress_shown) std::fprintf(stderr, "\r%60s\r", "");
-  progress_shown = false;
-}
-
-void print_oxford_progress(const OxfordCase& c) {
-  progress_shown = true;
-  std::fprintf(stderr, "\r%-13s %-8s crop %2d img%d %s", c.method.c_str(), c.subset.c_str(), c.crop,
-               c.degree, c.negative ? "(negative)" : "          ");
-}
-
-void print_synth_progress(const SynthCase& c) {
-  progress_shown = true;
-  std::fprintf(stderr, "\r%-13s index of %2d  frame %4d", c.method.c_str(), c.index_size, c.frame);
-}
 
 std::vector<std::string> split(const std::string& v) {
   std::vector<std::string> out;
@@ -75,10 +57,14 @@ Options::Apply set_methods(std::vector<std::string>& methods) {
   };
 }
 
+const char* const kQuietHelp =
+    "no progress on stderr (by default one line rewritten in place on a\n"
+    "terminal, otherwise a line every 10 %)";
+
 const char* const kMethodsHelp =
     "keygraph, keygraph-mser and/or baselines (sift-ransac, ...); all: every one";
 
-Options oxford_options(OxfordEvalOptions& o, std::string& out_dir, std::string& csv) {
+Options oxford_options(OxfordEvalOptions& o, std::string& out_dir, std::string& csv, bool& quiet) {
   Options options(
       "eval",
       "--dataset DIR [--subsets a,b] [--crops N] [--size S] [--centre] [--seed N]\n"
@@ -105,11 +91,12 @@ Options oxford_options(OxfordEvalOptions& o, std::string& out_dir, std::string& 
       .flag("--curves", o.curves, "precision-recall of correspondences and RANSAC iterations")
       .text("--out", "DIR", out_dir, "also write the report (tables, plots) into DIR")
       .text("--csv", "FILE", csv, "also write every case to FILE")
+      .flag("-q, --quiet", quiet, kQuietHelp)
       .example("keygraph eval --dataset ../shared/data/oxford --subsets graf,boat --methods all");
   return options;
 }
 
-Options synth_options(SynthEvalOptions& o, std::string& out_dir) {
+Options synth_options(SynthEvalOptions& o, std::string& out_dir, bool& quiet) {
   Options options("eval",
                   "--synth DIR [--sizes 1,10,50] [--frames N] [--methods M,...|all]\n"
                   "       [--set NAME=VALUE]... [--out DIR]",
@@ -146,6 +133,7 @@ Options synth_options(SynthEvalOptions& o, std::string& out_dir) {
       .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h, repeatable",
              set_param(o.params))
       .text("--out", "DIR", out_dir, "also write the report (tables, plots) into DIR")
+      .flag("-q, --quiet", quiet, kQuietHelp)
       .example("keygraph eval --synth signs-bench --sizes 1,50 --methods keygraph,sift-ransac");
   return options;
 }
@@ -159,9 +147,10 @@ int cmd_eval(const Args& args) {
     SynthEvalOptions synth;
     TruthEvalOptions truth;
     std::string out_dir, csv;
-    std::fputs(oxford_options(oxford, out_dir, csv).help().c_str(), stdout);
-    std::fputs(("\n" + synth_options(synth, out_dir).help()).c_str(), stdout);
-    std::fputs(("\n" + truth_options(truth, out_dir).help()).c_str(), stdout);
+    bool quiet = false;
+    std::fputs(oxford_options(oxford, out_dir, csv, quiet).help().c_str(), stdout);
+    std::fputs(("\n" + synth_options(synth, out_dir, quiet).help()).c_str(), stdout);
+    std::fputs(("\n" + truth_options(truth, out_dir, quiet).help()).c_str(), stdout);
     return 0;
   }
   for (const std::string& a : args) {
@@ -170,10 +159,11 @@ int cmd_eval(const Args& args) {
   OxfordEvalOptions options;
   SynthEvalOptions synth;
   std::string csv, out_dir;
+  bool quiet = false;
   bool synth_mode = false;
   for (const std::string& a : args) synth_mode = synth_mode || a == "--synth";
-  const Options table =
-      synth_mode ? synth_options(synth, out_dir) : oxford_options(options, out_dir, csv);
+  const Options table = synth_mode ? synth_options(synth, out_dir, quiet)
+                                   : oxford_options(options, out_dir, csv, quiet);
   if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
   if (options.dataset.empty() && synth.directory.empty())
     return table.usage_error(
@@ -188,8 +178,10 @@ int cmd_eval(const Args& args) {
 
   if (synth_mode) {
     std::vector<SynthCase> cases;
-    Status s = evaluate_synth(synth, cases, print_synth_progress);
-    clear_progress();
+    ProgressReporter progress({"eval", "case", is_terminal(stderr), false},
+                              quiet ? nullptr : stderr);
+    Status s = evaluate_synth(synth, cases, progress.callback());
+    progress.finish();
     if (!s) return fail(s.message());
     const std::vector<SynthRow> rows = synth_tallies(cases, synth);
     std::fputs(synth_text(rows, synth_by_scale(cases, synth)).c_str(), stdout);
@@ -200,8 +192,9 @@ int cmd_eval(const Args& args) {
   }
 
   std::vector<OxfordCase> cases;
-  Status s = evaluate_oxford(options, cases, print_oxford_progress);
-  clear_progress();
+  ProgressReporter progress({"eval", "case", is_terminal(stderr), false}, quiet ? nullptr : stderr);
+  Status s = evaluate_oxford(options, cases, progress.callback());
+  progress.finish();
   if (!s) return fail(s.message());
   const std::vector<OxfordRow> rows = oxford_tallies(cases, options.methods);
   std::fputs(

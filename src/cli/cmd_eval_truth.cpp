@@ -11,6 +11,7 @@
 
 #include "build/baselines.h"
 #include "build/param_overrides.h"
+#include "build/progress.h"
 #include "build/truth_eval.h"
 #include "build/truth_report.h"
 #include "cli/commands.h"
@@ -19,23 +20,9 @@
 
 namespace kg::cli {
 
-namespace {
+namespace {}  // namespace
 
-bool progress_shown = false;
-
-void print_progress(const std::string& method, int scene, int scenes) {
-  progress_shown = true;
-  std::fprintf(stderr, "\r%-13s scene %4d/%-4d", method.c_str(), scene + 1, scenes);
-}
-
-void clear_progress() {
-  if (progress_shown) std::fprintf(stderr, "\r%60s\r", "");
-  progress_shown = false;
-}
-
-}  // namespace
-
-Options truth_options(TruthEvalOptions& o, std::string& out_dir) {
+Options truth_options(TruthEvalOptions& o, std::string& out_dir, bool& quiet) {
   std::string methods;
   for (const std::string& m : o.methods) methods += (methods.empty() ? "" : ",") + m;
   Options options("eval",
@@ -65,6 +52,9 @@ Options truth_options(TruthEvalOptions& o, std::string& out_dir) {
              })
       .text("--out", "DIR", out_dir, "also write the report (tables, pictures) into DIR")
       .flag("--gallery", o.gallery, "with --out: draw the scenes with a miss or a false detection")
+      .flag("-q, --quiet", quiet,
+            "no progress on stderr (by default one line rewritten in place on a\n"
+            "terminal, otherwise a line every 10 %)")
       .example("keygraph eval --truth exit.jsonl --models exit-sign-models.json --out report/");
   return options;
 }
@@ -72,7 +62,8 @@ Options truth_options(TruthEvalOptions& o, std::string& out_dir) {
 int cmd_eval_truth(const Args& args) {
   TruthEvalOptions options;
   std::string out_dir;
-  const Options table = truth_options(options, out_dir);
+  bool quiet = false;
+  const Options table = truth_options(options, out_dir, quiet);
   if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
   if (options.manifest.empty()) return table.usage_error("--truth needs a manifest");
   if (Status s = format::validate_params(options.params); !s) return fail("eval: " + s.message());
@@ -86,8 +77,9 @@ int cmd_eval_truth(const Args& args) {
       return fail("eval: --out " + out_dir + ": not a directory (nor one that can be created)");
   }
   TruthResults results;
-  Status s = evaluate_truth(options, results, print_progress);
-  clear_progress();
+  ProgressReporter progress({"eval", "case", is_terminal(stderr), false}, quiet ? nullptr : stderr);
+  Status s = evaluate_truth(options, results, progress.callback());
+  progress.finish();
   if (!s) return fail("eval: " + s.message());
   std::fputs(truth_text(truth_tallies(results), options, results).c_str(), stdout);
   if (!out_dir.empty()) {

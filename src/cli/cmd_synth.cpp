@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <string>
 
+#include "build/progress.h"
 #include "build/sign_catalogue.h"
 #include "build/synth_set.h"
 #include "cli/commands.h"
@@ -13,20 +14,10 @@
 
 namespace kg::cli {
 
-namespace {
-
-bool progress_shown = false;
-
-void print_progress(int done, int total) {
-  progress_shown = true;
-  std::fprintf(stderr, "\rframe %d/%d", done, total);
-}
-
-}  // namespace
-
 int cmd_synth(const Args& args) {
   SynthSetOptions options;
   options.backgrounds = KG_OPENCV_DATA_DIR;
+  bool quiet = false;
   Options table("synth", "-o DIR [--seed N] [--signs N] [--frames N] [--sign-free F]",
                 "Generates the labelled indoor-sign benchmark: signs drawn by the project,\n"
                 "composited into opencv-doc photos, ground truth in DIR/manifest.txt.");
@@ -40,11 +31,16 @@ int cmd_synth(const Args& args) {
       .number("--sign-free", "F", options.sign_free_fraction, 0, 1, false,
               "fraction of the frames without a sign")
       .text("--backgrounds", "DIR", options.backgrounds, "opencv-doc's photos (the backgrounds)")
+      .flag("-q, --quiet", quiet,
+            "no progress on stderr (by default one line rewritten in place on a\n"
+            "terminal, otherwise a line every 10 %)")
       .example("keygraph synth -o signs-bench --frames 100");
   if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
   if (options.directory.empty()) return table.usage_error("no output directory given (-o DIR)");
-  const Status s = write_synth_set(options, print_progress);
-  if (progress_shown) std::fprintf(stderr, "\r%30s\r", "");
+  ProgressReporter progress({"synth", "frame", is_terminal(stderr), false},
+                            quiet ? nullptr : stderr);
+  const Status s = write_synth_set(options, progress.callback());
+  progress.finish();
   if (!s) return fail("synth: " + s.message());
   std::printf("%s: %d signs, %d frames (%d sign-free), seed %llu\n", options.directory.c_str(),
               options.signs, options.frames,

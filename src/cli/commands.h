@@ -22,7 +22,7 @@ int cmd_demo(const Args& args);
 int cmd_eval(const Args& args);
 int cmd_eval_truth(const Args& args);  // eval --truth (cmd_eval passes it on)
 // The options of eval --truth, bound to `options` and `out_dir`.
-Options truth_options(TruthEvalOptions& options, std::string& out_dir);
+Options truth_options(TruthEvalOptions& options, std::string& out_dir, bool& quiet);
 int cmd_manifest(const Args& args);
 int cmd_synth(const Args& args);
 int cmd_repeatability(const Args& args);
