@@ -1,7 +1,4 @@
-// keygraph build [--name NAME]... [--detector hessian|mser] [--structure 2|3|4]
-//                [--vertex-descriptor none|sift] [--encoding float32|int16|int8]
-//                [--min-size PX] [--max-tilt DEG] [--roi X,Y,W,H]
-//                [--set NAME=VALUE]... MODEL... -o OUT.kgi
+// keygraph build: its options are the Options table below (keygraph build --help).
 // --min-size and --max-tilt set the simulated views (views.min_size,
 // views.max_tilt; --max-tilt also asks for two tilt levels when none is set).
 // --name and --roi apply to the model image that follows them: --roi makes

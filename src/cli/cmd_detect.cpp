@@ -1,4 +1,4 @@
-// keygraph detect --index I.kgi [--json] [--draw OUT.png] SCENE...
+// keygraph detect: its options are the Options table below (keygraph detect --help).
 #include <chrono>
 #include <cstdio>
 

@@ -1,9 +1,6 @@
-// keygraph eval --dataset DIR [--subsets a,b] [--crops N] [--size S] [--centre]
-//               [--seed N] [--set NAME=VALUE]... [--methods m1,m2|all] [--negatives]
-//               [--curves] [--out DIR] [--csv FILE]
-// keygraph eval --truth MANIFEST ...: see cmd_eval_truth.cpp.
-// keygraph eval --synth DIR [--sizes 1,10,50] [--frames N] [--methods ...] [--set ...]
-//               [--out DIR]
+// keygraph eval --dataset DIR | --synth DIR | --truth MANIFEST: the options
+// of each mode are its Options table below (and in cmd_eval_truth.cpp);
+// keygraph eval --help prints them.
 //
 // --dataset: the paper's second experiment on the Oxford layout: crops of
 // img1 as models, img2..img6 as scenes; a detection succeeds when all four
@@ -160,10 +157,15 @@ int cmd_eval(const Args& args) {
   SynthEvalOptions synth;
   std::string csv, out_dir;
   bool quiet = false;
-  bool synth_mode = false;
-  for (const std::string& a : args) synth_mode = synth_mode || a == "--synth";
+  bool synth_mode = false, dataset_mode = false;
+  for (const std::string& a : args) {
+    synth_mode = synth_mode || a == "--synth";
+    dataset_mode = dataset_mode || a == "--dataset";
+  }
   const Options table = synth_mode ? synth_options(synth, out_dir, quiet)
                                    : oxford_options(options, out_dir, csv, quiet);
+  if (synth_mode && dataset_mode)
+    return table.usage_error("give one of --dataset DIR (Oxford layout) or --synth DIR");
   if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
   if (options.dataset.empty() && synth.directory.empty())
     return table.usage_error(

@@ -1,6 +1,4 @@
-// keygraph eval --truth MANIFEST (--models DIR|models.json | --index I.kgi)
-//               [--methods M,...|all] [--tolerance PX] [--set NAME=VALUE]...
-//               [--out DIR] [--gallery]
+// keygraph eval --truth: its options are the Options table below (keygraph eval --help).
 //
 // Detectors scored against a ground-truth manifest (docs/EVAL.md): the
 // table on stdout, the files of build/truth_report.h in --out. Every input

@@ -1,6 +1,4 @@
-// keygraph manifest exit-signs DIR -o OUT.jsonl [--split dev|test|model-bursts]
-// keygraph manifest planar-pairs DIR -o OUT.jsonl
-// keygraph manifest negatives DIR -o OUT.jsonl
+// keygraph manifest: its options are the Options table below (keygraph manifest --help).
 //
 // Ground-truth manifests for `keygraph eval --truth` from the real photo
 // sets of ../shared/data/real (build/real_sets.h, docs/EVAL.md). The

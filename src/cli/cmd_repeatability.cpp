@@ -1,6 +1,4 @@
-// keygraph repeatability --dataset DIR [--subsets a,b] [--detectors D,...]
-//                        [--set NAME=VALUE]... [--max-keypoints N] [--tolerance PX]
-//                        [--csv FILE]
+// keygraph repeatability: its options are the Options table below (keygraph repeatability --help).
 //
 // Keypoint detector repeatability on the Oxford layout (img1 against
 // img2..img6 under the ground-truth homographies), keypoints per image,

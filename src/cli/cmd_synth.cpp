@@ -1,5 +1,4 @@
-// keygraph synth -o DIR [--seed N] [--signs N] [--frames N] [--sign-free F]
-//                [--backgrounds DIR]
+// keygraph synth: its options are the Options table below (keygraph synth --help).
 // Writes the synthetic indoor-sign benchmark (src/build/synth_set.h): signs
 // drawn by the project, composited into opencv-doc photos with their
 // ground truth in DIR/manifest.txt.

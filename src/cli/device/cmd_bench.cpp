@@ -1,4 +1,4 @@
-// keygraph bench --index I.kgi [--repeat N] [--json] FRAME...
+// keygraph bench: its options are the Options table below (keygraph bench --help).
 // Loads the index and every frame once, then runs Detector::detect() N
 // times on each frame and prints the time per stage (DetectStats) and in
 // total (steady clock around detect()) as min / median / p90 / max, and the

@@ -1,4 +1,4 @@
-// keygraph detect --index I.kgi [--json] [--draw OUT.pgm] SCENE...
+// keygraph detect: its options are the Options table below (keygraph detect --help).
 // The device build's detect: scenes read by platform/files (binary PGM;
 // more formats when that library was built with OpenCV), the core detector,
 // and the same output as the desktop detect. --draw writes PGM.

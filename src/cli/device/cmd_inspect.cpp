@@ -1,4 +1,4 @@
-// keygraph inspect I.kgi
+// keygraph inspect: its options are the Options table below (keygraph inspect --help).
 // Prints the header, every parameter, the section table with each section's
 // checksum verified, per-model counts and sizes, and the bytes per arc.
 // A file the reader rejects exits 1 with the reader's message on one stderr

@@ -1,5 +1,4 @@
-// keygraph live --index I.kgi (--v4l2 /dev/videoN | --libcamera [ID] | --images PATH)
-//               [--size WxH] [--loop] [--json] [--draw DIR] [--frames N]
+// keygraph live: its options are the Options table below (keygraph live --help).
 // Detects on every frame of a camera or of image files. stdout gets the
 // same lines as `keygraph detect` (with --json, exactly its JSON lines);
 // stderr gets the source's description, a frames-per-second line about
