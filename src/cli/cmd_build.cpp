@@ -95,7 +95,8 @@ int cmd_build(const Args& args) {
           },
           param_text("graph.structure"))
       .value(
-          "--vertex-descriptor", "none|sift", "a SIFT descriptor per keypoint as well as per arc",
+          "--vertex-descriptor", "none|sift",
+          "sift: a SIFT descriptor per keypoint as well as per arc",
           [&params](const std::string& v) -> std::string {
             if (!parse_enum(v.c_str(), params.descriptor.vertex_descriptor))
               return "unknown vertex descriptor '" + v + "' (none or sift)";
@@ -112,8 +113,8 @@ int cmd_build(const Args& args) {
           param_text("descriptor.encoding"))
       .value(
           "--min-size", "PX",
-          "smallest simulated view of a model, pixels on its longer side\n"
-          "(views.min_size)",
+          "the smallest size, pixels on the long edge, at which a model must still be\n"
+          "found: views are simulated down to it; 0: no views (views.min_size)",
           [&params](const std::string& v) -> std::string {
             if (Status s = apply_param_override("views.min_size=" + v, params); !s)
               return "--min-size: " + s.message();
@@ -122,8 +123,8 @@ int cmd_build(const Args& args) {
           param_text("views.min_size"))
       .value(
           "--max-tilt", "DEG",
-          "largest simulated out-of-plane tilt, degrees (views.max_tilt;\n"
-          "asks for two tilt levels when views.tilt_levels is 0)",
+          "the largest simulated out-of-plane tilt, degrees; sets two tilt levels\n"
+          "when views.tilt_levels is 0 (views.max_tilt)",
           [&params](const std::string& v) -> std::string {
             if (Status s = apply_param_override("views.max_tilt=" + v, params); !s)
               return "--max-tilt: " + s.message();

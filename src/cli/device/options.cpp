@@ -50,21 +50,18 @@ std::string number_text(double v) {
 }
 
 // `text` broken into lines of at most `width` characters at spaces (a
-// longer word stays whole); its own line breaks are kept.
+// longer word stays whole). Line breaks in `text` count as spaces: they
+// only keep the source lines short.
 std::vector<std::string> wrap(const std::string& text, std::size_t width) {
-  std::vector<std::string> lines;
-  std::stringstream paragraphs(text);
-  for (std::string paragraph; std::getline(paragraphs, paragraph);) {
-    std::string line;
-    std::stringstream words(paragraph);
-    for (std::string word; words >> word;) {
-      if (!line.empty() && line.size() + 1 + word.size() > width) {
-        lines.push_back(line);
-        line.clear();
-      }
+  std::vector<std::string> lines(1);
+  std::stringstream words(text);
+  for (std::string word; words >> word;) {
+    std::string& line = lines.back();
+    if (!line.empty() && line.size() + 1 + word.size() > width) {
+      lines.push_back(word);
+    } else {
       line += (line.empty() ? "" : " ") + word;
     }
-    lines.push_back(line);
   }
   return lines;
 }

@@ -33,7 +33,8 @@ class Options {
   // the usage line after the command; `summary`: what the command does.
   Options(std::string command, std::string synopsis, std::string summary);
 
-  // `names`: "--index" or "-o, --output". `help` may hold '\n'.
+  // `names`: "--index" or "-o, --output". `help` is wrapped to the help's
+  // width (its own line breaks count as spaces).
   Options& flag(const std::string& names, bool& target, const std::string& help);
   Options& flag(const std::string& names, const std::string& help, std::function<void()> action);
   Options& text(const std::string& names, const std::string& value_name, std::string& target,
