@@ -89,7 +89,7 @@ Status load_model_image(const ModelSource& source, ImageLoader load, cv::Mat& gr
 
 Status build_model_set(const std::vector<ModelSource>& sources, const ModelBuildOptions& options,
                        ImageLoader load, std::vector<cv::Mat>& grays,
-                       std::vector<BuiltModel>& models) {
+                       std::vector<BuiltModel>& models, const ProgressFn& progress) {
   grays.clear();
   models.clear();
   std::set<std::string> seen;
@@ -105,6 +105,8 @@ Status build_model_set(const std::vector<ModelSource>& sources, const ModelBuild
     if (s = build_model(gray, source.name, options.params, model); !s) return s;
     grays.push_back(gray);
     models.push_back(std::move(model));
+    if (progress)
+      progress(static_cast<int>(models.size()), static_cast<int>(sources.size()), source.name);
   }
   return Status::ok();
 }

@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 
 #include "build/model_builder.h"
+#include "build/progress.h"
 #include "keygraph/params.h"
 #include "keygraph/status.h"
 
@@ -35,9 +36,10 @@ Status load_model_image(const ModelSource& source, ImageLoader load, cv::Mat& gr
 // Loads every source (its ROI cut out) and builds its model. Names must be
 // non-empty and distinct; an ROI must lie inside its image. `grays` gets
 // the model images (after the ROI), `models` the built models, in order.
+// `progress` (may be empty) is called after each model, with its name.
 Status build_model_set(const std::vector<ModelSource>& sources, const ModelBuildOptions& options,
                        ImageLoader load, std::vector<cv::Mat>& grays,
-                       std::vector<BuiltModel>& models);
+                       std::vector<BuiltModel>& models, const ProgressFn& progress = {});
 
 // Model sources from a directory or a models.json file (docs/EVAL.md): a
 // directory with a models.json uses it; otherwise every image in it is a

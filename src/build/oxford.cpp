@@ -129,7 +129,7 @@ OxfordCurveGrids oxford_curve_grids() {
 }
 
 Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>& cases,
-                       void (*progress)(const OxfordCase&)) {
+                       const ProgressFn& progress) {
   namespace fs = std::filesystem;
   cases.clear();
   std::vector<std::string> subsets = options.subsets;
@@ -185,6 +185,11 @@ Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>
       return {StatusCode::kInvalidArgument, dir + "/img1.png smaller than the crop size"};
   }
   using Clock = std::chrono::steady_clock;
+  // Cases: subsets x crops x scene sets x 5 scenes x methods.
+  const int total_cases = static_cast<int>(subsets.size()) *
+                          (options.centre_crop ? 1 : options.crops_per_subset) *
+                          (options.negatives && subsets.size() > 1 ? 2 : 1) * 5 *
+                          static_cast<int>(baselines.size() + keygraphs.size());
   Rng rng(options.seed);
   for (std::size_t si = 0; si < subsets.size(); ++si) {
     const cv::Mat& img1 = data[si].img1;
@@ -272,7 +277,12 @@ Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>
               }
             }
             cases.push_back(std::move(r));
-            if (progress != nullptr) progress(cases.back());
+            if (progress) {
+              const OxfordCase& last = cases.back();
+              progress(static_cast<int>(cases.size()), total_cases,
+                       last.method + " " + last.subset + " crop " + std::to_string(last.crop) +
+                           " img" + std::to_string(last.degree));
+            }
           }
         }
       }

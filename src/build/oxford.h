@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "build/pr_curves.h"
+#include "build/progress.h"
 #include "keygraph/params.h"
 #include "keygraph/status.h"
 #include "keygraph/types.h"
@@ -79,8 +80,8 @@ struct OxfordCase {
 };
 
 // Runs the evaluation; cases in subset, crop, degree order. `progress`
-// (may be null) is called after each case.
+// (may be empty) is called after each case.
 Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>& cases,
-                       void (*progress)(const OxfordCase&) = nullptr);
+                       const ProgressFn& progress = {});
 
 }  // namespace kg

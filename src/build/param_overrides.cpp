@@ -1,7 +1,10 @@
 #include "build/param_overrides.h"
 
 #include <charconv>
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <type_traits>
 
@@ -50,6 +53,35 @@ Status apply_param_override(const std::string& assignment, Params& params) {
   if (!known) return {StatusCode::kInvalidArgument, "unknown parameter '" + name + "'"};
   if (!parsed) return {StatusCode::kInvalidArgument, "bad value '" + value + "' for " + name};
   return Status::ok();
+}
+
+bool param_value_text(const Params& params, const std::string& name, std::string& out) {
+  bool known = false;
+  format::visit_params(params, [&](const char* field_name, const auto& field) {
+    if (known || name != field_name) return;
+    known = true;
+    using T = std::decay_t<decltype(field)>;
+    if constexpr (std::is_enum_v<T>) {
+      const char* text = enum_name(field);
+      out = text != nullptr ? text : std::to_string(static_cast<int>(field));
+    } else if constexpr (std::is_floating_point_v<T>) {
+      // The shortest text that reads back as the same value.
+      char buf[32];
+      if (field == std::floor(field) && std::fabs(field) < 1e15) {
+        std::snprintf(buf, sizeof(buf), "%.0f", static_cast<double>(field));
+        out = buf;
+        return;
+      }
+      for (int digits = 1; digits <= 17; ++digits) {
+        std::snprintf(buf, sizeof(buf), "%.*g", digits, static_cast<double>(field));
+        if (static_cast<T>(std::strtod(buf, nullptr)) == field) break;
+      }
+      out = buf;
+    } else {
+      out = std::to_string(field);
+    }
+  });
+  return known;
 }
 
 std::vector<std::string> param_names() {

@@ -14,6 +14,10 @@ namespace kg {
 // (format::validate_params). Unknown names and unparsable values are errors.
 Status apply_param_override(const std::string& assignment, Params& params);
 
+// The value of parameter `name` as --set spells it ("40", "hessian"), for
+// help texts' defaults; false for an unknown name.
+bool param_value_text(const Params& params, const std::string& name, std::string& out);
+
 // Names accepted by apply_param_override (every stored parameter, in file
 // order), for help texts.
 std::vector<std::string> param_names();

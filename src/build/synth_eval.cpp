@@ -105,7 +105,7 @@ void score_synth_frame(const std::vector<SynthDetection>& detections, const Synt
 }
 
 Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& cases,
-                      void (*progress)(const SynthCase&)) {
+                      const ProgressFn& progress) {
   cases.clear();
   SynthManifest manifest;
   Status s = read_manifest(options.directory, manifest);
@@ -160,6 +160,9 @@ Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& c
     if (std::find(sizes.begin(), sizes.end(), capped) == sizes.end()) sizes.push_back(capped);
   }
   using Clock = std::chrono::steady_clock;
+  // Cases: every frame, once per index size and method.
+  const int total_cases = static_cast<int>(sizes.size()) * frame_count *
+                          static_cast<int>(keygraphs.size() + baselines.size());
   for (const int n : sizes) {
     const int groups = (sign_count + n - 1) / n;
     std::vector<int> group_of(static_cast<std::size_t>(frame_count));
@@ -235,7 +238,10 @@ Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& c
                             sign != nullptr ? cv::Size(sign->width, sign->height) : cv::Size(),
                             begin, c);
           cases.push_back(c);
-          if (progress != nullptr) progress(c);
+          if (progress) {
+            progress(static_cast<int>(cases.size()), total_cases,
+                     c.method + ", index of " + std::to_string(n) + ", frame " + std::to_string(f));
+          }
         }
       }
     }

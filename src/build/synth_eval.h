@@ -14,6 +14,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "build/progress.h"
 #include "build/synth_frame.h"
 #include "keygraph/detector.h"
 #include "keygraph/params.h"
@@ -78,8 +79,9 @@ struct SynthDetection {
 void score_synth_frame(const std::vector<SynthDetection>& detections, const SynthFrameInfo& truth,
                        cv::Size sign_size, int group_begin, SynthCase& c);
 
+// `progress` (may be empty) is called after each frame searched by a method.
 Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& cases,
-                      void (*progress)(const SynthCase&) = nullptr);
+                      const ProgressFn& progress = {});
 
 // Scores of one method at one index size.
 struct SynthRow {

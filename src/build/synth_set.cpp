@@ -52,7 +52,7 @@ Rng frame_rng(std::uint64_t seed, int i) {
 }  // namespace
 
 Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
-                        SynthSetImages& images, void (*progress)(int, int)) {
+                        SynthSetImages& images, const ProgressFn& progress) {
   if (options.signs < 1 || options.signs > sign_catalogue_size())
     return {StatusCode::kInvalidArgument, "the catalogue has " +
                                               std::to_string(sign_catalogue_size()) +
@@ -119,12 +119,12 @@ Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
         render_frame(background, sign >= 0 ? images.signs[static_cast<std::size_t>(sign)] : none,
                      sign, photos[o], options.frame, rng, entry.info));
     manifest.frames.push_back(entry);
-    if (progress != nullptr) progress(i + 1, options.frames);
+    if (progress) progress(i + 1, options.frames, {});
   }
   return Status::ok();
 }
 
-Status write_synth_set(const SynthSetOptions& options, void (*progress)(int, int)) {
+Status write_synth_set(const SynthSetOptions& options, const ProgressFn& progress) {
   std::error_code ec;
   if (options.directory.empty()) return {StatusCode::kInvalidArgument, "no output directory"};
   const fs::path target(options.directory);

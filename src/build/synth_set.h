@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "build/progress.h"
 #include "build/synth_frame.h"
 #include "keygraph/status.h"
 
@@ -63,12 +64,11 @@ struct SynthSetImages {
   std::vector<cv::Mat> signs, frames;
 };
 Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
-                        SynthSetImages& images, void (*progress)(int done, int total) = nullptr);
+                        SynthSetImages& images, const ProgressFn& progress = {});
 
 // Renders and writes the set into options.directory, through a temporary
 // directory renamed into place (never half-written).
-Status write_synth_set(const SynthSetOptions& options,
-                       void (*progress)(int done, int total) = nullptr);
+Status write_synth_set(const SynthSetOptions& options, const ProgressFn& progress = {});
 
 std::string manifest_text(const SynthManifest& manifest);
 // Parses manifest text; errors name the line.

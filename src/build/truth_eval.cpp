@@ -191,7 +191,7 @@ void score_truth_scene(const std::vector<FoundQuad>& found, const std::vector<Tr
 }
 
 Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
-                      void (*progress)(const std::string&, int, int)) {
+                      const ProgressFn& progress) {
   results = TruthResults{};
   Status s = read_truth_manifest(options.manifest, results.manifest);
   if (!s) return s;
@@ -310,7 +310,6 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
     searched.erase(std::unique(searched.begin(), searched.end()), searched.end());
 
     for (Method& m : methods) {
-      if (progress != nullptr) progress(m.name, si, scene_count);
       MethodDetectors& d = m.by_search[search_key(searched)];
       if (d.models.empty()) {
         d.models = searched;
@@ -359,6 +358,11 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
         }
       }
       const double ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+      if (progress) {
+        const int method_count = static_cast<int>(methods.size());
+        progress(si * method_count + static_cast<int>(&m - methods.data()) + 1,
+                 scene_count * method_count, m.name + ", scene " + std::to_string(si + 1));
+      }
       // A file index searches all its models: keep the scene's own.
       found.erase(std::remove_if(found.begin(), found.end(),
                                  [&](const FoundQuad& f) {

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "build/progress.h"
 #include "build/truth_manifest.h"
 #include "keygraph/params.h"
 #include "keygraph/status.h"
@@ -106,6 +107,6 @@ void score_truth_scene(const std::vector<FoundQuad>& found, const std::vector<Tr
 // Checks everything (manifest, model names, scene files, methods) before
 // the first detection: a bad input fails before any work.
 Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
-                      void (*progress)(const std::string& method, int scene, int scenes) = nullptr);
+                      const ProgressFn& progress = {});
 
 }  // namespace kg

@@ -1,8 +1,4 @@
-// keygraph build [--name NAME]... [--detector hessian|mser] [--structure 2|3|4]
-//                [--vertex-descriptor none|sift] [--encoding float32|int16|int8]
-//                [--min-size PX] [--max-tilt DEG] [--roi X,Y,W,H]
-//                [--set NAME=VALUE]... [--draw-model DIR] [--no-look-alikes]
-//                MODEL... -o OUT.kgi
+// keygraph build: its options are the Options table below (keygraph build --help).
 // --min-size and --max-tilt set the simulated views (views.min_size,
 // views.max_tilt; --max-tilt also asks for two tilt levels when none is set).
 // --name and --roi apply to the model image that follows them: --roi makes
@@ -27,7 +23,9 @@
 #include "build/model_quality.h"
 #include "build/model_set.h"
 #include "build/param_overrides.h"
+#include "build/progress.h"
 #include "cli/commands.h"
+#include "cli/device/options.h"
 #include "cli/device/quality_report.h"
 #include "core/param_names.h"
 #include "platform/files/output_file.h"
@@ -98,77 +96,134 @@ int cmd_build(const Args& args) {
   std::string output, draw_dir;
   bool look_alikes = true;
   Params params;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    const bool has_value = i + 1 < args.size();
-    if (a == "--name" || a == "-o" || a == "--output" || a == "--detector" || a == "--structure" ||
-        a == "--vertex-descriptor" || a == "--encoding" || a == "--roi" || a == "--set" ||
-        a == "--min-size" || a == "--max-tilt" || a == "--draw-model") {
-      if (!has_value) return fail("build: " + a + " needs a value");
-      const std::string& v = args[++i];
-      if (a == "--draw-model") {
-        draw_dir = v;
-      } else if (a == "--name") {
-        if (pending_name) return fail("build: two --name options for one model image");
-        pending_name = v;
-      } else if (a == "--roi") {
-        cv::Rect roi;
-        if (!parse_roi(v, roi)) return fail("build: --roi takes X,Y,W,H (pixels), got '" + v + "'");
-        pending_roi = roi;
-      } else if (a == "--detector") {
-        if (v == "hessian") {
-          params.keypoints.detector = KeypointDetector::kHessian;
-        } else if (v == "mser") {
-          params.keypoints.detector = KeypointDetector::kMser;
-        } else {
-          return fail("build: unknown detector '" + v + "' (hessian or mser)");
-        }
-      } else if (a == "--vertex-descriptor") {
-        if (v == "sift") {
-          params.descriptor.vertex_descriptor = VertexDescriptor::kSift;
-        } else if (v == "none") {
-          params.descriptor.vertex_descriptor = VertexDescriptor::kNone;
-        } else {
-          return fail("build: unknown vertex descriptor '" + v + "' (none or sift)");
-        }
-      } else if (a == "--encoding") {
-        if (!parse_enum(v.c_str(), params.descriptor.encoding))
-          return fail("build: unknown encoding '" + v + "' (float32, int16 or int8)");
-      } else if (a == "--set") {
-        if (Status s = apply_param_override(v, params); !s) return fail("build: " + s.message());
-      } else if (a == "--min-size" || a == "--max-tilt") {
-        const std::string name = a == "--min-size" ? "views.min_size" : "views.max_tilt";
-        if (Status s = apply_param_override(name + "=" + v, params); !s)
-          return fail("build: " + a + ": " + s.message());
-        if (a == "--max-tilt" && params.views.tilt_levels == 0) params.views.tilt_levels = 2;
-      } else if (a == "--structure") {
-        if (v != "2" && v != "3" && v != "4") return fail("build: --structure takes 2, 3 or 4");
-        params.graph.structure = static_cast<Structure>(v[0] - '0');
-      } else {
-        output = v;
-      }
-    } else if (a == "--no-look-alikes") {
-      look_alikes = false;
-    } else if (!a.empty() && a[0] == '-') {
-      return fail("build: unknown option " + a);
-    } else {
-      paths.push_back(a);
-      rois.push_back(pending_roi);
-      pending_roi.reset();
-      names.push_back(pending_name ? *pending_name : std::filesystem::path(a).stem().string());
-      pending_name.reset();
-    }
-  }
-  if (pending_roi) return fail("build: --roi must come before the model image it applies to");
-  if (pending_name) return fail("build: --name must come before the model image it applies to");
-  if (paths.empty()) return fail("build: no model images given");
-  if (output.empty()) return fail("build: no output given (-o OUT.kgi)");
+  bool quiet = false;
+  // A value of `params` (the defaults of the options below) as text.
+  auto param_text = [&params](const char* name) {
+    std::string text;
+    param_value_text(params, name, text);  // empty (no default shown) for an unknown name
+    return text;
+  };
+  Options table("build", "[options] [--name NAME] [--roi X,Y,W,H] MODEL... -o OUT.kgi",
+                "Compiles model images (signs, posters, any planar object) into one index.\n"
+                "--name and --roi apply to the MODEL that follows them.");
+  table
+      .positional("MODEL...", "model image files (PNG, JPEG, ...): one model each",
+                  [&](const std::string& v) {
+                    paths.push_back(v);
+                    rois.push_back(pending_roi);
+                    pending_roi.reset();
+                    names.push_back(pending_name ? *pending_name
+                                                 : std::filesystem::path(v).stem().string());
+                    pending_name.reset();
+                    return std::string();
+                  })
+      .text("-o, --output", "OUT.kgi", output, "the index to write (required)")
+      .value("--name", "NAME", "the next MODEL's name (default: its file name without extension)",
+             [&pending_name](const std::string& v) -> std::string {
+               if (pending_name) return "two --name options for one model image";
+               pending_name = v;
+               return {};
+             })
+      .value("--roi", "X,Y,W,H",
+             "the next MODEL is this rectangle of its image, in pixels\n"
+             "(model pixel (0,0) is image pixel (X,Y); default: the whole image)",
+             [&pending_roi](const std::string& v) -> std::string {
+               cv::Rect roi;
+               if (!parse_roi(v, roi)) return "--roi takes X,Y,W,H (pixels), got '" + v + "'";
+               pending_roi = roi;
+               return {};
+             })
+      .value(
+          "--detector", "hessian|mser", "the keypoint detector",
+          [&params](const std::string& v) -> std::string {
+            if (!parse_enum(v.c_str(), params.keypoints.detector))
+              return "unknown detector '" + v + "' (hessian or mser)";
+            return {};
+          },
+          param_text("keypoints.detector"))
+      .value(
+          "--structure", "2|3|4", "keygraph structure: 2, 3 or 4 arcs per triangle",
+          [&params](const std::string& v) -> std::string {
+            if (v != "2" && v != "3" && v != "4") return "--structure takes 2, 3 or 4";
+            params.graph.structure = static_cast<Structure>(v[0] - '0');
+            return {};
+          },
+          param_text("graph.structure"))
+      .value(
+          "--vertex-descriptor", "none|sift",
+          "sift: a SIFT descriptor per keypoint as well as per arc",
+          [&params](const std::string& v) -> std::string {
+            if (!parse_enum(v.c_str(), params.descriptor.vertex_descriptor))
+              return "unknown vertex descriptor '" + v + "' (none or sift)";
+            return {};
+          },
+          param_text("descriptor.vertex_descriptor"))
+      .value(
+          "--encoding", "float32|int16|int8", "how arc descriptors are stored in the index",
+          [&params](const std::string& v) -> std::string {
+            if (!parse_enum(v.c_str(), params.descriptor.encoding))
+              return "unknown encoding '" + v + "' (float32, int16 or int8)";
+            return {};
+          },
+          param_text("descriptor.encoding"))
+      .value(
+          "--min-size", "PX",
+          "the smallest size, pixels on the long edge, at which a model must still be\n"
+          "found: views are simulated down to it; 0: no views (views.min_size)",
+          [&params](const std::string& v) -> std::string {
+            if (Status s = apply_param_override("views.min_size=" + v, params); !s)
+              return "--min-size: " + s.message();
+            return {};
+          },
+          param_text("views.min_size"))
+      .value(
+          "--max-tilt", "DEG",
+          "the largest simulated out-of-plane tilt, degrees; sets two tilt levels\n"
+          "when views.tilt_levels is 0 (views.max_tilt)",
+          [&params](const std::string& v) -> std::string {
+            if (Status s = apply_param_override("views.max_tilt=" + v, params); !s)
+              return "--max-tilt: " + s.message();
+            if (params.views.tilt_levels == 0) params.views.tilt_levels = 2;
+            return {};
+          },
+          param_text("views.max_tilt"))
+      .value("--set", "NAME=VALUE",
+             "any parameter of keygraph/params.h, repeatable\n"
+             "(e.g. graph.max_keypoints=300; keygraph inspect lists them all)",
+             [&params](const std::string& v) -> std::string {
+               if (Status s = apply_param_override(v, params); !s) return s.message();
+               return {};
+             })
+      .text("--draw-model", "DIR", draw_dir,
+            "also write a picture of each model into DIR (MODEL.png: its keypoints\n"
+            "and strongest keygraphs)")
+      .flag("--no-look-alikes",
+            "skip the look-alike check of the quality report (each model rendered as\n"
+            "a scene and detected with the whole index)",
+            [&look_alikes] { look_alikes = false; })
+      .flag("-q, --quiet", quiet,
+            "no progress on stderr (by default one line rewritten in place on a\n"
+            "terminal, otherwise a line per model)")
+      .example("keygraph build --name exit --roi 10,10,200,120 exit.png stairs.png -o signs.kgi");
+  if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
+  if (pending_roi) return table.usage_error("--roi must come before the model image it applies to");
+  if (pending_name)
+    return table.usage_error("--name must come before the model image it applies to");
+  if (paths.empty()) return table.usage_error("no model images given");
+  if (output.empty()) return table.usage_error("no output given (-o OUT.kgi)");
 
   // The output first: a device node, a directory or one of the model
   // images as -o fails before the build, and an interrupted build leaves
   // nothing behind (the temporary is removed on SIGINT and SIGTERM).
   platform::OutputFile out;
   if (Status s = out.create(output, paths); !s) return fail("build: -o " + s.message());
+  // So is a --draw-model that cannot be a directory (checked again when drawing).
+  if (!draw_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(draw_dir, ec);
+    if (!std::filesystem::is_directory(draw_dir, ec))
+      return fail("build: --draw-model " + draw_dir + ": not a directory");
+  }
 
   std::vector<ModelSource> sources;
   for (std::size_t i = 0; i < paths.size(); ++i) sources.push_back({names[i], paths[i], rois[i]});
@@ -176,8 +231,11 @@ int cmd_build(const Args& args) {
   options.params = params;
   std::vector<cv::Mat> grays;
   std::vector<BuiltModel> models;
-  if (Status s = build_model_set(sources, options, load_image, grays, models); !s)
-    return fail("build: " + s.message());
+  ProgressReporter progress({"build", "model", is_terminal(stderr), true},
+                            quiet ? nullptr : stderr);
+  Status built = build_model_set(sources, options, load_image, grays, models, progress.callback());
+  progress.finish();
+  if (!built) return fail("build: " + built.message());
   for (const BuiltModel& model : models) {
     // Its size alone: what this model adds to an index.
     std::vector<std::uint8_t> bytes;

@@ -9,21 +9,20 @@
 #include "build/image_io.h"
 #include "build/model_builder.h"
 #include "cli/commands.h"
+#include "cli/device/options.h"
 
 namespace kg::cli {
 
 int cmd_demo(const Args& args) {
   std::string out_dir = ".";
   std::string data_dir = KG_OPENCV_DATA_DIR;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    if (args[i] == "--out" || args[i] == "--data") {
-      if (i + 1 >= args.size()) return fail("demo: " + args[i] + " needs a value");
-      (args[i] == "--out" ? out_dir : data_dir) = args[i + 1];
-      ++i;
-    } else {
-      return fail("demo: unknown option " + args[i]);
-    }
-  }
+  Options options("demo", "[--out DIR] [--data DIR]",
+                  "Builds an index of box.png from Debian's opencv-doc images, finds the box in\n"
+                  "box_in_scene.png, prints where, and draws the outline (DIR/demo.png).");
+  options.text("--out", "DIR", out_dir, "where demo.kgi and demo.png are written")
+      .text("--data", "DIR", data_dir, "where box.png and box_in_scene.png are")
+      .example("keygraph demo --out /tmp");
+  if (const int exit_code = options.parse(args); exit_code >= 0) return exit_code;
   const std::string model_path = data_dir + "/box.png";
   const std::string scene_path = data_dir + "/box_in_scene.png";
   std::error_code ec;

@@ -1,10 +1,11 @@
-// keygraph detect --index I.kgi [--json] [--draw OUT.png] SCENE...
+// keygraph detect: its options are the Options table below (keygraph detect --help).
 #include <chrono>
 #include <cstdio>
 
 #include "build/desktop_detect.h"
 #include "build/image_io.h"
 #include "cli/commands.h"
+#include "cli/device/device_commands.h"
 #include "cli/device/json.h"
 
 namespace kg::cli {
@@ -13,21 +14,10 @@ int cmd_detect(const Args& args) {
   std::string index_path, draw;
   bool json = false;
   std::vector<std::string> scenes;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "--index" || a == "--draw") {
-      if (i + 1 >= args.size()) return fail("detect: " + a + " needs a value");
-      (a == "--index" ? index_path : draw) = args[++i];
-    } else if (a == "--json") {
-      json = true;
-    } else if (!a.empty() && a[0] == '-') {
-      return fail("detect: unknown option " + a);
-    } else {
-      scenes.push_back(a);
-    }
-  }
-  if (index_path.empty()) return fail("detect: no index given (--index I.kgi)");
-  if (scenes.empty()) return fail("detect: no scene images given");
+  const Options options = detect_options(index_path, draw, json, scenes, "any image format");
+  if (const int exit_code = options.parse(args); exit_code >= 0) return exit_code;
+  if (index_path.empty()) return options.usage_error("no index given (--index I.kgi)");
+  if (scenes.empty()) return options.usage_error("no scene images given");
   std::vector<std::string> drawn;
   if (!draw.empty()) {
     if (std::string error = draw_paths(draw, scenes, drawn); !error.empty())

@@ -1,9 +1,6 @@
-// keygraph eval --dataset DIR [--subsets a,b] [--crops N] [--size S] [--centre]
-//               [--seed N] [--set NAME=VALUE]... [--methods m1,m2|all] [--negatives]
-//               [--curves] [--out DIR] [--csv FILE]
-// keygraph eval --truth MANIFEST ...: see cmd_eval_truth.cpp.
-// keygraph eval --synth DIR [--sizes 1,10,50] [--frames N] [--methods ...] [--set ...]
-//               [--out DIR]
+// keygraph eval --dataset DIR | --synth DIR | --truth MANIFEST: the options
+// of each mode are its Options table below (and in cmd_eval_truth.cpp);
+// keygraph eval --help prints them.
 //
 // --dataset: the paper's second experiment on the Oxford layout: crops of
 // img1 as models, img2..img6 as scenes; a detection succeeds when all four
@@ -18,33 +15,17 @@
 #include "build/oxford.h"
 #include "build/oxford_report.h"
 #include "build/param_overrides.h"
+#include "build/progress.h"
 #include "build/report_io.h"
 #include "build/synth_eval.h"
 #include "cli/commands.h"
+#include "cli/device/options.h"
 #include "core/index_format.h"
+#include "keygraph/detector.h"
 
 namespace kg::cli {
 
 namespace {
-
-bool progress_shown = false;
-
-// Clears the progress line, if any, before results or an error.
-void clear_progress() {
-  if (progress_shown) std::fprintf(stderr, "\r%60s\r", "");
-  progress_shown = false;
-}
-
-void print_oxford_progress(const OxfordCase& c) {
-  progress_shown = true;
-  std::fprintf(stderr, "\r%-13s %-8s crop %2d img%d %s", c.method.c_str(), c.subset.c_str(), c.crop,
-               c.degree, c.negative ? "(negative)" : "          ");
-}
-
-void print_synth_progress(const SynthCase& c) {
-  progress_shown = true;
-  std::fprintf(stderr, "\r%-13s index of %2d  frame %4d", c.method.c_str(), c.index_size, c.frame);
-}
 
 std::vector<std::string> split(const std::string& v) {
   std::vector<std::string> out;
@@ -53,77 +34,156 @@ std::vector<std::string> split(const std::string& v) {
   return out;
 }
 
+std::string joined(const std::vector<std::string>& items) {
+  std::string out;
+  for (const std::string& item : items) out += (out.empty() ? "" : ",") + item;
+  return out;
+}
+
+Options::Apply set_param(Params& params) {
+  return [&params](const std::string& v) {
+    const Status s = apply_param_override(v, params);
+    return s ? std::string() : s.message();
+  };
+}
+
+Options::Apply set_methods(std::vector<std::string>& methods) {
+  return [&methods](const std::string& v) {
+    methods = method_list(v);
+    return methods.empty() ? std::string("--methods is empty") : std::string();
+  };
+}
+
+const char* const kQuietHelp =
+    "no progress on stderr (by default one line rewritten in place on a\n"
+    "terminal, otherwise a line every 10 %)";
+
+const char* const kMethodsHelp =
+    "keygraph, keygraph-mser and/or baselines (sift-ransac, ...); all: every one";
+
+Options oxford_options(OxfordEvalOptions& o, std::string& out_dir, std::string& csv, bool& quiet) {
+  Options options(
+      "eval",
+      "--dataset DIR [--subsets a,b] [--crops N] [--size S] [--centre] [--seed N]\n"
+      "       [--set NAME=VALUE]... [--methods M,...|all] [--negatives] [--curves]\n"
+      "       [--out DIR] [--csv FILE]",
+      "The paper's second experiment on the Oxford layout: crops of img1 are the models,\n"
+      "img2..img6 the scenes; a detection counts when its four corners are within 3\n"
+      "(or 10) pixels of the ground truth.");
+  options.text("--dataset", "DIR", o.dataset, "the Oxford-layout set (required)")
+      .value("--subsets", "a,b,...", "the subsets to use (default: every one with img1)",
+             [&o](const std::string& v) {
+               o.subsets = split(v);
+               return std::string();
+             })
+      .integer("--crops", "N", o.crops_per_subset, 1, 100000, "random crops of img1 per subset")
+      .integer("--size", "S", o.crop_size, 32, Limits::kMaxSide, "crop side, pixels")
+      .flag("--centre", o.centre_crop, "one crop, centred, instead of random ones")
+      .unsigned64("--seed", "N", o.seed, "seed of the random crops")
+      .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h, repeatable",
+             set_param(o.params))
+      .value("--methods", "M,...|all", kMethodsHelp, set_methods(o.methods), joined(o.methods))
+      .flag("--negatives", o.negatives,
+            "also run each crop on the next subset's scenes (false detections)")
+      .flag("--curves", o.curves, "precision-recall of correspondences and RANSAC iterations")
+      .text("--out", "DIR", out_dir, "also write the report (tables, plots) into DIR")
+      .text("--csv", "FILE", csv, "also write every case to FILE")
+      .flag("-q, --quiet", quiet, kQuietHelp)
+      .example("keygraph eval --dataset ../shared/data/oxford --subsets graf,boat --methods all");
+  return options;
+}
+
+Options synth_options(SynthEvalOptions& o, std::string& out_dir, bool& quiet) {
+  Options options("eval",
+                  "--synth DIR [--sizes 1,10,50] [--frames N] [--methods M,...|all]\n"
+                  "       [--set NAME=VALUE]... [--out DIR]",
+                  "The sign benchmark written by keygraph synth: each frame searched with indexes\n"
+                  "of N signs; found within 10 pixels, false detections, time, by sign scale.");
+  options.text("--synth", "DIR", o.directory, "the benchmark's directory (required)")
+      .value(
+          "--sizes", "N,...", "index sizes (signs per index; capped at the set's signs)",
+          [&o](const std::string& v) -> std::string {
+            o.index_sizes.clear();
+            for (const std::string& n : split(v)) {
+              int size = 0;
+              if (!parse_int(n, 1, 100000, size))
+                return "--sizes " + v + ": not a list of whole numbers in 1..100000";
+              o.index_sizes.push_back(size);
+            }
+            if (o.index_sizes.empty()) return "--sizes is empty";
+            return {};
+          },
+          [&o] {
+            std::vector<std::string> sizes;
+            for (const int n : o.index_sizes) sizes.push_back(std::to_string(n));
+            return joined(sizes);
+          }())
+      .value(
+          "--frames", "N", "the first N frames only, 1..1000000",
+          [&o](const std::string& v) -> std::string {
+            if (!parse_int(v, 1, 1000000, o.max_frames))
+              return "--frames " + v + ": not a whole number in 1..1000000";
+            return {};
+          },
+          "every frame")
+      .value("--methods", "M,...|all", kMethodsHelp, set_methods(o.methods), joined(o.methods))
+      .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h, repeatable",
+             set_param(o.params))
+      .text("--out", "DIR", out_dir, "also write the report (tables, plots) into DIR")
+      .flag("-q, --quiet", quiet, kQuietHelp)
+      .example("keygraph eval --synth signs-bench --sizes 1,50 --methods keygraph,sift-ransac");
+  return options;
+}
+
 }  // namespace
 
 int cmd_eval(const Args& args) {
+  if (asks_for_help(args)) {
+    // Every mode's options, whatever else is given.
+    OxfordEvalOptions oxford;
+    SynthEvalOptions synth;
+    TruthEvalOptions truth;
+    std::string out_dir, csv;
+    bool quiet = false;
+    std::fputs(oxford_options(oxford, out_dir, csv, quiet).help().c_str(), stdout);
+    std::fputs(("\n" + synth_options(synth, out_dir, quiet).help()).c_str(), stdout);
+    std::fputs(("\n" + truth_options(truth, out_dir, quiet).help()).c_str(), stdout);
+    return 0;
+  }
   for (const std::string& a : args) {
     if (a == "--truth") return cmd_eval_truth(args);  // cmd_eval_truth.cpp
   }
   OxfordEvalOptions options;
   SynthEvalOptions synth;
   std::string csv, out_dir;
-  std::vector<std::string> methods;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "--centre" || a == "--negatives" || a == "--curves") {
-      (a == "--centre"      ? options.centre_crop
-       : a == "--negatives" ? options.negatives
-                            : options.curves) = true;
-      continue;
-    }
-    if (i + 1 >= args.size()) return fail("eval: " + a + " needs a value (or is unknown)");
-    const std::string& v = args[++i];
-    try {
-      if (a == "--dataset") {
-        options.dataset = v;
-      } else if (a == "--synth") {
-        synth.directory = v;
-      } else if (a == "--subsets") {
-        options.subsets = split(v);
-      } else if (a == "--crops") {
-        options.crops_per_subset = std::stoi(v);
-      } else if (a == "--size") {
-        options.crop_size = std::stoi(v);
-      } else if (a == "--seed") {
-        options.seed = std::stoull(v);
-      } else if (a == "--sizes") {
-        synth.index_sizes.clear();
-        for (const std::string& n : split(v)) synth.index_sizes.push_back(std::stoi(n));
-      } else if (a == "--frames") {
-        synth.max_frames = std::stoi(v);
-      } else if (a == "--set") {
-        Status s = apply_param_override(v, options.params);
-        if (!s) return fail("eval: " + s.message());
-      } else if (a == "--methods") {
-        methods = method_list(v);
-      } else if (a == "--csv") {
-        csv = v;
-      } else if (a == "--out") {
-        out_dir = v;
-      } else {
-        return fail("eval: unknown option " + a);
-      }
-    } catch (const std::exception&) {
-      return fail("eval: bad number '" + v + "' for " + a);
-    }
+  bool quiet = false;
+  bool synth_mode = false, dataset_mode = false;
+  for (const std::string& a : args) {
+    synth_mode = synth_mode || a == "--synth";
+    dataset_mode = dataset_mode || a == "--dataset";
   }
-  if (options.dataset.empty() == synth.directory.empty())
-    return fail("eval: give one of --dataset DIR (Oxford layout) or --synth DIR (keygraph synth)");
+  const Options table = synth_mode ? synth_options(synth, out_dir, quiet)
+                                   : oxford_options(options, out_dir, csv, quiet);
+  if (synth_mode && dataset_mode)
+    return table.usage_error("give one of --dataset DIR (Oxford layout) or --synth DIR");
+  if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
+  if (options.dataset.empty() && synth.directory.empty())
+    return table.usage_error(
+        "give one of --dataset DIR (Oxford layout), --synth DIR (keygraph synth) or --truth "
+        "MANIFEST");
+  if (synth_mode) options.params = synth.params;
   if (Status s = format::validate_params(options.params); !s) return fail("eval: " + s.message());
   // The output directory before the (long) run, so that a bad one fails at once.
   if (!out_dir.empty()) {
     if (Status s = ensure_directory(out_dir); !s) return fail("eval: " + s.message());
   }
 
-  if (!synth.directory.empty()) {
-    synth.params = options.params;
-    if (!methods.empty()) synth.methods = methods;
-    for (const int n : synth.index_sizes) {
-      if (n < 1) return fail("eval: bad --sizes");
-    }
+  if (synth_mode) {
     std::vector<SynthCase> cases;
-    Status s = evaluate_synth(synth, cases, print_synth_progress);
-    clear_progress();
+    ProgressReporter progress({"eval", "case", is_terminal(stderr), false},
+                              quiet ? nullptr : stderr);
+    Status s = evaluate_synth(synth, cases, progress.callback());
+    progress.finish();
     if (!s) return fail(s.message());
     const std::vector<SynthRow> rows = synth_tallies(cases, synth);
     std::fputs(synth_text(rows, synth_by_scale(cases, synth), synth_by_confidence(cases)).c_str(),
@@ -134,12 +194,10 @@ int cmd_eval(const Args& args) {
     return 0;
   }
 
-  if (!methods.empty()) options.methods = methods;
-  if (options.crops_per_subset < 1 || options.crop_size < 32)
-    return fail("eval: bad --crops or --size");
   std::vector<OxfordCase> cases;
-  Status s = evaluate_oxford(options, cases, print_oxford_progress);
-  clear_progress();
+  ProgressReporter progress({"eval", "case", is_terminal(stderr), false}, quiet ? nullptr : stderr);
+  Status s = evaluate_oxford(options, cases, progress.callback());
+  progress.finish();
   if (!s) return fail(s.message());
   const std::vector<OxfordRow> rows = oxford_tallies(cases, options.methods);
   std::fputs(

@@ -1,6 +1,4 @@
-// keygraph eval --truth MANIFEST (--models DIR|models.json | --index I.kgi)
-//               [--methods M,...|all] [--tolerance PX] [--set NAME=VALUE]...
-//               [--out DIR] [--gallery]
+// keygraph eval --truth: its options are the Options table below (keygraph eval --help).
 //
 // Detectors scored against a ground-truth manifest (docs/EVAL.md): the
 // table on stdout, the files of build/truth_report.h in --out. Every input
@@ -11,64 +9,61 @@
 
 #include "build/baselines.h"
 #include "build/param_overrides.h"
+#include "build/progress.h"
 #include "build/truth_eval.h"
 #include "build/truth_report.h"
 #include "cli/commands.h"
+#include "cli/device/options.h"
 #include "core/index_format.h"
 
 namespace kg::cli {
 
-namespace {
+namespace {}  // namespace
 
-bool progress_shown = false;
-
-void print_progress(const std::string& method, int scene, int scenes) {
-  progress_shown = true;
-  std::fprintf(stderr, "\r%-13s scene %4d/%-4d", method.c_str(), scene + 1, scenes);
+Options truth_options(TruthEvalOptions& o, std::string& out_dir, bool& quiet) {
+  std::string methods;
+  for (const std::string& m : o.methods) methods += (methods.empty() ? "" : ",") + m;
+  Options options("eval",
+                  "--truth MANIFEST (--models DIR|M.json | --index I.kgi) [--methods M,...|all]\n"
+                  "       [--tolerance PX] [--set NAME=VALUE]... [--out DIR] [--gallery]",
+                  "Detectors scored against hand-marked ground truth (docs/EVAL.md): found, false\n"
+                  "detections, by size, time. Every input is checked before the first detection.");
+  options.text("--truth", "MANIFEST", o.manifest, "the ground-truth manifest (.jsonl; required)")
+      .text("--models", "DIR|M.json", o.models,
+            "model images: a directory (each image a model) or a models.json")
+      .text("--index", "I.kgi", o.index, "or a built index (keygraph methods only)")
+      .value(
+          "--methods", "M,...|all",
+          "keygraph, keygraph-mser and/or baselines (sift-magsac, ...); all: every one",
+          [&o](const std::string& v) {
+            o.methods = method_list(v);
+            return o.methods.empty() ? std::string("--methods is empty") : std::string();
+          },
+          methods)
+      .number("--tolerance", "PX", o.tolerance, 0, 1e6, true,
+              "a detection is correct when every corner is within PX pixels")
+      .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h, repeatable (with --models)",
+             [&o](const std::string& v) {
+               const Status s = apply_param_override(v, o.params);
+               o.params_set = true;
+               return s ? std::string() : s.message();
+             })
+      .text("--out", "DIR", out_dir, "also write the report (tables, pictures) into DIR")
+      .flag("--gallery", o.gallery, "with --out: draw the scenes with a miss or a false detection")
+      .flag("-q, --quiet", quiet,
+            "no progress on stderr (by default one line rewritten in place on a\n"
+            "terminal, otherwise a line every 10 %)")
+      .example("keygraph eval --truth exit.jsonl --models exit-sign-models.json --out report/");
+  return options;
 }
-
-void clear_progress() {
-  if (progress_shown) std::fprintf(stderr, "\r%60s\r", "");
-  progress_shown = false;
-}
-
-}  // namespace
 
 int cmd_eval_truth(const Args& args) {
   TruthEvalOptions options;
   std::string out_dir;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "--gallery") {
-      options.gallery = true;
-      continue;
-    }
-    if (i + 1 >= args.size()) return fail("eval: " + a + " needs a value (or is unknown)");
-    const std::string& v = args[++i];
-    if (a == "--truth") {
-      options.manifest = v;
-    } else if (a == "--models") {
-      options.models = v;
-    } else if (a == "--index") {
-      options.index = v;
-    } else if (a == "--methods") {
-      options.methods = method_list(v);
-    } else if (a == "--tolerance") {
-      char* end = nullptr;
-      options.tolerance = std::strtod(v.c_str(), &end);
-      if (end == v.c_str() || *end != '\0' || !(options.tolerance > 0) || options.tolerance > 1e6)
-        return fail("eval: --tolerance takes a positive number of pixels, got '" + v + "'");
-    } else if (a == "--set") {
-      if (Status s = apply_param_override(v, options.params); !s)
-        return fail("eval: " + s.message());
-      options.params_set = true;
-    } else if (a == "--out") {
-      out_dir = v;
-    } else {
-      return fail("eval: unknown option " + a + " (with --truth)");
-    }
-  }
-  if (options.manifest.empty()) return fail("eval: --truth needs a manifest");
+  bool quiet = false;
+  const Options table = truth_options(options, out_dir, quiet);
+  if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
+  if (options.manifest.empty()) return table.usage_error("--truth needs a manifest");
   if (Status s = format::validate_params(options.params); !s) return fail("eval: " + s.message());
   if (!out_dir.empty()) {
     // A bad output directory fails now, not after the run.
@@ -80,8 +75,9 @@ int cmd_eval_truth(const Args& args) {
       return fail("eval: --out " + out_dir + ": not a directory (nor one that can be created)");
   }
   TruthResults results;
-  Status s = evaluate_truth(options, results, print_progress);
-  clear_progress();
+  ProgressReporter progress({"eval", "case", is_terminal(stderr), false}, quiet ? nullptr : stderr);
+  Status s = evaluate_truth(options, results, progress.callback());
+  progress.finish();
   if (!s) return fail("eval: " + s.message());
   std::fputs(truth_text(truth_tallies(results), options, results).c_str(), stdout);
   if (!out_dir.empty()) {

@@ -1,6 +1,4 @@
-// keygraph manifest exit-signs DIR -o OUT.jsonl [--split dev|test|model-bursts]
-// keygraph manifest planar-pairs DIR -o OUT.jsonl
-// keygraph manifest negatives DIR -o OUT.jsonl
+// keygraph manifest: its options are the Options table below (keygraph manifest --help).
 //
 // Ground-truth manifests for `keygraph eval --truth` from the real photo
 // sets of ../shared/data/real (build/real_sets.h, docs/EVAL.md). The
@@ -12,30 +10,34 @@
 #include "build/real_sets.h"
 #include "build/report_io.h"
 #include "cli/commands.h"
+#include "cli/device/options.h"
 
 namespace kg::cli {
 
 int cmd_manifest(const Args& args) {
   std::string set, dir, output, split;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "-o" || a == "--output" || a == "--split") {
-      if (i + 1 >= args.size()) return fail("manifest: " + a + " needs a value");
-      (a == "--split" ? split : output) = args[++i];
-    } else if (!a.empty() && a[0] == '-') {
-      return fail("manifest: unknown option " + a);
-    } else if (set.empty()) {
-      set = a;
-    } else if (dir.empty()) {
-      dir = a;
-    } else {
-      return fail("manifest: unexpected argument " + a);
-    }
-  }
-  if (set.empty() || dir.empty())
-    return fail(
-        "manifest: usage: keygraph manifest exit-signs|planar-pairs|negatives DIR -o OUT.jsonl");
-  if (output.empty()) return fail("manifest: no output given (-o OUT.jsonl)");
+  Options options("manifest", "exit-signs|planar-pairs|negatives DIR -o OUT.jsonl [--split S]",
+                  "Writes a ground-truth manifest for keygraph eval --truth from a real photo set\n"
+                  "(docs/EVAL.md); the sets with models also get a models.json beside OUT.");
+  options
+      .positional("SET DIR", "the set (exit-signs, planar-pairs or negatives) and its directory",
+                  [&](const std::string& v) -> std::string {
+                    if (set.empty()) {
+                      set = v;
+                    } else if (dir.empty()) {
+                      dir = v;
+                    } else {
+                      return "unexpected argument " + v;
+                    }
+                    return {};
+                  })
+      .text("-o, --output", "OUT.jsonl", output, "the manifest to write (required)")
+      .text("--split", "dev|test|model-bursts", split,
+            "exit-signs only: that split of the set (default: all of it)")
+      .example("keygraph manifest exit-signs ../shared/data/real/exit-signs -o exit.jsonl");
+  if (const int exit_code = options.parse(args); exit_code >= 0) return exit_code;
+  if (set.empty() || dir.empty()) return options.usage_error("give a set and its directory");
+  if (output.empty()) return options.usage_error("no output given (-o OUT.jsonl)");
   if (!split.empty() && set != "exit-signs") return fail("manifest: --split is for exit-signs");
   ConvertedSet converted;
   std::string models_name;

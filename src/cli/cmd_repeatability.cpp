@@ -1,6 +1,4 @@
-// keygraph repeatability --dataset DIR [--subsets a,b] [--detectors D,...]
-//                        [--set NAME=VALUE]... [--max-keypoints N] [--tolerance PX]
-//                        [--csv FILE]
+// keygraph repeatability: its options are the Options table below (keygraph repeatability --help).
 //
 // Keypoint detector repeatability on the Oxford layout (img1 against
 // img2..img6 under the ground-truth homographies), keypoints per image,
@@ -19,6 +17,7 @@
 #include "build/repeatability_report.h"
 #include "build/report_io.h"
 #include "cli/commands.h"
+#include "cli/device/options.h"
 #include "core/index_format.h"
 
 namespace kg::cli {
@@ -51,38 +50,39 @@ int cmd_repeatability(const Args& args) {
   Params params;
   std::vector<std::string> detectors = {"hessian", "mser", "sift", "orb", "akaze"};
   std::string csv;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (i + 1 >= args.size()) return fail("repeatability: " + a + " needs a value (or is unknown)");
-    const std::string& v = args[++i];
-    if (a == "--dataset") {
-      options.dataset = v;
-    } else if (a == "--subsets") {
-      options.subsets = split(v);
-    } else if (a == "--detectors") {
-      detectors = split(v);
-    } else if (a == "--set") {
-      if (Status s = apply_param_override(v, params); !s)
-        return fail("repeatability: " + s.message());
-    } else if (a == "--max-keypoints") {
-      if (!parse_int(v, 1, 1 << 24, options.limits.max_keypoints))
-        return fail("repeatability: bad --max-keypoints '" + v + "'");
-    } else if (a == "--tolerance") {
-      std::size_t used = 0;
-      try {
-        options.tolerance = std::stod(v, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used == 0 || used != v.size() || !(options.tolerance > 0 && options.tolerance <= 100))
-        return fail("repeatability: bad --tolerance '" + v + "' (pixels, 0 < PX <= 100)");
-    } else if (a == "--csv") {
-      csv = v;
-    } else {
-      return fail("repeatability: unknown option " + a);
-    }
-  }
-  if (options.dataset.empty()) return fail("repeatability: --dataset DIR is required");
+  Options table("repeatability",
+                "--dataset DIR [--subsets a,b] [--detectors D,...] [--set NAME=VALUE]...\n"
+                "       [--max-keypoints N] [--tolerance PX] [--csv FILE]",
+                "Keypoint repeatability img1 -> img2..img6 on the Oxford layout (ground-truth\n"
+                "homographies), keypoints per image, scene triangles that can be correct\n"
+                "keygraphs, and detection time per image on one thread.");
+  table.text("--dataset", "DIR", options.dataset, "the Oxford-layout set (required)")
+      .value("--subsets", "a,b,...", "the subsets to use (default: every one with img1)",
+             [&options](const std::string& v) {
+               options.subsets = split(v);
+               return std::string();
+             })
+      .value(
+          "--detectors", "D,...",
+          "keypoint detectors: hessian|mser[:NAME=VALUE...], sift, orb, akaze",
+          [&detectors](const std::string& v) {
+            detectors = split(v);
+            return std::string();
+          },
+          "hessian,mser,sift,orb,akaze")
+      .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h, repeatable",
+             [&params](const std::string& v) {
+               const Status s = apply_param_override(v, params);
+               return s ? std::string() : s.message();
+             })
+      .integer("--max-keypoints", "N", options.limits.max_keypoints, 1, 1 << 24,
+               "keypoints per image at most")
+      .number("--tolerance", "PX", options.tolerance, 0, 100, true,
+              "a keypoint is repeated within this many pixels")
+      .text("--csv", "FILE", csv, "also write every case to FILE")
+      .example("keygraph repeatability --dataset ../shared/data/oxford --detectors hessian,sift");
+  if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
+  if (options.dataset.empty()) return table.usage_error("--dataset DIR is required");
   if (Status s = format::validate_params(params); !s) return fail("repeatability: " + s.message());
   if (detectors.empty()) return fail("repeatability: --detectors is empty");
   // A CSV that cannot be written fails now, not after the run.

@@ -1,57 +1,45 @@
-// keygraph synth -o DIR [--seed N] [--signs N] [--frames N] [--sign-free F]
-//                [--backgrounds DIR]
+// keygraph synth: its options are the Options table below (keygraph synth --help).
 // Writes the synthetic indoor-sign benchmark (src/build/synth_set.h): signs
 // drawn by the project, composited into opencv-doc photos with their
 // ground truth in DIR/manifest.txt.
 #include <cstdio>
 #include <string>
 
+#include "build/progress.h"
+#include "build/sign_catalogue.h"
 #include "build/synth_set.h"
 #include "cli/commands.h"
+#include "cli/device/options.h"
 
 namespace kg::cli {
-
-namespace {
-
-bool progress_shown = false;
-
-void print_progress(int done, int total) {
-  progress_shown = true;
-  std::fprintf(stderr, "\rframe %d/%d", done, total);
-}
-
-}  // namespace
 
 int cmd_synth(const Args& args) {
   SynthSetOptions options;
   options.backgrounds = KG_OPENCV_DATA_DIR;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (i + 1 >= args.size()) return fail("synth: " + a + " needs a value (or is unknown)");
-    const std::string& v = args[++i];
-    try {
-      if (a == "-o" || a == "--out") {
-        options.directory = v;
-      } else if (a == "--seed") {
-        options.seed = std::stoull(v);
-      } else if (a == "--signs") {
-        options.signs = std::stoi(v);
-      } else if (a == "--frames") {
-        options.frames = std::stoi(v);
-      } else if (a == "--sign-free") {
-        options.sign_free_fraction = std::stod(v);
-      } else if (a == "--backgrounds") {
-        options.backgrounds = v;
-      } else {
-        return fail("synth: unknown option " + a);
-      }
-    } catch (const std::exception&) {
-      return fail("synth: bad number '" + v + "' for " + a);
-    }
-  }
-  if (options.directory.empty()) return fail("synth: no output directory given (-o DIR)");
-  const Status s = write_synth_set(options, print_progress);
-  if (progress_shown) std::fprintf(stderr, "\r%30s\r", "");
+  bool quiet = false;
+  Options table("synth", "-o DIR [--seed N] [--signs N] [--frames N] [--sign-free F]",
+                "Generates the labelled indoor-sign benchmark: signs drawn by the project,\n"
+                "composited into opencv-doc photos, ground truth in DIR/manifest.txt.");
+  table
+      .text("-o, --out", "DIR", options.directory,
+            "the directory to create (required; new or empty)")
+      .unsigned64("--seed", "N", options.seed, "seed of the signs' style and of the frames")
+      .integer("--signs", "N", options.signs, 1, sign_catalogue_size(),
+               "the first N signs of the catalogue")
+      .integer("--frames", "N", options.frames, 1, 100000, "frames (640x480) to render")
+      .number("--sign-free", "F", options.sign_free_fraction, 0, 1, false,
+              "fraction of the frames without a sign")
+      .text("--backgrounds", "DIR", options.backgrounds, "opencv-doc's photos (the backgrounds)")
+      .flag("-q, --quiet", quiet,
+            "no progress on stderr (by default one line rewritten in place on a\n"
+            "terminal, otherwise a line every 10 %)")
+      .example("keygraph synth -o signs-bench --frames 100");
+  if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
+  if (options.directory.empty()) return table.usage_error("no output directory given (-o DIR)");
+  ProgressReporter progress({"synth", "frame", is_terminal(stderr), false},
+                            quiet ? nullptr : stderr);
+  const Status s = write_synth_set(options, progress.callback());
+  progress.finish();
   if (!s) return fail("synth: " + s.message());
   std::printf("%s: %d signs, %d frames (%d sign-free), seed %llu\n", options.directory.c_str(),
               options.signs, options.frames,

@@ -9,7 +9,9 @@
 
 #include <opencv2/core.hpp>
 
+#include "build/truth_eval.h"
 #include "cli/device/command_line.h"
+#include "cli/device/options.h"
 #include "keygraph/status.h"
 
 namespace kg::cli {
@@ -19,6 +21,8 @@ int cmd_detect(const Args& args);
 int cmd_demo(const Args& args);
 int cmd_eval(const Args& args);
 int cmd_eval_truth(const Args& args);  // eval --truth (cmd_eval passes it on)
+// The options of eval --truth, bound to `options` and `out_dir`.
+Options truth_options(TruthEvalOptions& options, std::string& out_dir, bool& quiet);
 int cmd_manifest(const Args& args);
 int cmd_synth(const Args& args);
 int cmd_repeatability(const Args& args);

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "cli/device/device_commands.h"
+#include "cli/device/options.h"
 #include "keygraph/detector.h"
 #include "platform/files/file_source.h"
 #include "platform/files/image_limits.h"
@@ -23,99 +24,98 @@ namespace {
 using kg::Limits;
 namespace platform = kg::platform;
 
+struct Command {
+  const char* name;
+  const char* summary;
+  int (*run)(const kg::cli::Args& args);  // null: not in this build
+};
+
+// Every command, in the order `keygraph help` lists them. Each command's
+// options and help are in its own file (its Options table).
+constexpr Command kCommands[] = {
+#if KG_CLI_DESKTOP
+    {"build", "compile model images into one index (.kgi) and rate each model", kg::cli::cmd_build},
+    {"detect", "find the index's models in scene images", kg::cli::cmd_detect},
+    {"demo", "build box.png from opencv-doc and find it in box_in_scene.png", kg::cli::cmd_demo},
+    {"eval", "evaluate detectors: Oxford crops, the sign benchmark, or ground truth",
+     kg::cli::cmd_eval},
+    {"manifest", "a ground-truth manifest for a real photo set", kg::cli::cmd_manifest},
+    {"synth", "generate the labelled indoor-sign benchmark", kg::cli::cmd_synth},
+    {"repeatability", "keypoint repeatability, density and time (Oxford layout)",
+     kg::cli::cmd_repeatability},
+#else
+    {"detect", "find the index's models in PGM images", kg::cli::cmd_detect_files},
+    {"build", "(desktop keygraph only)", nullptr},
+    {"demo", "(desktop keygraph only)", nullptr},
+    {"eval", "(desktop keygraph only)", nullptr},
+    {"manifest", "(desktop keygraph only)", nullptr},
+    {"synth", "(desktop keygraph only)", nullptr},
+    {"repeatability", "(desktop keygraph only)", nullptr},
+#endif
+    {"live", "detect on every camera frame or image file", kg::cli::cmd_live},
+    {"bench", "time detect() per stage on frames in memory", kg::cli::cmd_bench},
+    {"inspect", "an index's header, parameters, sections and models", kg::cli::cmd_inspect},
+};
+
 void usage(std::FILE* out) {
   std::fprintf(out,
-               "usage: keygraph <command> [options]\n"
+               "usage: keygraph COMMAND [options]\n"
+               "       keygraph help COMMAND    (or keygraph COMMAND --help): its options\n"
                "\n"
                "commands:\n");
-#if KG_CLI_DESKTOP
-  std::fprintf(
-      out,
-      "  build [--name NAME]... [--roi X,Y,W,H] [--detector hessian|mser]\n"
-      "        [--structure 2|3|4] [--vertex-descriptor none|sift]\n"
-      "        [--encoding float32|int16|int8] [--draw-model DIR] [--no-look-alikes]\n"
-      "        MODEL.png... -o OUT.kgi     compile model images into one index, rate them\n"
-      "  detect --index I.kgi [--json] [--draw OUT.png] SCENE...\n"
-      "                                    find the index's models in scene images\n"
-      "  demo [--out DIR]                  build box.png from opencv-doc and find it\n"
-      "                                    in box_in_scene.png\n"
-      "  eval --dataset DIR [--subsets a,b] [--crops N] [--size S] [--centre]\n"
-      "       [--seed N] [--set NAME=VALUE]... [--methods M,...|all] [--negatives]\n"
-      "       [--curves] [--out DIR] [--csv FILE]\n"
-      "                                    crops of img1 found in img2..6 (Oxford layout);\n"
-      "                                    --curves: precision-recall and RANSAC iterations\n"
-      "  eval --synth DIR [--sizes 1,10,50] [--methods M,...|all] [--set ...] [--out DIR]\n"
-      "                                    the sign benchmark of keygraph synth\n"
-      "  eval --truth MANIFEST (--models DIR|M.json | --index I.kgi) [--methods M,...|all]\n"
-      "       [--tolerance PX] [--set NAME=VALUE]... [--out DIR] [--gallery]\n"
-      "                                    detectors against hand-marked ground truth\n"
-      "                                    (docs/EVAL.md): found, false, by size, time\n"
-      "  manifest exit-signs|planar-pairs|negatives DIR -o OUT.jsonl\n"
-      "       [--split dev|test|model-bursts]\n"
-      "                                    a ground-truth manifest for a real photo set\n"
-      "  synth -o DIR [--seed N] [--signs N] [--frames N] [--sign-free F]\n"
-      "                                    generate a labelled indoor-sign benchmark\n"
-      "  repeatability --dataset DIR [--subsets a,b] [--detectors D,...]\n"
-      "       [--set NAME=VALUE]... [--max-keypoints N] [--tolerance PX] [--csv FILE]\n"
-      "                                    keypoint repeatability img1 -> img2..6 (Oxford\n"
-      "                                    layout), density, keygraph triangles, time;\n"
-      "                                    D: hessian|mser[:NAME=VALUE...], sift, orb, akaze\n");
-#else
+  for (const Command& c : kCommands) std::fprintf(out, "  %-15s %s\n", c.name, c.summary);
   std::fprintf(out,
-               "  detect --index I.kgi [--json] [--draw OUT.pgm] SCENE.pgm...\n"
-               "                                    find the index's models in PGM images\n");
-#endif
-  std::fprintf(out,
-               "  live --index I.kgi (--v4l2 /dev/videoN | --libcamera [ID] | --images PATH)\n"
-               "       [--size WxH] [--loop] [--json] [--draw DIR] [--frames N]\n"
-               "                                    detect on every camera frame or image file;\n"
-               "                                    frames per second on stderr; Ctrl-C stops\n"
-               "  bench --index I.kgi [--repeat N] [--json] FRAME...\n"
-               "                                    time detect() per stage on frames in memory\n"
-               "  inspect I.kgi                     header, parameters, sections (checksums\n"
-               "                                    verified), models and bytes per arc\n"
-               "  help                              this text\n"
+               "  %-15s %s\n"
                "\n"
                "Image files must be regular files of at most %lld pixels (width x height,\n"
                "checked on the size the file declares, before decoding) and %d pixels a\n"
                "side for detection; live and bench skip larger frames with a warning.\n"
                "Outputs (-o, --draw) are written whole or not at all and replace regular\n"
-               "files only, never an input.\n",
-               platform::kMaxImagePixels, Limits::kMaxSide);
+               "files only, never an input. Exit codes: 0 done, 1 failed, 2 usage error.\n"
+               "\n"
+               "example:\n"
+               "  keygraph demo --out /tmp\n",
+               "help", "this text", platform::kMaxImagePixels, Limits::kMaxSide);
+}
+
+const Command* find_command(const std::string& name) {
+  for (const Command& c : kCommands) {
+    if (name == c.name) return &c;
+  }
+  return nullptr;
+}
+
+int unknown_command(const std::string& name) {
+  std::fprintf(stderr, "keygraph: unknown command '%s' (see keygraph --help)\n", name.c_str());
+  return kg::cli::kUsageError;
+}
+
+int run_command(const Command& c, const kg::cli::Args& args) {
+  if (c.run == nullptr) {
+    return kg::cli::fail(std::string(c.name) +
+                         ": not in this build of keygraph (a device build, without "
+                         "OpenCV); use the desktop keygraph");
+  }
+  return c.run(args);
 }
 
 int run(int argc, char** argv) {
   if (argc < 2) {
     usage(stderr);
-    return 2;
+    return kg::cli::kUsageError;
   }
   const std::string command = argv[1];
-  kg::cli::Args args(argv + 2, argv + argc);
-#if KG_CLI_DESKTOP
-  if (command == "build") return kg::cli::cmd_build(args);
-  if (command == "detect") return kg::cli::cmd_detect(args);
-  if (command == "demo") return kg::cli::cmd_demo(args);
-  if (command == "eval") return kg::cli::cmd_eval(args);
-  if (command == "manifest") return kg::cli::cmd_manifest(args);
-  if (command == "synth") return kg::cli::cmd_synth(args);
-  if (command == "repeatability") return kg::cli::cmd_repeatability(args);
-#else
-  if (command == "detect") return kg::cli::cmd_detect_files(args);
-  if (command == "build" || command == "demo" || command == "eval" || command == "synth" ||
-      command == "repeatability" || command == "manifest") {
-    return kg::cli::fail(command +
-                         ": not in this build of keygraph (a device build, without "
-                         "OpenCV); use the desktop keygraph");
-  }
-#endif
-  if (command == "live") return kg::cli::cmd_live(args);
-  if (command == "bench") return kg::cli::cmd_bench(args);
-  if (command == "inspect") return kg::cli::cmd_inspect(args);
   if (command == "help" || command == "--help" || command == "-h") {
-    usage(stdout);
-    return 0;
+    if (argc < 3) {
+      usage(stdout);
+      return 0;
+    }
+    const Command* c = find_command(argv[2]);
+    return c != nullptr ? run_command(*c, {"--help"}) : unknown_command(argv[2]);
   }
-  return kg::cli::fail("unknown command '" + command + "' (see keygraph help)");
+  const Command* c = find_command(command);
+  return c != nullptr ? run_command(*c, kg::cli::Args(argv + 2, argv + argc))
+                      : unknown_command(command);
 }
 
 // OpenCV imgcodecs reads its image size limit from the environment once,

@@ -120,7 +120,10 @@ checks=$((checks + 1))
 if "$KG" build "$DATA/box.png" -o "$INDEX" >"$LOG/stdout" 2>"$LOG/stderr"; then
   grep -Eq '^box: [0-9]+ views, [0-9]+ keypoints, [0-9]+ arcs, [0-9]+ keygraphs, [0-9.]+ KB alone$' "$LOG/stdout" ||
     bad "build: no 'box: N views, N keypoints, N arcs, N keygraphs, N KB alone' line in: $(cat "$LOG/stdout")"
-  [ -s "$LOG/stderr" ] && bad "build: succeeded but wrote to stderr: $(cat "$LOG/stderr")"
+  # stderr (not a terminal here): one progress line per model, nothing else.
+  grep -Eqx 'build: model 1/1 box \(100 %\), took [0-9]+:[0-9]{2}' "$LOG/stderr" &&
+    [ "$(wc -l <"$LOG/stderr")" -eq 1 ] ||
+    bad "build: expected one progress line on stderr, got: $(cat "$LOG/stderr")"
   [ -s "$INDEX" ] || bad "build: $INDEX missing or empty"
   for f in "$INDEX.tmp" "$WORK"/.box.kgi.*; do
     [ -e "$f" ] && bad "build: temporary $f left behind"
@@ -129,6 +132,23 @@ else
   bad "build box.png failed: $(cat "$LOG/stderr")"
 fi
 [ -s "$INDEX" ] || die "no index to continue with ($failures failure(s) so far)"
+# Progress: a line per model, with the model's name and the time left;
+# none with --quiet.
+checks=$((checks + 1))
+if "$KG" build --name first "$DATA/box.png" --name second "$DATA/box.png" -o "$WORK/two.kgi" \
+  >"$LOG/stdout" 2>"$LOG/stderr"; then
+  grep -Eqx 'build: model 1/2 first \(50 %\), [0-9]+:[0-9]{2} left' "$LOG/stderr" &&
+    grep -Eqx 'build: model 2/2 second \(100 %\), took [0-9]+:[0-9]{2}' "$LOG/stderr" &&
+    [ "$(wc -l <"$LOG/stderr")" -eq 2 ] ||
+    bad "build of two models: expected two progress lines, got: $(cat "$LOG/stderr")"
+else
+  bad "build of two models failed: $(cat "$LOG/stderr")"
+fi
+checks=$((checks + 1))
+"$KG" build --quiet "$DATA/box.png" -o "$WORK/quiet.kgi" >"$LOG/stdout" 2>"$LOG/stderr" ||
+  bad "build --quiet failed: $(cat "$LOG/stderr")"
+[ -s "$LOG/stderr" ] && bad "build --quiet wrote to stderr: $(cat "$LOG/stderr")"
+rm -f "$WORK/two.kgi" "$WORK/quiet.kgi"
 
 # --name and --roi name the image that follows them; others keep their stem.
 checks=$((checks + 1))

@@ -48,6 +48,9 @@ expect_failure "eval unknown option" "$KG" eval --synth "$WORK/corrupt" --bogus 
 "$KG" synth -o "$WORK/set" --signs 2 --frames 4 --seed 3 >/dev/null 2>"$WORK/stderr" ||
   bad "synth failed: $(cat "$WORK/stderr")"
 [ -f "$WORK/set/manifest.txt" ] || bad "no manifest"
+# Progress (stderr is no terminal here): plain lines, the last at 100 %.
+grep -Eqx 'synth: frame 4/4 \(100 %\), took [0-9]+:[0-9]{2}' "$WORK/stderr" ||
+  bad "synth: no final progress line: $(cat "$WORK/stderr")"
 [ "$(ls "$WORK/set/frames" | wc -l)" -eq 4 ] || bad "expected 4 frames"
 ls -A "$WORK" | grep -q '^\.tmp-' && bad "temporary directory left behind"
 expect_failure "synth into a non-empty directory" "$KG" synth -o "$WORK/set"
@@ -55,6 +58,10 @@ expect_failure "synth into a non-empty directory" "$KG" synth -o "$WORK/set"
 expect_failure "eval unknown method" "$KG" eval --synth "$WORK/set" --methods nonesuch
 "$KG" eval --synth "$WORK/set" --sizes 1,2 --methods keygraph,orb-ransac --out "$WORK/out" \
   >"$WORK/stdout" 2>"$WORK/stderr" || bad "eval --synth failed: $(cat "$WORK/stderr")"
+# 2 index sizes x 2 methods x 4 frames: 16 cases, a line per ~10 %.
+grep -Eq '^eval: case 16/16 .* \(100 %\), took [0-9]+:[0-9]{2}$' "$WORK/stderr" &&
+  grep -Eq '^eval: case 8/16 .* \(50 %\), [0-9]+:[0-9]{2} left$' "$WORK/stderr" ||
+  bad "eval --synth: progress lines missing: $(cat "$WORK/stderr")"
 grep -q '^orb-ransac  *2 ' "$WORK/stdout" || bad "no orb-ransac row for the index of 2: $(cat "$WORK/stdout")"
 python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert len(d['results']) == 4" \
   "$WORK/out/synth-summary.json" || bad "synth-summary.json is not the expected JSON"

@@ -504,7 +504,7 @@ if [ -w /dev/full ]; then
   full "inspect" "$KG" inspect "$INDEX"
   full "bench" "$KG" bench --index "$INDEX" --repeat 2 "$SCENE"
   full "help" "$KG" help
-  [ "$MODE" = desktop ] && full "build" "$KG" build "$DATA/box.png" -o "$CASE/full.kgi"
+  [ "$MODE" = desktop ] && full "build" "$KG" build --quiet "$DATA/box.png" -o "$CASE/full.kgi"
   rm -f "$CASE/full.kgi"
 else
   skip "row 13: no writable /dev/full"

@@ -1,4 +1,4 @@
-// keygraph bench --index I.kgi [--repeat N] [--json] FRAME...
+// keygraph bench: its options are the Options table below (keygraph bench --help).
 // Loads the index and every frame once, then runs Detector::detect() N
 // times on each frame and prints the time per stage (DetectStats) and in
 // total (steady clock around detect()) as min / median / p90 / max, and the
@@ -17,6 +17,7 @@
 #include "cli/device/device_commands.h"
 #include "cli/device/frame_output.h"
 #include "cli/device/json.h"
+#include "cli/device/options.h"
 #include "core/descriptor_encoding.h"
 #include "keygraph/detector.h"
 #include "platform/convert.h"
@@ -116,26 +117,22 @@ int cmd_bench(const Args& args) {
   int repeat = 20;
   bool json = false;
   std::vector<std::string> paths;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "--index" || a == "--repeat") {
-      if (i + 1 >= args.size()) return fail("bench: " + a + " needs a value");
-      const std::string& v = args[++i];
-      if (a == "--index") {
-        index_path = v;
-      } else if (!parse_int(v, 1, 1000000, repeat)) {
-        return fail("bench: --repeat " + v + ": not a count in 1..1000000");
-      }
-    } else if (a == "--json") {
-      json = true;
-    } else if (!a.empty() && a[0] == '-') {
-      return fail("bench: unknown option " + a);
-    } else {
-      paths.push_back(a);
-    }
-  }
-  if (index_path.empty()) return fail("bench: no index given (--index I.kgi)");
-  if (paths.empty()) return fail("bench: no frames given (image files or directories)");
+  Options options("bench", "--index I.kgi [--repeat N] [--json] FRAME...",
+                  "Times Detector::detect() per stage on frames held in memory: min, median, p90\n"
+                  "and max milliseconds of each stage and in total, and the workspace bytes.");
+  options
+      .positional("FRAME...", "image files or directories of them (in name order)",
+                  [&paths](const std::string& v) {
+                    paths.push_back(v);
+                    return std::string();
+                  })
+      .text("--index", "I.kgi", index_path, "the model index to detect with (required)")
+      .integer("--repeat", "N", repeat, 1, 1000000, "detect() runs per frame")
+      .flag("--json", json, "one JSON object per frame on stdout instead of the table")
+      .example("keygraph bench --index signs.kgi --repeat 50 frames/");
+  if (const int exit_code = options.parse(args); exit_code >= 0) return exit_code;
+  if (index_path.empty()) return options.usage_error("no index given (--index I.kgi)");
+  if (paths.empty()) return options.usage_error("no frames given (image files or directories)");
 
   ModelIndex index;
   if (Status s = ModelIndex::read(index_path, index); !s) return fail(s.message());

@@ -1,4 +1,4 @@
-// keygraph detect --index I.kgi [--json] [--draw OUT.pgm] SCENE...
+// keygraph detect: its options are the Options table below (keygraph detect --help).
 // The device build's detect: scenes read by platform/files (binary PGM;
 // more formats when that library was built with OpenCV), the core detector,
 // and the same output as the desktop detect. --draw writes PGM.
@@ -8,31 +8,43 @@
 #include "cli/device/detector_fit.h"
 #include "cli/device/device_commands.h"
 #include "cli/device/frame_output.h"
+#include "cli/device/options.h"
 #include "keygraph/detector.h"
 #include "platform/files/file_source.h"
 #include "platform/files/pgm.h"
 
 namespace kg::cli {
 
+Options detect_options(std::string& index_path, std::string& draw, bool& json,
+                       std::vector<std::string>& scenes, const std::string& draw_format) {
+  Options options("detect", "--index I.kgi [--json] [--draw OUT] SCENE...",
+                  "Finds the index's models in scene images: per scene, the detections with their\n"
+                  "inliers, score and corners (scene pixels), and the time.");
+  options
+      .positional("SCENE...", "scene image files",
+                  [&scenes](const std::string& v) {
+                    scenes.push_back(v);
+                    return std::string();
+                  })
+      .text("--index", "I.kgi", index_path, "the model index (required)")
+      .flag("--json", json, "one JSON object per scene on stdout")
+      .text("--draw", "OUT", draw,
+            "draw the outlines found into OUT (" + draw_format +
+                "); with several scenes,\nOUT_<scene name> next to OUT")
+      .example("keygraph detect --index signs.kgi --draw found." +
+               std::string(draw_format == "PGM" ? "pgm" : "png") + " scene." +
+               std::string(draw_format == "PGM" ? "pgm" : "jpg"));
+  return options;
+}
+
 int cmd_detect_files(const Args& args) {
   std::string index_path, draw;
   bool json = false;
   std::vector<std::string> scenes;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "--index" || a == "--draw") {
-      if (i + 1 >= args.size()) return fail("detect: " + a + " needs a value");
-      (a == "--index" ? index_path : draw) = args[++i];
-    } else if (a == "--json") {
-      json = true;
-    } else if (!a.empty() && a[0] == '-') {
-      return fail("detect: unknown option " + a);
-    } else {
-      scenes.push_back(a);
-    }
-  }
-  if (index_path.empty()) return fail("detect: no index given (--index I.kgi)");
-  if (scenes.empty()) return fail("detect: no scene images given");
+  Options options = detect_options(index_path, draw, json, scenes, "PGM");
+  if (const int exit_code = options.parse(args); exit_code >= 0) return exit_code;
+  if (index_path.empty()) return options.usage_error("no index given (--index I.kgi)");
+  if (scenes.empty()) return options.usage_error("no scene images given");
   if (!draw.empty() && std::filesystem::path(draw).extension() != ".pgm")
     return fail("detect: --draw " + draw + ": this build writes PGM only (use a .pgm name)");
   std::vector<std::string> drawn;

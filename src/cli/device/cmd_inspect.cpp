@@ -1,4 +1,4 @@
-// keygraph inspect I.kgi
+// keygraph inspect: its options are the Options table below (keygraph inspect --help).
 // Prints the header, every parameter, the section table with each section's
 // checksum verified, per-model counts and sizes, the bytes per arc, and
 // the model quality report (cli/device/quality_report.h).
@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "cli/device/device_commands.h"
+#include "cli/device/options.h"
 #include "cli/device/quality_report.h"
 #include "core/crc32.h"
 #include "core/descriptor_encoding.h"
@@ -169,12 +170,19 @@ void print_index(const ModelIndex& index) {
 
 int cmd_inspect(const Args& args) {
   std::string path;
-  for (const std::string& a : args) {
-    if (!a.empty() && a[0] == '-') return fail("inspect: unknown option " + a);
-    if (!path.empty()) return fail("inspect: one index at a time");
-    path = a;
-  }
-  if (path.empty()) return fail("inspect: no index given (keygraph inspect I.kgi)");
+  Options options("inspect", "I.kgi",
+                  "Prints an index's header, every parameter, the section table with each\n"
+                  "section's checksum verified, the models and the bytes per arc.");
+  options
+      .positional("I.kgi", "the model index (one)",
+                  [&path](const std::string& v) {
+                    if (!path.empty()) return std::string("one index at a time");
+                    path = v;
+                    return std::string();
+                  })
+      .example("keygraph inspect signs.kgi");
+  if (const int exit_code = options.parse(args); exit_code >= 0) return exit_code;
+  if (path.empty()) return options.usage_error("no index given (keygraph inspect I.kgi)");
   // Validation first, through the reader the detector uses (it also rejects
   // directories and missing files with a clear message).
   ModelIndex index;

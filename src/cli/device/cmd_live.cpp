@@ -1,5 +1,4 @@
-// keygraph live --index I.kgi (--v4l2 /dev/videoN | --libcamera [ID] | --images PATH)
-//               [--size WxH] [--loop] [--json] [--draw DIR] [--frames N]
+// keygraph live: its options are the Options table below (keygraph live --help).
 // Detects on every frame of a camera or of image files. stdout gets the
 // same lines as `keygraph detect` (with --json, exactly its JSON lines);
 // stderr gets the source's description, a frames-per-second line about
@@ -20,6 +19,7 @@
 #include "cli/device/detector_fit.h"
 #include "cli/device/device_commands.h"
 #include "cli/device/frame_output.h"
+#include "cli/device/options.h"
 #include "cli/device/stop_signal.h"
 #include "keygraph/detector.h"
 #include "platform/files/file_source.h"
@@ -63,57 +63,72 @@ double seconds(Clock::duration d) {
   return std::chrono::duration<double>(d).count();
 }
 
-// Returns an error message, or empty when the options are usable.
-std::string parse(const Args& args, LiveOptions& o) {
-  auto set_source = [&o](SourceKind kind, std::string value) -> std::string {
-    if (o.kind != SourceKind::kNone) return "give one source: --v4l2, --libcamera or --images";
-    o.kind = kind;
-    o.source = std::move(value);
-    return {};
+// The options of live, bound to `o`.
+Options live_options(LiveOptions& o) {
+  auto source = [&o](SourceKind kind) {
+    return [&o, kind](const std::string& value) -> std::string {
+      if (o.kind != SourceKind::kNone) return "give one source: --v4l2, --libcamera or --images";
+      o.kind = kind;
+      o.source = value;
+      return {};
+    };
   };
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    const bool has_value = i + 1 < args.size();
-    std::string error;
-    if (a == "--index" || a == "--v4l2" || a == "--images" || a == "--draw" || a == "--frames" ||
-        a == "--size") {
-      if (!has_value) return a + " needs a value";
-      const std::string& v = args[++i];
-      if (a == "--index") {
-        o.index_path = v;
-      } else if (a == "--v4l2") {
-        error = set_source(SourceKind::kV4l2, v);
-      } else if (a == "--images") {
-        error = set_source(SourceKind::kImages, v);
-      } else if (a == "--draw") {
-        o.draw_dir = v;
-      } else if (a == "--frames") {
-        if (!parse_int(v, 1, 1 << 30, o.max_frames))
-          return "--frames " + v + ": not a count in 1.." + std::to_string(1 << 30);
-      } else if (!parse_size(v, o.width, o.height)) {
-        return "--size " + v + ": expected WIDTHxHEIGHT, e.g. 640x480";
-      } else {
-        o.size_given = true;
-      }
-    } else if (a == "--libcamera") {
-      // The camera id is optional: the next argument, unless it is an option.
-      std::string id;
-      if (has_value && (args[i + 1].empty() || args[i + 1][0] != '-')) id = args[++i];
-      error = set_source(SourceKind::kLibcamera, id);
-    } else if (a == "--json") {
-      o.json = true;
-    } else if (a == "--loop") {
-      o.loop = true;
-    } else {
-      return "unknown " + std::string(!a.empty() && a[0] == '-' ? "option " : "argument ") + a;
-    }
-    if (!error.empty()) return error;
-  }
+  Options options(
+      "live",
+      "--index I.kgi (--v4l2 /dev/videoN | --libcamera [ID] | --images PATH)\n"
+      "       [--size WxH] [--loop] [--json] [--draw DIR] [--frames N]",
+      "Detects on every frame of a camera or of image files: stdout gets the lines of\n"
+      "keygraph detect, stderr the frames per second about once a second and a summary.\n"
+      "Ctrl-C (SIGINT) or SIGTERM finishes the current frame and exits 0.");
+  options
+      .text("--index", "I.kgi", o.index_path,
+            "the model index (required); reloaded when its file changes")
+      .value("--v4l2", "DEV", "frames from a V4L2 camera, e.g. /dev/video0",
+             source(SourceKind::kV4l2))
+      .optional_value("--libcamera", "ID",
+                      "frames from a libcamera camera (CSI); ID: its id, default the first",
+                      source(SourceKind::kLibcamera))
+      .value("--images", "PATH", "frames from an image file or a directory of them (name order)",
+             source(SourceKind::kImages))
+      .value(
+          "--size", "WxH", "the camera's frame size in pixels (cameras only)",
+          [&o](const std::string& v) -> std::string {
+            if (!parse_size(v, o.width, o.height))
+              return "--size " + v + ": expected WIDTHxHEIGHT, e.g. 640x480";
+            o.size_given = true;
+            return {};
+          },
+          std::to_string(o.width) + "x" + std::to_string(o.height))
+      .flag("--loop", o.loop, "start the images again after the last one (--images only)")
+      .flag("--json", o.json, "one JSON object per frame on stdout (as keygraph detect --json)")
+      .text("--draw", "DIR", o.draw_dir,
+            "write each frame with the outlines found to DIR as PGM\n"
+            "(frame_NNNNNN.pgm; <image name>.pgm with --images)")
+      .value(
+          "--frames", "N", "stop after N frames, 1..1073741824",
+          [&o](const std::string& v) -> std::string {
+            if (!parse_int(v, 1, 1 << 30, o.max_frames))
+              return "--frames " + v + ": not a count in 1.." + std::to_string(1 << 30);
+            return {};
+          },
+          "no limit")
+      .example("keygraph live --index signs.kgi --v4l2 /dev/video0 --size 1280x720")
+      .example("keygraph live --index signs.kgi --images frames/ --json --frames 100");
+  return options;
+}
+
+// The options that do not go together; returns an error message, or empty.
+std::string usage_problem(const LiveOptions& o) {
   if (o.index_path.empty()) return "no index given (--index I.kgi)";
   if (o.kind == SourceKind::kNone)
     return "no frame source given (--v4l2 /dev/videoN, --libcamera [ID] or --images DIR)";
   if (o.loop && o.kind != SourceKind::kImages) return "--loop applies to --images only";
   if (o.size_given && o.kind == SourceKind::kImages) return "--size applies to cameras only";
+  return {};
+}
+
+// The --draw directory; returns an error message, or empty.
+std::string check_draw(const LiveOptions& o) {
   if (!o.draw_dir.empty()) {
     std::error_code ec;
     if (!fs::is_directory(o.draw_dir, ec)) return "--draw " + o.draw_dir + ": no such directory";
@@ -272,7 +287,10 @@ class RateMeter {
 
 int cmd_live(const Args& args) {
   LiveOptions o;
-  if (std::string error = parse(args, o); !error.empty()) return fail("live: " + error);
+  const Options options = live_options(o);
+  if (const int exit_code = options.parse(args); exit_code >= 0) return exit_code;
+  if (std::string error = usage_problem(o); !error.empty()) return options.usage_error(error);
+  if (std::string error = check_draw(o); !error.empty()) return fail("live: " + error);
   LiveIndex live_index(o.index_path);
   if (Status s = live_index.load(); !s) return fail("live: " + s.message());
   std::string error;
@@ -384,7 +402,8 @@ int cmd_live(const Args& args) {
       name = files->last_path();
     } else {
       name = o.source.empty() ? std::string("libcamera") : o.source;
-      name += ":" + std::to_string(frame.sequence);
+      name += ':';
+      name += std::to_string(frame.sequence);
     }
     if (!d) {
       exit_code = fail("live: " + name + ": " + d.message());

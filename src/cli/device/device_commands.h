@@ -3,7 +3,11 @@
 // process exit code and reports any failure as one line on stderr.
 #pragma once
 
+#include <string>
+#include <vector>
+
 #include "cli/device/command_line.h"
+#include "cli/device/options.h"
 
 namespace kg::cli {
 
@@ -16,5 +20,8 @@ int cmd_bench(const Args& args);
 // keygraph detect on image files read by platform/files (PGM; other formats
 // when that library has OpenCV): the device build's `detect`.
 int cmd_detect_files(const Args& args);
+// The options of both detects; `draw_format`: the picture format --draw writes.
+Options detect_options(std::string& index_path, std::string& draw, bool& json,
+                       std::vector<std::string>& scenes, const std::string& draw_format);
 
 }  // namespace kg::cli
