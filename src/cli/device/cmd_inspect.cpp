@@ -172,7 +172,8 @@ int cmd_inspect(const Args& args) {
   std::string path;
   Options options("inspect", "I.kgi",
                   "Prints an index's header, every parameter, the section table with each\n"
-                  "section's checksum verified, the models and the bytes per arc.");
+                  "section's checksum verified, the models, the bytes per arc and the model\n"
+                  "quality report (docs/QUALITY.md).");
   options
       .positional("I.kgi", "the model index (one)",
                   [&path](const std::string& v) {
