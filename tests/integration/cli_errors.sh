@@ -275,6 +275,8 @@ d = found[0]
 assert d["model"] == "box", d["model"]
 h = d["homography"]
 assert len(h) == 9 and all(isinstance(v, numbers.Real) and not isinstance(v, bool) for v in h), h
+# box.png in box_in_scene.png: about 50 inliers, a confident detection.
+assert isinstance(d["confidence"], numbers.Real) and 0.9 < d["confidence"] <= 1.0, d["confidence"]
 EOF
 else
   bad "detect --json failed (exit $?): $(cat "$LOG/stderr")"
