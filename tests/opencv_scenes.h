@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <string>
 #include <utility>
@@ -51,12 +52,16 @@ inline Homography graf_truth() {
 }
 
 // Largest distance between a detection's corners and the model outline
-// mapped by `truth`.
+// mapped by `truth`; infinity when a distance is not finite (a broken
+// reference, e.g. the all-zero homography of a failed load, or corners at
+// infinity), so that no tolerance test can pass on it.
 inline double max_corner_error(const Detection& d, const Homography& truth, const ModelInfo& m) {
   double worst = 0.0;
   for (int c = 0; c < 4; ++c) {
     const Point2f g = kg::apply(truth, m.outline[c]);
-    worst = std::max(worst, std::hypot(double{g.x} - d.corners[c].x, double{g.y} - d.corners[c].y));
+    const double e = std::hypot(double{g.x} - d.corners[c].x, double{g.y} - d.corners[c].y);
+    if (!std::isfinite(e)) return std::numeric_limits<double>::infinity();
+    worst = std::max(worst, e);
   }
   return worst;
 }

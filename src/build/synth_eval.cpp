@@ -210,6 +210,7 @@ Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& c
           const auto start = Clock::now();
           if (m < keygraphs.size()) {
             c.method = keygraphs[m].name;
+            c.has_confidence = true;
             DetectionList list;
             s = detectors[m]->detect(frame, list);
             c.time_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
@@ -342,10 +343,7 @@ const std::vector<double>& synth_confidence_thresholds() {
 std::vector<SynthConfidenceRow> synth_by_confidence(const std::vector<SynthCase>& cases) {
   std::vector<SynthConfidenceRow> rows;
   for (const SynthCase& c : cases) {
-    // Baselines have no confidence (-1 on every detection they make).
-    bool baseline = false;
-    for (const SynthScoredDetection& d : c.scored) baseline = baseline || d.confidence < 0;
-    if (baseline) continue;
+    if (!c.has_confidence) continue;  // baselines
     for (const double t : synth_confidence_thresholds()) {
       auto it = std::find_if(rows.begin(), rows.end(), [&](const SynthConfidenceRow& r) {
         return r.method == c.method && r.index_size == c.index_size && r.threshold == t;
@@ -356,13 +354,17 @@ std::vector<SynthConfidenceRow> synth_by_confidence(const std::vector<SynthCase>
       }
       ++it->frames;
       it->sign_frames += c.sign >= 0 ? 1 : 0;
+      // As in the main table: every kept detection but one right one is false
+      // (a second right detection of the same sign too).
       bool found = false;
+      int kept = 0;
       for (const SynthScoredDetection& d : c.scored) {
         if (d.confidence < t) continue;
+        ++kept;
         found = found || d.right;
-        it->false_detections += d.right ? 0 : 1;
       }
       it->found += found ? 1 : 0;
+      it->false_detections += kept - (found ? 1 : 0);
     }
   }
   return rows;

@@ -61,6 +61,7 @@ struct SynthCase {
   // model keypoint of the sign under the ground truth (-1: not measured).
   int sign_keypoints = -1, repeated_keypoints = -1;
   std::vector<SynthScoredDetection> scored{};  // every detection of the frame
+  bool has_confidence = false;  // a keygraph method: its detections carry a confidence
 };
 
 // A detection of model `model` (an id within the searched index).

@@ -38,7 +38,12 @@ int cmd_manifest(const Args& args) {
   if (const int exit_code = options.parse(args); exit_code >= 0) return exit_code;
   if (set.empty() || dir.empty()) return options.usage_error("give a set and its directory");
   if (output.empty()) return options.usage_error("no output given (-o OUT.jsonl)");
-  if (!split.empty() && set != "exit-signs") return fail("manifest: --split is for exit-signs");
+  if (set != "exit-signs" && set != "planar-pairs" && set != "negatives")
+    return options.usage_error("unknown set '" + set + "' (exit-signs, planar-pairs or negatives)");
+  if (!split.empty() && set != "exit-signs")
+    return options.usage_error("--split is for exit-signs");
+  if (!split.empty() && split != "dev" && split != "test" && split != "model-bursts")
+    return options.usage_error("--split takes dev, test or model-bursts, got '" + split + "'");
   ConvertedSet converted;
   std::string models_name;
   Status s;

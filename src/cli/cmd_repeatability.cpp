@@ -84,7 +84,7 @@ int cmd_repeatability(const Args& args) {
   if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
   if (options.dataset.empty()) return table.usage_error("--dataset DIR is required");
   if (Status s = format::validate_params(params); !s) return fail("repeatability: " + s.message());
-  if (detectors.empty()) return fail("repeatability: --detectors is empty");
+  if (detectors.empty()) return table.usage_error("--detectors is empty");
   // A CSV that cannot be written fails now, not after the run.
   if (!csv.empty()) {
     const std::filesystem::path parent = std::filesystem::path(csv).parent_path();

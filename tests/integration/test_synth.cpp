@@ -245,14 +245,23 @@ TEST(SynthEval, ConfidenceThresholdsKeepTheConfidentDetections) {
     cases[i].index_size = 10;
     cases[i].frame = static_cast<int>(i);
     cases[i].sign = i < 2 ? static_cast<int>(i) : -1;
+    cases[i].has_confidence = true;
   }
   cases[0].scored = {scored(true, 0.95), scored(false, 0.6)};
   cases[1].scored = {scored(true, 0.75)};
   cases[2].scored = {scored(false, 0.85)};
-  // A baseline's detections carry no confidence: not tallied.
+  // Frame 1 again, with a second right detection (at 0.7): false, as in
+  // the main table. Baselines carry no confidence and are not tallied,
+  // with detections or without.
+  cases.push_back(cases[1]);
+  cases.back().frame = 3;
+  cases.back().scored.push_back(scored(true, 0.7));
   SynthCase baseline = cases[0];
   baseline.method = "orb";
+  baseline.has_confidence = false;
   baseline.scored = {scored(true, -1)};
+  cases.push_back(baseline);
+  baseline.scored.clear();
   cases.push_back(baseline);
   const std::vector<SynthConfidenceRow> rows = synth_by_confidence(cases);
   const std::vector<double>& thresholds = synth_confidence_thresholds();
@@ -262,10 +271,13 @@ TEST(SynthEval, ConfidenceThresholdsKeepTheConfidentDetections) {
     const double t = thresholds[i];
     EXPECT_EQ(r.method, "keygraph");
     EXPECT_DOUBLE_EQ(r.threshold, t);
-    EXPECT_EQ(r.frames, 3);
-    EXPECT_EQ(r.sign_frames, 2);
-    EXPECT_EQ(r.found, (0.95 >= t ? 1 : 0) + (0.75 >= t ? 1 : 0)) << t;
-    EXPECT_EQ(r.false_detections, (0.6 >= t ? 1 : 0) + (0.85 >= t ? 1 : 0)) << t;
+    EXPECT_EQ(r.frames, 4);
+    EXPECT_EQ(r.sign_frames, 3);
+    EXPECT_EQ(r.found, (0.95 >= t ? 1 : 0) + 2 * (0.75 >= t ? 1 : 0)) << t;
+    // The repeated frame's two right ones: one found, the other false when
+    // both are kept (or found alone at 0.7 <= t < 0.75: never here).
+    const int second_right = 0.75 >= t && 0.7 >= t ? 1 : 0;
+    EXPECT_EQ(r.false_detections, (0.6 >= t ? 1 : 0) + (0.85 >= t ? 1 : 0) + second_right) << t;
   }
 }
 

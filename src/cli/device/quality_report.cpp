@@ -19,12 +19,23 @@ std::string stars_text(int stars) {
   return text;
 }
 
+// The reader keeps the pairs sorted by (shown, detected) and unrepeated: a
+// binary search, so that a hostile index with every pair listed costs
+// O(pairs log pairs) per model, not O(pairs^2).
 bool has_pair(const ModelIndex& index, std::uint32_t shown, std::uint32_t detected) {
-  for (std::uint32_t i = 0; i < index.look_alike_count(); ++i) {
-    const LookAlike p = index.look_alike(i);
-    if (p.shown == shown && p.detected == detected) return true;
+  std::uint32_t lo = 0, hi = index.look_alike_count();
+  while (lo < hi) {
+    const std::uint32_t mid = lo + (hi - lo) / 2;
+    const LookAlike p = index.look_alike(mid);
+    if (p.shown < shown || (p.shown == shown && p.detected < detected)) {
+      lo = mid + 1;
+    } else {
+      hi = mid;
+    }
   }
-  return false;
+  if (lo == index.look_alike_count()) return false;
+  const LookAlike p = index.look_alike(lo);
+  return p.shown == shown && p.detected == detected;
 }
 
 }  // namespace
