@@ -16,6 +16,7 @@
 
 #include "platform/files/file_source.h"
 #include "platform/files/pgm.h"
+#include "temp_dir.h"
 
 #if KG_TEST_OPENCV
 #include <opencv2/core.hpp>
@@ -24,26 +25,9 @@
 
 namespace kg::platform {
 namespace {
+
+using test::TempDir;
 namespace fs = std::filesystem;
-
-// A fresh directory under the system temp dir, removed with its contents.
-class TempDir {
- public:
-  TempDir() {
-    std::string tmpl = (fs::temp_directory_path() / "kg-files-XXXXXX").string();
-    const char* made = ::mkdtemp(tmpl.data());
-    if (made != nullptr) path_ = made;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    if (!path_.empty()) fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
-};
 
 void write_bytes(const std::string& path, const std::string& bytes) {
   std::ofstream(path, std::ios::binary) << bytes;

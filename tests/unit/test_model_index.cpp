@@ -37,10 +37,13 @@
 #include "core/index_format.h"
 #include "core/kdtree.h"
 #include "core/selection.h"
+#include "temp_dir.h"
 #include "test_data.h"
 
 namespace kg {
 namespace {
+
+using test::TempDir;
 
 using Bytes = std::vector<std::uint8_t>;
 using format::load;
@@ -768,30 +771,6 @@ TEST_F(ModelIndexTest, SerializeRejectsMissingVertexDescriptors) {
 
 // --- Files --------------------------------------------------------------
 
-class TempDir {
- public:
-  TempDir() {
-    std::string tmpl = (std::filesystem::temp_directory_path() / "kg_index_XXXXXX").string();
-    if (::mkdtemp(tmpl.data()) != nullptr) path_ = tmpl;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    if (!path_.empty()) std::filesystem::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const std::filesystem::path& path() const { return path_; }
-  std::vector<std::string> entries() const {
-    std::vector<std::string> names;
-    for (const auto& e : std::filesystem::directory_iterator(path_))
-      names.push_back(e.path().filename().string());
-    return names;
-  }
-
- private:
-  std::filesystem::path path_;
-};
-
 Bytes read_file(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   return Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
@@ -810,7 +789,7 @@ TEST_F(ModelIndexTest, WriteAndOpenFile) {
   Status s = write_index(models(), paper_params(), path);
   ASSERT_TRUE(s) << s.message();
   EXPECT_TRUE(read_file(path) == bytes()) << "file differs from serialize_index";
-  EXPECT_EQ(dir.entries(), std::vector<std::string>{"models.kgi"}) << "temporary file left";
+  EXPECT_EQ(dir.names(), std::vector<std::string>{"models.kgi"}) << "temporary file left";
 
   ModelIndex index;
   s = ModelIndex::open(path, index);
@@ -837,7 +816,7 @@ TEST_F(ModelIndexTest, WriteAndOpenFile) {
   // Overwriting an existing index replaces it whole.
   std::vector<BuiltModel> one = {models()[1]};
   ASSERT_TRUE(write_index(one, paper_params(), path));
-  EXPECT_EQ(dir.entries(), std::vector<std::string>{"models.kgi"});
+  EXPECT_EQ(dir.names(), std::vector<std::string>{"models.kgi"});
   ModelIndex replaced;
   ASSERT_TRUE(ModelIndex::open(path, replaced));
   EXPECT_EQ(replaced.model_count(), 1);
@@ -859,7 +838,7 @@ TEST_F(ModelIndexTest, WriteIntoMissingDirectoryFails) {
   ASSERT_FALSE(s);
   EXPECT_NE(s.message().find(path), std::string::npos) << s.message();
   EXPECT_FALSE(std::filesystem::exists(missing));
-  EXPECT_TRUE(dir.entries().empty()) << "something was left behind";
+  EXPECT_TRUE(dir.names().empty()) << "something was left behind";
 }
 
 TEST_F(ModelIndexTest, OpenRejectsBadFiles) {
