@@ -155,4 +155,17 @@ inline std::vector<std::pair<std::string, cv::Mat>> distractor_tiles(std::size_t
   return out;
 }
 
+// The first `count` distractor tiles the builder accepts (it refuses the
+// few without keypoints, e.g. chessboard squares), built with `params`;
+// fewer when the photos run out.
+inline std::vector<BuiltModel> distractor_models(std::size_t count, const Params& params = {}) {
+  std::vector<BuiltModel> out;
+  for (const auto& [name, image] : distractor_tiles(count + 40)) {
+    if (out.size() >= count) break;
+    BuiltModel model;
+    if (build_model(image, name, params, model).is_ok()) out.push_back(std::move(model));
+  }
+  return out;
+}
+
 }  // namespace kg::test

@@ -35,9 +35,7 @@ constexpr int kMostModels = 200;
 
 struct Models {
   BuiltModel box, graf;
-  std::vector<std::pair<std::string, cv::Mat>> tiles;
-  std::size_t next_tile = 0;
-  std::vector<BuiltModel> others;  // distractors, built as far as needed
+  std::vector<BuiltModel> others;  // distractors, built when first needed
   cv::Mat box_scene, graf_scene;
   bool ok = false;
 };
@@ -57,24 +55,16 @@ Models& models() {
   return m;
 }
 
-// Builds distractors (the tiles the builder accepts) until there are `n`.
-bool ensure_others(Models& m, std::size_t n) {
-  if (m.tiles.empty()) m.tiles = test::distractor_tiles(kMostModels + 40);
-  while (m.others.size() < n && m.next_tile < m.tiles.size()) {
-    const auto& [name, image] = m.tiles[m.next_tile++];
-    BuiltModel model;
-    if (build_model(image, name, Params{}, model).is_ok()) m.others.push_back(std::move(model));
-  }
-  return m.others.size() >= n;
-}
-
 // The index of `count` models, built once (exact: searched exactly).
 const test::InMemoryIndex* index_of(int count, bool exact) {
   static std::map<std::pair<int, bool>, std::unique_ptr<test::InMemoryIndex>> cache;
   auto& slot = cache[{count, exact}];
   if (slot) return slot.get();
   Models& m = models();
-  if (!m.ok || !ensure_others(m, static_cast<std::size_t>(std::max(0, count - 2)))) return nullptr;
+  if (!m.ok) return nullptr;
+  const auto others = static_cast<std::size_t>(std::max(0, count - 2));
+  if (m.others.size() < others) m.others = test::distractor_models(kMostModels - 2);
+  if (m.others.size() < others) return nullptr;
   std::vector<BuiltModel> list{m.box};
   if (count > 1) list.push_back(m.graf);
   for (int i = 2; i < count; ++i) list.push_back(m.others[static_cast<std::size_t>(i - 2)]);

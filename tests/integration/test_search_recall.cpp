@@ -43,15 +43,7 @@ class SearchRecall : public ::testing::Test {
     targets_ = new std::vector<BuiltModel>(2);
     ASSERT_TRUE(build_model(graf, "graf-crop", Params{}, (*targets_)[0]).is_ok());
     ASSERT_TRUE(build_model(box, "box", Params{}, (*targets_)[1]).is_ok());
-    // The first 200 tiles the builder accepts (it refuses the few without
-    // keypoints, e.g. chessboard squares).
-    const auto tiles = test::distractor_tiles(kMostOthers + 40);
-    others_ = new std::vector<BuiltModel>;
-    for (std::size_t i = 0; i < tiles.size() && others_->size() < kMostOthers; ++i) {
-      BuiltModel model;
-      if (build_model(tiles[i].second, tiles[i].first, Params{}, model).is_ok())
-        others_->push_back(std::move(model));
-    }
+    others_ = new std::vector<BuiltModel>(test::distractor_models(kMostOthers));
     ASSERT_EQ(others_->size(), static_cast<std::size_t>(kMostOthers)) << "opencv-doc photos";
     scenes_ = new std::vector<cv::Mat>;
     references_ = new std::vector<Homography>;
