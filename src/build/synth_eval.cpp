@@ -76,15 +76,7 @@ void score_synth_frame(const std::vector<SynthDetection>& detections, const Synt
   for (const SynthDetection& d : detections) {
     SynthScoredDetection scored;
     scored.model = d.model;
-    if (d.has_detail) {
-      scored.inliers = d.detail.inliers;
-      scored.inlier_keygraphs = d.detail.inlier_keygraphs;
-      scored.verification_z = d.detail.verification_z;
-      scored.score = d.detail.score;
-      scored.chance = d.detail.chance;
-      scored.rms_error = d.detail.rms_error;
-      scored.confidence = d.detail.confidence;
-    }
+    scored.support = d.detail;
     if (truth.sign >= 0 && d.model == truth.sign - group_begin) {
       double worst = 0;
       for (const Point2f& p : outline) {
@@ -215,7 +207,7 @@ Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& c
             s = detectors[m]->detect(frame, list);
             c.time_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
             if (!s) return {s.code(), entry.file + ": " + s.message()};
-            for (const Detection& d : list) found.push_back({d.model_id, d.homography, d, true});
+            for (const Detection& d : list) found.push_back({d.model_id, d.homography, d});
             if (sign != nullptr) {
               count_sign_keypoints(detectors[m]->core().last_keypoints(),
                                    keygraphs[m].models[static_cast<std::size_t>(entry.info.sign)],
@@ -359,7 +351,7 @@ std::vector<SynthConfidenceRow> synth_by_confidence(const std::vector<SynthCase>
       bool found = false;
       int kept = 0;
       for (const SynthScoredDetection& d : c.scored) {
-        if (d.confidence < t) continue;
+        if (d.support.confidence < t) continue;
         ++kept;
         found = found || d.right;
       }
@@ -476,9 +468,10 @@ Status write_synth_report(const std::string& dir, const SynthEvalOptions& option
   for (const SynthCase& c : cases) {
     for (const SynthScoredDetection& d : c.scored) {
       det << c.method << ',' << c.index_size << ',' << c.frame << ',' << c.sign << ',' << d.model
-          << ',' << d.right << ',' << d.corner_error << ',' << d.inliers << ','
-          << d.inlier_keygraphs << ',' << d.verification_z << ',' << d.score << ',' << d.chance
-          << ',' << d.rms_error << ',' << d.confidence << '\n';
+          << ',' << d.right << ',' << d.corner_error << ',' << d.support.inliers << ','
+          << d.support.inlier_keygraphs << ',' << d.support.verification_z << ',' << d.support.score
+          << ',' << d.support.chance << ',' << d.support.rms_error << ','
+          << (c.has_confidence ? d.support.confidence : -1.0) << '\n';
     }
   }
   if (s = write_text_file(dir + "/synth-detections.csv", det.str()); !s) return s;

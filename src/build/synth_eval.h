@@ -36,9 +36,8 @@ struct SynthScoredDetection {
   int model = -1;
   bool right = false;
   double corner_error = -1;  // px, against the frame's sign (-1: another model)
-  int inliers = 0, inlier_keygraphs = 0;
-  double verification_z = 0, score = 0, chance = 0, rms_error = 0;
-  double confidence = -1;
+  // The detector's support and confidence (a baseline's: inliers only).
+  Detection support{};
 };
 
 struct SynthCase {
@@ -68,10 +67,8 @@ struct SynthCase {
 struct SynthDetection {
   int model = -1;
   Homography homography{};  // model pixels -> frame pixels
-  // Keygraph methods: the detector's support and confidence (unset for
-  // baselines: confidence -1).
+  // The detector's support and confidence (a baseline's: inliers only).
   Detection detail{};
-  bool has_detail = false;
 };
 // Scores one frame's detections against its ground truth: fills found,
 // corner_error, detections, false_detections and scored of `c`. The index searched

@@ -236,7 +236,7 @@ TEST(SynthEval, ConfidenceThresholdsKeepTheConfidentDetections) {
   auto scored = [](bool right, double confidence) {
     SynthScoredDetection d;
     d.right = right;
-    d.confidence = confidence;
+    d.support.confidence = confidence;
     return d;
   };
   std::vector<SynthCase> cases(3);
