@@ -1,0 +1,379 @@
+#include "core/appearance_align.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace kg {
+
+namespace {
+
+constexpr int kParams = 8;          // homography parameters (h33 fixed)
+constexpr int kMaxIterations = 10;  // Gauss-Newton steps per level
+constexpr double kConverged = 0.1;  // largest corner step, level pixels
+constexpr double kMinInside = 0.7;  // share of the level that must be in the frame
+constexpr int kMinHalfWidth = 16;   // smaller half levels carry too little
+constexpr int kMaxSubsamples = 2;   // per axis, where the frame is finer than the level
+
+void multiply(const double a[9], const double b[9], double out[9]) {
+  double r[9];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      r[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
+  std::copy(r, r + 9, out);
+}
+
+bool invert(const double m[9], double out[9]) {
+  const double c0 = m[4] * m[8] - m[5] * m[7];
+  const double c1 = m[5] * m[6] - m[3] * m[8];
+  const double c2 = m[3] * m[7] - m[4] * m[6];
+  const double det = m[0] * c0 + m[1] * c1 + m[2] * c2;
+  if (!(std::fabs(det) > 1e-300) || !std::isfinite(det)) return false;
+  const double d = 1.0 / det;
+  out[0] = c0 * d;
+  out[1] = (m[2] * m[7] - m[1] * m[8]) * d;
+  out[2] = (m[1] * m[5] - m[2] * m[4]) * d;
+  out[3] = c1 * d;
+  out[4] = (m[0] * m[8] - m[2] * m[6]) * d;
+  out[5] = (m[2] * m[3] - m[0] * m[5]) * d;
+  out[6] = c2 * d;
+  out[7] = (m[1] * m[6] - m[0] * m[7]) * d;
+  out[8] = (m[0] * m[4] - m[1] * m[3]) * d;
+  return true;
+}
+
+// The level's normalised coordinates (centred, half the long edge = 1,
+// which keeps the normal equations well conditioned) -> model pixels.
+void level_to_model(int width, int height, float scale, double out[9]) {
+  const double half_long = 0.5 * std::max(width, height);
+  const double s = scale;
+  out[0] = half_long / s;
+  out[1] = 0.0;
+  out[2] = (0.5 * (width - 1) + 0.5) / s - 0.5;
+  out[3] = 0.0;
+  out[4] = half_long / s;
+  out[5] = (0.5 * (height - 1) + 0.5) / s - 0.5;
+  out[6] = 0.0;
+  out[7] = 0.0;
+  out[8] = 1.0;
+}
+
+float bilinear(ImageView f, double x, double y) {
+  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+  const auto fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
+  const std::uint8_t* r0 = f.row(y0) + x0;
+  const std::uint8_t* r1 = r0 + f.stride;
+  const float top = r0[0] + fx * static_cast<float>(r0[1] - r0[0]);
+  const float bottom = r1[0] + fx * static_cast<float>(r1[1] - r1[0]);
+  return top + fy * (bottom - top);
+}
+
+// Cholesky solve of the 8x8 normal equations (a is overwritten).
+bool solve8(double a[kParams][kParams], const double b[kParams], double x[kParams]) {
+  for (int j = 0; j < kParams; ++j) {
+    double d = a[j][j];
+    for (int k = 0; k < j; ++k) d -= a[j][k] * a[j][k];
+    if (!(d > 1e-12)) return false;
+    a[j][j] = std::sqrt(d);
+    for (int i = j + 1; i < kParams; ++i) {
+      double s = a[i][j];
+      for (int k = 0; k < j; ++k) s -= a[i][k] * a[j][k];
+      a[i][j] = s / a[j][j];
+    }
+  }
+  double y[kParams];
+  for (int i = 0; i < kParams; ++i) {
+    double s = b[i];
+    for (int k = 0; k < i; ++k) s -= a[i][k] * y[k];
+    y[i] = s / a[i][i];
+  }
+  for (int i = kParams - 1; i >= 0; --i) {
+    double s = y[i];
+    for (int k = i + 1; k < kParams; ++k) s -= a[k][i] * x[k];
+    x[i] = s / a[i][i];
+  }
+  return true;
+}
+
+}  // namespace
+
+AppearanceAligner::AppearanceAligner(std::pmr::memory_resource* memory)
+    : full_(memory), half_(memory), steepest_(memory), warped_(memory), valid_(memory) {}
+
+void AppearanceAligner::reserve(int max_pixels) {
+  const auto n = static_cast<std::size_t>(std::max(0, max_pixels));
+  full_.reserve(n);
+  half_.reserve(n / 4 + 1);
+  steepest_.reserve(n * kParams);
+  warped_.reserve(n);
+  valid_.reserve(n);
+}
+
+void AppearanceAligner::warp_level(const Level& level, ImageView frame, const double g[9]) {
+  const int w = level.width, h = level.height;
+  const double half_long = 0.5 * std::max(w, h);
+  const double cx = 0.5 * (w - 1), cy = 0.5 * (h - 1);
+  // Frame pixels per level pixel at the centre: where it exceeds one, each
+  // level pixel averages a grid of samples (the appearance is area-averaged).
+  const auto at = [&](double xn, double yn, double& x, double& y) {
+    const double z = g[6] * xn + g[7] * yn + g[8];
+    x = (g[0] * xn + g[1] * yn + g[2]) / z;
+    y = (g[3] * xn + g[4] * yn + g[5]) / z;
+  };
+  double ox, oy, ux, uy, vx, vy;
+  at(0.0, 0.0, ox, oy);
+  at(1.0 / half_long, 0.0, ux, uy);
+  at(0.0, 1.0 / half_long, vx, vy);
+  const double footprint = std::sqrt(std::fabs((ux - ox) * (vy - oy) - (uy - oy) * (vx - ox)));
+  const int sub = std::clamp(static_cast<int>(std::ceil(footprint - 0.25)), 1, kMaxSubsamples);
+  const double max_x = frame.width - 1.001, max_y = frame.height - 1.001;
+  warped_.resize(static_cast<std::size_t>(w) * h);
+  valid_.resize(static_cast<std::size_t>(w) * h);
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * w + u;
+      float sum = 0.f;
+      bool inside = true;
+      for (int sy = 0; sy < sub && inside; ++sy) {
+        for (int sx = 0; sx < sub; ++sx) {
+          const double du = (sx + 0.5) / sub - 0.5, dv = (sy + 0.5) / sub - 0.5;
+          double x, y;
+          at((u + du - cx) / half_long, (v + dv - cy) / half_long, x, y);
+          if (!(x >= 0.0 && y >= 0.0 && x < max_x && y < max_y)) {
+            inside = false;
+            break;
+          }
+          sum += bilinear(frame, x, y);
+        }
+      }
+      valid_[i] = inside ? 1 : 0;
+      warped_[i] = inside ? sum / static_cast<float>(sub * sub) : 0.f;
+    }
+  }
+}
+
+double AppearanceAligner::correlation(const Level& level, ImageView frame, const double g[9]) {
+  warp_level(level, frame, g);
+  const int w = level.width, h = level.height;
+  double n = 0, st = 0, si = 0, stt = 0, sii = 0, sti = 0;
+  for (int v = 1; v + 1 < h; ++v) {
+    for (int u = 1; u + 1 < w; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * w + u;
+      if (!valid_[i]) continue;
+      const double t = level.values[i], s = warped_[i];
+      n += 1;
+      st += t;
+      si += s;
+      stt += t * t;
+      sii += s * s;
+      sti += t * s;
+    }
+  }
+  const double interior = static_cast<double>(w - 2) * (h - 2);
+  if (interior <= 0 || n < kMinInside * interior) return -1.0;
+  const double vt = stt - st * st / n, vi = sii - si * si / n;
+  if (!(vt > 1e-9 && vi > 1e-9)) return 0.0;
+  return (sti - st * si / n) / std::sqrt(vt * vi);
+}
+
+int AppearanceAligner::refine_level(const Level& level, ImageView frame, double g[9]) {
+  const int w = level.width, h = level.height;
+  const float* t = level.values;
+  const double half_long = 0.5 * std::max(w, h);
+  const double cx = 0.5 * (w - 1), cy = 0.5 * (h - 1);
+  const std::size_t n = static_cast<std::size_t>(w) * h;
+  steepest_.assign(n * kParams, 0.f);
+
+  // Steepest-descent images of the inverse compositional step: the
+  // appearance's gradient times the warp's Jacobian at the identity.
+  double interior = 0, t_sum = 0;
+  for (int v = 1; v + 1 < h; ++v) {
+    for (int u = 1; u + 1 < w; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * w + u;
+      const double gx = 0.5 * (t[i + 1] - t[i - 1]) * half_long;
+      const double gy = 0.5 * (t[i + w] - t[i - w]) * half_long;
+      const double x = (u - cx) / half_long, y = (v - cy) / half_long;
+      float* sd = &steepest_[i * kParams];
+      sd[0] = static_cast<float>(gx * x);
+      sd[1] = static_cast<float>(gy * x);
+      sd[2] = static_cast<float>(gx * y);
+      sd[3] = static_cast<float>(gy * y);
+      sd[4] = static_cast<float>(gx);
+      sd[5] = static_cast<float>(gy);
+      sd[6] = static_cast<float>(-(gx * x * x + gy * x * y));
+      sd[7] = static_cast<float>(-(gx * x * y + gy * y * y));
+      interior += 1;
+      t_sum += t[i];
+    }
+  }
+  if (interior < 16) return 0;
+  // Project gain and bias out: each steepest-descent image is made
+  // orthogonal to the constant image and to the appearance itself, so a
+  // brighter or lower-contrast frame moves no parameter.
+  const double t_mean = t_sum / interior;
+  double t_norm = 0;
+  for (int v = 1; v + 1 < h; ++v)
+    for (int u = 1; u + 1 < w; ++u) {
+      const double d = t[static_cast<std::size_t>(v) * w + u] - t_mean;
+      t_norm += d * d;
+    }
+  if (!(t_norm > 1e-6)) return 0;  // a flat appearance says nothing about the pose
+  t_norm = std::sqrt(t_norm);
+  for (int j = 0; j < kParams; ++j) {
+    double mean = 0, along = 0;
+    for (int v = 1; v + 1 < h; ++v)
+      for (int u = 1; u + 1 < w; ++u)
+        mean += steepest_[(static_cast<std::size_t>(v) * w + u) * kParams + j];
+    mean /= interior;
+    for (int v = 1; v + 1 < h; ++v)
+      for (int u = 1; u + 1 < w; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * w + u;
+        along += (steepest_[i * kParams + j] - mean) * (t[i] - t_mean) / t_norm;
+      }
+    for (int v = 1; v + 1 < h; ++v)
+      for (int u = 1; u + 1 < w; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * w + u;
+        steepest_[i * kParams + j] = static_cast<float>(steepest_[i * kParams + j] - mean -
+                                                        along * (t[i] - t_mean) / t_norm);
+      }
+  }
+  double hessian[kParams][kParams] = {};
+  for (std::size_t i = 0; i < n; ++i) {
+    const float* sd = &steepest_[i * kParams];
+    for (int a = 0; a < kParams; ++a)
+      for (int b = 0; b <= a; ++b) hessian[a][b] += static_cast<double>(sd[a]) * sd[b];
+  }
+  for (int a = 0; a < kParams; ++a)
+    for (int b = a + 1; b < kParams; ++b) hessian[a][b] = hessian[b][a];
+
+  int iterations = 0;
+  for (; iterations < kMaxIterations; ++iterations) {
+    warp_level(level, frame, g);
+    double count = 0, si = 0, st = 0, sii = 0, stt = 0;
+    for (int v = 1; v + 1 < h; ++v)
+      for (int u = 1; u + 1 < w; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * w + u;
+        if (!valid_[i]) continue;
+        count += 1;
+        si += warped_[i];
+        sii += static_cast<double>(warped_[i]) * warped_[i];
+        st += t[i];
+        stt += static_cast<double>(t[i]) * t[i];
+      }
+    if (count < kMinInside * interior) break;
+    const double mi = si / count, mt = st / count;
+    const double vi = sii / count - mi * mi, vt = stt / count - mt * mt;
+    if (!(vi > 1e-6 && vt > 1e-6)) break;
+    const double gain = std::sqrt(vt / vi);
+    double b[kParams] = {};
+    for (int v = 1; v + 1 < h; ++v)
+      for (int u = 1; u + 1 < w; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * w + u;
+        if (!valid_[i]) continue;
+        const double e = gain * (warped_[i] - mi) - (t[i] - mt);
+        const float* sd = &steepest_[i * kParams];
+        for (int j = 0; j < kParams; ++j) b[j] += sd[j] * e;
+      }
+    double a[kParams][kParams];
+    std::copy(&hessian[0][0], &hessian[0][0] + kParams * kParams, &a[0][0]);
+    double dp[kParams];
+    if (!solve8(a, b, dp)) break;
+    const double step[9] = {1.0 + dp[0], dp[2], dp[4], dp[1], 1.0 + dp[3],
+                            dp[5],       dp[6], dp[7], 1.0};
+    double inverse[9];
+    if (!invert(step, inverse)) break;
+    multiply(g, inverse, g);
+    // Stop when the step moves no corner of the level by more than
+    // kConverged of its pixels.
+    double largest = 0;
+    for (const double sx : {-1.0, 1.0})
+      for (const double sy : {-1.0, 1.0}) {
+        const double x = sx * cx / half_long, y = sy * cy / half_long;
+        const double z = step[6] * x + step[7] * y + step[8];
+        const double dx = (step[0] * x + step[1] * y + step[2]) / z - x;
+        const double dy = (step[3] * x + step[4] * y + step[5]) / z - y;
+        largest = std::max(largest, std::hypot(dx, dy) * half_long);
+      }
+    if (!std::isfinite(largest)) break;
+    if (largest < kConverged) {
+      ++iterations;
+      break;
+    }
+  }
+  return iterations;
+}
+
+AppearanceFit AppearanceAligner::align(const AppearanceImage& appearance, ImageView frame,
+                                       Homography& h) {
+  AppearanceFit fit;
+  const int w = appearance.width, hgt = appearance.height;
+  const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(hgt);
+  if (appearance.pixels == nullptr || w < 3 || hgt < 3 || !(appearance.scale > 0.f) ||
+      n > full_.capacity() || frame.width < 2 || frame.height < 2)
+    return fit;
+
+  // The appearance lightly smoothed ([1 2 1] / 4 each way), matching the
+  // blur of the frame it is compared with.
+  full_.resize(n);
+  warped_.resize(n);
+  for (int v = 0; v < hgt; ++v) {
+    const std::uint8_t* r = appearance.pixels + static_cast<std::size_t>(v) * w;
+    for (int u = 0; u < w; ++u) {
+      const int l = std::max(u - 1, 0), rr = std::min(u + 1, w - 1);
+      warped_[static_cast<std::size_t>(v) * w + u] = 0.25f * (r[l] + 2.f * r[u] + r[rr]);
+    }
+  }
+  for (int v = 0; v < hgt; ++v) {
+    const int up = std::max(v - 1, 0), down = std::min(v + 1, hgt - 1);
+    for (int u = 0; u < w; ++u)
+      full_[static_cast<std::size_t>(v) * w + u] =
+          0.25f * (warped_[static_cast<std::size_t>(up) * w + u] +
+                   2.f * warped_[static_cast<std::size_t>(v) * w + u] +
+                   warped_[static_cast<std::size_t>(down) * w + u]);
+  }
+  const Level full{full_.data(), w, hgt, appearance.scale};
+  Level half{};
+  if (w / 2 >= kMinHalfWidth && hgt / 2 >= kMinHalfWidth / 2) {
+    half.width = w / 2;
+    half.height = hgt / 2;
+    half.scale = appearance.scale * 0.5f;
+    half_.resize(static_cast<std::size_t>(half.width) * half.height);
+    for (int v = 0; v < half.height; ++v)
+      for (int u = 0; u < half.width; ++u) {
+        const float* r0 = &full_[static_cast<std::size_t>(2 * v) * w + 2 * u];
+        half_[static_cast<std::size_t>(v) * half.width + u] =
+            0.25f * (r0[0] + r0[1] + r0[w] + r0[w + 1]);
+      }
+    half.values = half_.data();
+  }
+
+  double to_model[9], from_model[9], g[9];
+  level_to_model(w, hgt, full.scale, to_model);
+  multiply(h.data(), to_model, g);
+  fit.ncc_before = correlation(full, frame, g);
+  fit.ncc = fit.ncc_before;
+  if (fit.ncc_before <= -1.0) return fit;
+
+  double refined[9];
+  std::copy(h.begin(), h.end(), refined);
+  if (half.values != nullptr) {
+    double half_to_model[9], half_from_model[9];
+    level_to_model(half.width, half.height, half.scale, half_to_model);
+    if (!invert(half_to_model, half_from_model)) return fit;
+    multiply(refined, half_to_model, g);
+    fit.iterations += refine_level(half, frame, g);
+    multiply(g, half_from_model, refined);
+  }
+  if (!invert(to_model, from_model)) return fit;
+  multiply(refined, to_model, g);
+  fit.iterations += refine_level(full, frame, g);
+  const double ncc = correlation(full, frame, g);
+  if (!(ncc > fit.ncc_before)) return fit;
+  multiply(g, from_model, refined);
+  if (!(std::fabs(refined[8]) > 1e-12)) return fit;
+  for (int i = 0; i < 9; ++i) h[static_cast<std::size_t>(i)] = refined[i] / refined[8];
+  fit.aligned = true;
+  fit.ncc = ncc;
+  return fit;
+}
+
+}  // namespace kg

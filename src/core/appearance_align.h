@@ -1,0 +1,77 @@
+// Photometric refinement of a found pose: the model's stored appearance
+// image (format 6.2, section 15) is aligned onto the frame by inverse
+// compositional Gauss-Newton on the homography (Baker & Matthews, "Lucas-
+// Kanade 20 years on"), with gain and bias projected out of the steepest-
+// descent images so that lighting changes do not bias the pose. Keypoint
+// correspondences bring the pose within a few pixels; the image brings it
+// to a fraction of one, and the normalised cross-correlation of the aligned
+// image with the frame is a check of the model's identity that no keypoint
+// count gives (two signs differing only by an arrow's direction share most
+// keypoints, not most pixels).
+//
+// Coarse to fine: the appearance at half resolution first, then at full.
+// The work per detection is a few hundred thousand multiply-adds; the
+// buffers are reserved once (reserve()) and align() allocates nothing.
+#pragma once
+
+#include <cstdint>
+
+#include "core/workspace.h"
+#include "keygraph/image.h"
+#include "keygraph/types.h"
+
+namespace kg {
+
+// An appearance image and where it lies in model pixels: pixel (u, v)
+// covers model pixels [u / scale, (u + 1) / scale) x [v / scale, (v + 1) / scale).
+struct AppearanceImage {
+  const std::uint8_t* pixels = nullptr;  // width * height bytes, row-major
+  int width = 0;
+  int height = 0;
+  float scale = 0.f;  // appearance pixels per model pixel
+};
+
+struct AppearanceFit {
+  bool aligned = false;  // the refined pose was kept (it correlates better)
+  // Normalised cross-correlation of the appearance with the frame under the
+  // pose given and under the pose returned; -1 where too little of the
+  // appearance falls inside the frame to measure it.
+  double ncc_before = -1.0;
+  double ncc = -1.0;
+  int iterations = 0;  // Gauss-Newton steps over both levels
+};
+
+class AppearanceAligner {
+ public:
+  explicit AppearanceAligner(std::pmr::memory_resource* memory = std::pmr::get_default_resource());
+  // Sizes the buffers for appearance images of up to max_pixels pixels.
+  void reserve(int max_pixels);
+
+  // Refines h (model pixels -> frame pixels) by aligning `appearance` to
+  // `frame` (best a lightly blurred frame: the appearance is area-averaged),
+  // and keeps the refinement only when it raises the correlation. An
+  // appearance larger than reserved is not aligned (ncc stays -1).
+  AppearanceFit align(const AppearanceImage& appearance, ImageView frame, Homography& h);
+
+ private:
+  struct Level {
+    const float* values = nullptr;
+    int width = 0, height = 0;
+    float scale = 0.f;
+  };
+  // Runs Gauss-Newton on one level; g maps the level's normalised
+  // coordinates to frame pixels and is updated in place.
+  int refine_level(const Level& level, ImageView frame, double g[9]);
+  // NCC of the level with the frame under g; -1 when under 70 % of it is
+  // inside the frame.
+  double correlation(const Level& level, ImageView frame, const double g[9]);
+  void warp_level(const Level& level, ImageView frame, const double g[9]);
+
+  WorkVector<float> full_;          // the appearance, lightly smoothed
+  WorkVector<float> half_;          // the same at half resolution
+  WorkVector<float> steepest_;      // 8 steepest-descent images, pixel-major
+  WorkVector<float> warped_;        // the frame sampled under the pose
+  WorkVector<std::uint8_t> valid_;  // 1 where the sample fell inside the frame
+};
+
+}  // namespace kg
