@@ -13,6 +13,10 @@ constexpr double kConverged = 0.1;  // largest corner step, level pixels
 constexpr double kMinInside = 0.7;  // share of the level that must be in the frame
 constexpr int kMinHalfWidth = 16;   // smaller half levels carry too little
 constexpr int kMaxSubsamples = 2;   // per axis, where the frame is finer than the level
+constexpr double kSelected = 0.3;   // share of the pixels the Gauss-Newton steps use
+constexpr std::size_t kMinSelected = 200;
+constexpr double kTukey = 4.685;           // Tukey's biweight constant (95 % efficiency)
+constexpr double kMinResidualScale = 2.0;  // grey levels: the noise floor of the residuals
 
 void multiply(const double a[9], const double b[9], double out[9]) {
   double r[9];
@@ -97,7 +101,14 @@ bool solve8(double a[kParams][kParams], const double b[kParams], double x[kParam
 }  // namespace
 
 AppearanceAligner::AppearanceAligner(std::pmr::memory_resource* memory)
-    : full_(memory), half_(memory), steepest_(memory), warped_(memory), valid_(memory) {}
+    : full_(memory),
+      half_(memory),
+      steepest_(memory),
+      warped_(memory),
+      valid_(memory),
+      magnitude_(memory),
+      selected_(memory),
+      interior_(memory) {}
 
 void AppearanceAligner::reserve(int max_pixels) {
   const auto n = static_cast<std::size_t>(std::max(0, max_pixels));
@@ -106,18 +117,22 @@ void AppearanceAligner::reserve(int max_pixels) {
   steepest_.reserve(n * kParams);
   warped_.reserve(n);
   valid_.reserve(n);
+  magnitude_.reserve(n);
+  selected_.reserve(n);
+  interior_.reserve(n);
 }
 
-void AppearanceAligner::warp_level(const Level& level, ImageView frame, const double g[9]) {
-  const int w = level.width, h = level.height;
-  const double half_long = 0.5 * std::max(w, h);
-  const double cx = 0.5 * (w - 1), cy = 0.5 * (h - 1);
+void AppearanceAligner::warp_level(const Level& level, ImageView frame, const double g[9],
+                                   const std::uint32_t* pixels, std::size_t count) {
+  const int w = level.width;
+  const double half_long = 0.5 * std::max(w, level.height);
+  const double cx = 0.5 * (w - 1), cy = 0.5 * (level.height - 1);
   // Frame pixels per level pixel at the centre: where it exceeds one, each
   // level pixel averages a grid of samples (the appearance is area-averaged).
   const auto at = [&](double xn, double yn, double& x, double& y) {
-    const double z = g[6] * xn + g[7] * yn + g[8];
-    x = (g[0] * xn + g[1] * yn + g[2]) / z;
-    y = (g[3] * xn + g[4] * yn + g[5]) / z;
+    const double z = 1.0 / (g[6] * xn + g[7] * yn + g[8]);
+    x = (g[0] * xn + g[1] * yn + g[2]) * z;
+    y = (g[3] * xn + g[4] * yn + g[5]) * z;
   };
   double ox, oy, ux, uy, vx, vy;
   at(0.0, 0.0, ox, oy);
@@ -126,50 +141,52 @@ void AppearanceAligner::warp_level(const Level& level, ImageView frame, const do
   const double footprint = std::sqrt(std::fabs((ux - ox) * (vy - oy) - (uy - oy) * (vx - ox)));
   const int sub = std::clamp(static_cast<int>(std::ceil(footprint - 0.25)), 1, kMaxSubsamples);
   const double max_x = frame.width - 1.001, max_y = frame.height - 1.001;
-  warped_.resize(static_cast<std::size_t>(w) * h);
-  valid_.resize(static_cast<std::size_t>(w) * h);
-  for (int v = 0; v < h; ++v) {
-    for (int u = 0; u < w; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * w + u;
-      float sum = 0.f;
-      bool inside = true;
-      for (int sy = 0; sy < sub && inside; ++sy) {
-        for (int sx = 0; sx < sub; ++sx) {
-          const double du = (sx + 0.5) / sub - 0.5, dv = (sy + 0.5) / sub - 0.5;
-          double x, y;
-          at((u + du - cx) / half_long, (v + dv - cy) / half_long, x, y);
-          if (!(x >= 0.0 && y >= 0.0 && x < max_x && y < max_y)) {
-            inside = false;
-            break;
-          }
-          sum += bilinear(frame, x, y);
+  const double step = 1.0 / (sub * half_long);
+  const double first = (0.5 / sub - 0.5) / half_long;
+  const float weight = 1.f / static_cast<float>(sub * sub);
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::uint32_t i = pixels[k];
+    const double xn0 =
+        (static_cast<int>(i % static_cast<std::uint32_t>(w)) - cx) / half_long + first;
+    const double yn0 =
+        (static_cast<int>(i / static_cast<std::uint32_t>(w)) - cy) / half_long + first;
+    float sum = 0.f;
+    bool inside = true;
+    for (int sy = 0; sy < sub && inside; ++sy) {
+      for (int sx = 0; sx < sub; ++sx) {
+        double x, y;
+        at(xn0 + sx * step, yn0 + sy * step, x, y);
+        if (!(x >= 0.0 && y >= 0.0 && x < max_x && y < max_y)) {
+          inside = false;
+          break;
         }
+        sum += bilinear(frame, x, y);
       }
-      valid_[i] = inside ? 1 : 0;
-      warped_[i] = inside ? sum / static_cast<float>(sub * sub) : 0.f;
     }
+    valid_[i] = inside ? 1 : 0;
+    warped_[i] = inside ? sum * weight : 0.f;
   }
 }
 
 double AppearanceAligner::correlation(const Level& level, ImageView frame, const double g[9]) {
-  warp_level(level, frame, g);
   const int w = level.width, h = level.height;
+  if (w < 3 || h < 3) return -1.0;
+  interior_.clear();
+  for (int v = 1; v + 1 < h; ++v)
+    for (int u = 1; u + 1 < w; ++u) interior_.push_back(static_cast<std::uint32_t>(v * w + u));
+  warp_level(level, frame, g, interior_.data(), interior_.size());
   double n = 0, st = 0, si = 0, stt = 0, sii = 0, sti = 0;
-  for (int v = 1; v + 1 < h; ++v) {
-    for (int u = 1; u + 1 < w; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * w + u;
-      if (!valid_[i]) continue;
-      const double t = level.values[i], s = warped_[i];
-      n += 1;
-      st += t;
-      si += s;
-      stt += t * t;
-      sii += s * s;
-      sti += t * s;
-    }
+  for (const std::uint32_t i : interior_) {
+    if (!valid_[i]) continue;
+    const double t = level.values[i], s = warped_[i];
+    n += 1;
+    st += t;
+    si += s;
+    stt += t * t;
+    sii += s * s;
+    sti += t * s;
   }
-  const double interior = static_cast<double>(w - 2) * (h - 2);
-  if (interior <= 0 || n < kMinInside * interior) return -1.0;
+  if (n < kMinInside * static_cast<double>(interior_.size())) return -1.0;
   const double vt = stt - st * st / n, vi = sii - si * si / n;
   if (!(vt > 1e-9 && vi > 1e-9)) return 0.0;
   return (sti - st * si / n) / std::sqrt(vt * vi);
@@ -180,101 +197,125 @@ int AppearanceAligner::refine_level(const Level& level, ImageView frame, double 
   const float* t = level.values;
   const double half_long = 0.5 * std::max(w, h);
   const double cx = 0.5 * (w - 1), cy = 0.5 * (h - 1);
-  const std::size_t n = static_cast<std::size_t>(w) * h;
-  steepest_.assign(n * kParams, 0.f);
+  const auto gradient = [&](std::uint32_t i, double& gx, double& gy) {
+    gx = 0.5 * (t[i + 1] - t[i - 1]) * half_long;
+    gy = 0.5 * (t[i + w] - t[i - w]) * half_long;
+  };
+
+  // Only the pixels with the strongest gradients move the pose (a sign is
+  // mostly flat colour): the kSelected share of the interior, ranked by
+  // gradient magnitude.
+  magnitude_.clear();
+  for (int v = 1; v + 1 < h; ++v)
+    for (int u = 1; u + 1 < w; ++u) {
+      double gx, gy;
+      gradient(static_cast<std::uint32_t>(v * w + u), gx, gy);
+      magnitude_.push_back(static_cast<float>(gx * gx + gy * gy));
+    }
+  if (magnitude_.size() < 16) return 0;
+  const std::size_t keep =
+      std::max(std::min(kMinSelected, magnitude_.size()),
+               static_cast<std::size_t>(kSelected * static_cast<double>(magnitude_.size())));
+  std::nth_element(magnitude_.begin(),
+                   magnitude_.begin() + static_cast<std::ptrdiff_t>(magnitude_.size() - keep),
+                   magnitude_.end());
+  const float threshold = std::max(magnitude_[magnitude_.size() - keep], 1e-6f);
+  selected_.clear();
+  for (int v = 1; v + 1 < h; ++v)
+    for (int u = 1; u + 1 < w; ++u) {
+      const auto i = static_cast<std::uint32_t>(v * w + u);
+      double gx, gy;
+      gradient(i, gx, gy);
+      if (gx * gx + gy * gy >= threshold && selected_.size() < keep) selected_.push_back(i);
+    }
+  const std::size_t n = selected_.size();
+  if (n < 16) return 0;
 
   // Steepest-descent images of the inverse compositional step: the
   // appearance's gradient times the warp's Jacobian at the identity.
-  double interior = 0, t_sum = 0;
-  for (int v = 1; v + 1 < h; ++v) {
-    for (int u = 1; u + 1 < w; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * w + u;
-      const double gx = 0.5 * (t[i + 1] - t[i - 1]) * half_long;
-      const double gy = 0.5 * (t[i + w] - t[i - w]) * half_long;
-      const double x = (u - cx) / half_long, y = (v - cy) / half_long;
-      float* sd = &steepest_[i * kParams];
-      sd[0] = static_cast<float>(gx * x);
-      sd[1] = static_cast<float>(gy * x);
-      sd[2] = static_cast<float>(gx * y);
-      sd[3] = static_cast<float>(gy * y);
-      sd[4] = static_cast<float>(gx);
-      sd[5] = static_cast<float>(gy);
-      sd[6] = static_cast<float>(-(gx * x * x + gy * x * y));
-      sd[7] = static_cast<float>(-(gx * x * y + gy * y * y));
-      interior += 1;
-      t_sum += t[i];
-    }
+  steepest_.resize(n * kParams);
+  double t_sum = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::uint32_t i = selected_[k];
+    double gx, gy;
+    gradient(i, gx, gy);
+    const double x = (static_cast<int>(i % static_cast<std::uint32_t>(w)) - cx) / half_long;
+    const double y = (static_cast<int>(i / static_cast<std::uint32_t>(w)) - cy) / half_long;
+    float* sd = &steepest_[k * kParams];
+    sd[0] = static_cast<float>(gx * x);
+    sd[1] = static_cast<float>(gy * x);
+    sd[2] = static_cast<float>(gx * y);
+    sd[3] = static_cast<float>(gy * y);
+    sd[4] = static_cast<float>(gx);
+    sd[5] = static_cast<float>(gy);
+    sd[6] = static_cast<float>(-(gx * x * x + gy * x * y));
+    sd[7] = static_cast<float>(-(gx * x * y + gy * y * y));
+    t_sum += t[i];
   }
-  if (interior < 16) return 0;
   // Project gain and bias out: each steepest-descent image is made
   // orthogonal to the constant image and to the appearance itself, so a
   // brighter or lower-contrast frame moves no parameter.
-  const double t_mean = t_sum / interior;
+  const double t_mean = t_sum / static_cast<double>(n);
   double t_norm = 0;
-  for (int v = 1; v + 1 < h; ++v)
-    for (int u = 1; u + 1 < w; ++u) {
-      const double d = t[static_cast<std::size_t>(v) * w + u] - t_mean;
-      t_norm += d * d;
-    }
-  if (!(t_norm > 1e-6)) return 0;  // a flat appearance says nothing about the pose
+  for (const std::uint32_t i : selected_) t_norm += (t[i] - t_mean) * (t[i] - t_mean);
+  if (!(t_norm > 1e-6)) return 0;
   t_norm = std::sqrt(t_norm);
   for (int j = 0; j < kParams; ++j) {
     double mean = 0, along = 0;
-    for (int v = 1; v + 1 < h; ++v)
-      for (int u = 1; u + 1 < w; ++u)
-        mean += steepest_[(static_cast<std::size_t>(v) * w + u) * kParams + j];
-    mean /= interior;
-    for (int v = 1; v + 1 < h; ++v)
-      for (int u = 1; u + 1 < w; ++u) {
-        const std::size_t i = static_cast<std::size_t>(v) * w + u;
-        along += (steepest_[i * kParams + j] - mean) * (t[i] - t_mean) / t_norm;
-      }
-    for (int v = 1; v + 1 < h; ++v)
-      for (int u = 1; u + 1 < w; ++u) {
-        const std::size_t i = static_cast<std::size_t>(v) * w + u;
-        steepest_[i * kParams + j] = static_cast<float>(steepest_[i * kParams + j] - mean -
-                                                        along * (t[i] - t_mean) / t_norm);
-      }
+    for (std::size_t k = 0; k < n; ++k) mean += steepest_[k * kParams + j];
+    mean /= static_cast<double>(n);
+    for (std::size_t k = 0; k < n; ++k)
+      along += (steepest_[k * kParams + j] - mean) * (t[selected_[k]] - t_mean) / t_norm;
+    for (std::size_t k = 0; k < n; ++k)
+      steepest_[k * kParams + j] = static_cast<float>(steepest_[k * kParams + j] - mean -
+                                                      along * (t[selected_[k]] - t_mean) / t_norm);
   }
-  double hessian[kParams][kParams] = {};
-  for (std::size_t i = 0; i < n; ++i) {
-    const float* sd = &steepest_[i * kParams];
-    for (int a = 0; a < kParams; ++a)
-      for (int b = 0; b <= a; ++b) hessian[a][b] += static_cast<double>(sd[a]) * sd[b];
-  }
-  for (int a = 0; a < kParams; ++a)
-    for (int b = a + 1; b < kParams; ++b) hessian[a][b] = hessian[b][a];
-
   int iterations = 0;
   for (; iterations < kMaxIterations; ++iterations) {
-    warp_level(level, frame, g);
+    warp_level(level, frame, g, selected_.data(), n);
     double count = 0, si = 0, st = 0, sii = 0, stt = 0;
-    for (int v = 1; v + 1 < h; ++v)
-      for (int u = 1; u + 1 < w; ++u) {
-        const std::size_t i = static_cast<std::size_t>(v) * w + u;
-        if (!valid_[i]) continue;
-        count += 1;
-        si += warped_[i];
-        sii += static_cast<double>(warped_[i]) * warped_[i];
-        st += t[i];
-        stt += static_cast<double>(t[i]) * t[i];
-      }
-    if (count < kMinInside * interior) break;
+    for (const std::uint32_t i : selected_) {
+      if (!valid_[i]) continue;
+      count += 1;
+      si += warped_[i];
+      sii += static_cast<double>(warped_[i]) * warped_[i];
+      st += t[i];
+      stt += static_cast<double>(t[i]) * t[i];
+    }
+    if (count < kMinInside * static_cast<double>(n)) break;
     const double mi = si / count, mt = st / count;
     const double vi = sii / count - mi * mi, vt = stt / count - mt * mt;
     if (!(vi > 1e-6 && vt > 1e-6)) break;
     const double gain = std::sqrt(vt / vi);
+    // Robust scale of the residuals (median absolute value): occluders,
+    // glare and the background at the model's border give residuals far
+    // beyond it, which Tukey's weights then ignore.
+    magnitude_.clear();
+    for (const std::uint32_t i : selected_) {
+      if (!valid_[i]) continue;
+      magnitude_.push_back(static_cast<float>(std::fabs(gain * (warped_[i] - mi) - (t[i] - mt))));
+    }
+    const auto middle = magnitude_.begin() + static_cast<std::ptrdiff_t>(magnitude_.size() / 2);
+    std::nth_element(magnitude_.begin(), middle, magnitude_.end());
+    const double sigma = std::max(1.4826 * static_cast<double>(*middle), kMinResidualScale);
+    const double cutoff = kTukey * sigma;
     double b[kParams] = {};
-    for (int v = 1; v + 1 < h; ++v)
-      for (int u = 1; u + 1 < w; ++u) {
-        const std::size_t i = static_cast<std::size_t>(v) * w + u;
-        if (!valid_[i]) continue;
-        const double e = gain * (warped_[i] - mi) - (t[i] - mt);
-        const float* sd = &steepest_[i * kParams];
-        for (int j = 0; j < kParams; ++j) b[j] += sd[j] * e;
+    double a[kParams][kParams] = {};
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::uint32_t i = selected_[k];
+      if (!valid_[i]) continue;
+      const double e = gain * (warped_[i] - mi) - (t[i] - mt);
+      if (std::fabs(e) >= cutoff) continue;
+      const double r = 1.0 - (e / cutoff) * (e / cutoff);
+      const double weight = r * r;
+      const float* sd = &steepest_[k * kParams];
+      for (int j = 0; j < kParams; ++j) {
+        b[j] += weight * sd[j] * e;
+        for (int l = 0; l <= j; ++l) a[j][l] += weight * static_cast<double>(sd[j]) * sd[l];
       }
-    double a[kParams][kParams];
-    std::copy(&hessian[0][0], &hessian[0][0] + kParams * kParams, &a[0][0]);
+    }
+    for (int j = 0; j < kParams; ++j)
+      for (int l = j + 1; l < kParams; ++l) a[j][l] = a[l][j];
     double dp[kParams];
     if (!solve8(a, b, dp)) break;
     const double step[9] = {1.0 + dp[0], dp[2], dp[4], dp[1], 1.0 + dp[3],
@@ -302,19 +343,17 @@ int AppearanceAligner::refine_level(const Level& level, ImageView frame, double 
   return iterations;
 }
 
-AppearanceFit AppearanceAligner::align(const AppearanceImage& appearance, ImageView frame,
-                                       Homography& h) {
-  AppearanceFit fit;
+bool AppearanceAligner::prepare(const AppearanceImage& appearance, ImageView frame) {
   const int w = appearance.width, hgt = appearance.height;
   const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(hgt);
   if (appearance.pixels == nullptr || w < 3 || hgt < 3 || !(appearance.scale > 0.f) ||
       n > full_.capacity() || frame.width < 2 || frame.height < 2)
-    return fit;
-
+    return false;
   // The appearance lightly smoothed ([1 2 1] / 4 each way), matching the
   // blur of the frame it is compared with.
   full_.resize(n);
   warped_.resize(n);
+  valid_.resize(n);
   for (int v = 0; v < hgt; ++v) {
     const std::uint8_t* r = appearance.pixels + static_cast<std::size_t>(v) * w;
     for (int u = 0; u < w; ++u) {
@@ -330,6 +369,24 @@ AppearanceFit AppearanceAligner::align(const AppearanceImage& appearance, ImageV
                    2.f * warped_[static_cast<std::size_t>(v) * w + u] +
                    warped_[static_cast<std::size_t>(down) * w + u]);
   }
+  return true;
+}
+
+double AppearanceAligner::correlate(const AppearanceImage& appearance, ImageView frame,
+                                    const Homography& h) {
+  if (!prepare(appearance, frame)) return -1.0;
+  const Level full{full_.data(), appearance.width, appearance.height, appearance.scale};
+  double to_model[9], g[9];
+  level_to_model(full.width, full.height, full.scale, to_model);
+  multiply(h.data(), to_model, g);
+  return correlation(full, frame, g);
+}
+
+AppearanceFit AppearanceAligner::align(const AppearanceImage& appearance, ImageView frame,
+                                       Homography& h) {
+  AppearanceFit fit;
+  if (!prepare(appearance, frame)) return fit;
+  const int w = appearance.width, hgt = appearance.height;
   const Level full{full_.data(), w, hgt, appearance.scale};
   Level half{};
   if (w / 2 >= kMinHalfWidth && hgt / 2 >= kMinHalfWidth / 2) {

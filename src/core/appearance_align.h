@@ -52,6 +52,9 @@ class AppearanceAligner {
   // and keeps the refinement only when it raises the correlation. An
   // appearance larger than reserved is not aligned (ncc stays -1).
   AppearanceFit align(const AppearanceImage& appearance, ImageView frame, Homography& h);
+  // The correlation of `appearance` with `frame` under h, without aligning
+  // (as AppearanceFit::ncc_before).
+  double correlate(const AppearanceImage& appearance, ImageView frame, const Homography& h);
 
  private:
   struct Level {
@@ -59,19 +62,27 @@ class AppearanceAligner {
     int width = 0, height = 0;
     float scale = 0.f;
   };
+  // Smooths the appearance into full_; false when it cannot be used.
+  bool prepare(const AppearanceImage& appearance, ImageView frame);
   // Runs Gauss-Newton on one level; g maps the level's normalised
   // coordinates to frame pixels and is updated in place.
   int refine_level(const Level& level, ImageView frame, double g[9]);
   // NCC of the level with the frame under g; -1 when under 70 % of it is
   // inside the frame.
   double correlation(const Level& level, ImageView frame, const double g[9]);
-  void warp_level(const Level& level, ImageView frame, const double g[9]);
+  // Samples the frame under g at the listed pixels of the level (into
+  // warped_ and valid_, indexed by pixel).
+  void warp_level(const Level& level, ImageView frame, const double g[9],
+                  const std::uint32_t* pixels, std::size_t count);
 
-  WorkVector<float> full_;          // the appearance, lightly smoothed
-  WorkVector<float> half_;          // the same at half resolution
-  WorkVector<float> steepest_;      // 8 steepest-descent images, pixel-major
-  WorkVector<float> warped_;        // the frame sampled under the pose
-  WorkVector<std::uint8_t> valid_;  // 1 where the sample fell inside the frame
+  WorkVector<float> full_;              // the appearance, lightly smoothed
+  WorkVector<float> half_;              // the same at half resolution
+  WorkVector<float> steepest_;          // 8 steepest-descent images, pixel-major
+  WorkVector<float> warped_;            // the frame sampled under the pose
+  WorkVector<std::uint8_t> valid_;      // 1 where the sample fell inside the frame
+  WorkVector<float> magnitude_;         // gradient magnitudes, for the selection
+  WorkVector<std::uint32_t> selected_;  // pixels the Gauss-Newton steps use
+  WorkVector<std::uint32_t> interior_;  // every pixel but the border
 };
 
 }  // namespace kg
