@@ -30,6 +30,7 @@
 
 #include "alloc_counter.h"
 #include "build/desktop_detect.h"
+#include "build/eval_index.h"
 #include "build/model_builder.h"
 #include "build/model_quality.h"
 #include "core/arc_attributes.h"
@@ -2100,6 +2101,16 @@ TEST(Appearance, NoneStoredWithAppearanceSizeZero) {
   EXPECT_FALSE(index.has_appearance());
   EXPECT_TRUE(index.appearance(0).empty());
   EXPECT_EQ(index.max_appearance_pixels(), 0);
+}
+
+// keygraph eval's in-memory indexes go through the same writer.
+TEST_F(ModelIndexTest, EvalIndexCarriesTheAppearances) {
+  EvalIndex eval;
+  const Status s = eval.build(models(), paper_params());
+  ASSERT_TRUE(s) << s.message();
+  ASSERT_TRUE(eval.index().has_appearance());
+  expect_matches(eval.index(), models());
+  EXPECT_EQ(eval.index().max_appearance_pixels(), 128 * 128);
 }
 
 TEST_F(ModelIndexTest, SerializeRejectsMissingOrMismatchedAppearance) {
