@@ -71,6 +71,25 @@ struct LookAlike {
   std::uint32_t detected = 0;
 };
 
+// A model's appearance (format 6.2, docs/FORMAT.md sections 15-16): the
+// model image (its ROI) resampled by area averaging so that its long edge
+// is Params::views.appearance_size pixels (never upsampled: a model smaller
+// than that is stored at its own size), 8-bit grey, row-major,
+// width * height bytes without padding. Appearance pixel (u, v) covers
+// model pixels [u / scale, (u + 1) / scale) x [v / scale, (v + 1) / scale),
+// so its centre is model point ((u + 0.5) / scale - 0.5,
+// (v + 0.5) / scale - 0.5).
+struct ModelAppearance {
+  const std::uint8_t* pixels = nullptr;  // nullptr: none stored
+  int width = 0;
+  int height = 0;
+  // Appearance pixels per model pixel, the same along both axes: the long
+  // edge's ratio (width / model width for a model at least as wide as
+  // high); 1 for a model stored at its own size.
+  float scale = 0.f;
+  bool empty() const { return pixels == nullptr; }
+};
+
 // A directed model arc between two keypoints of the same model (global ids).
 struct ModelArc {
   std::uint32_t from = 0;
@@ -204,6 +223,20 @@ class ModelIndex {
   }
   LookAlike look_alike(std::uint32_t i) const;  // i < look_alike_count()
 
+  // The models' appearances (see ModelAppearance); false for files older
+  // than format 6.2 and indexes built with views.appearance_size 0.
+  bool has_appearance() const {
+    return appearances_ != nullptr;
+  }
+  // Model `model`'s appearance; empty when none is stored or model is not
+  // in [0, model_count()).
+  ModelAppearance appearance(int model) const;
+  // The largest width * height over the models' appearances (0 when none):
+  // what a workspace for aligning any of them needs.
+  int max_appearance_pixels() const {
+    return max_appearance_pixels_;
+  }
+
   // The whole index: size in bytes and its first byte (mapped, owned or the
   // caller's buffer).
   const std::uint8_t* data() const {
@@ -218,6 +251,8 @@ class ModelIndex {
   Status validate_quality(const std::uint8_t* quality, std::uint32_t quality_count,
                           const std::uint8_t* views, std::uint32_t view_count,
                           const std::uint8_t* pairs, std::uint32_t pair_count) const;
+  Status validate_appearances(const std::uint8_t* records, std::uint32_t record_count,
+                              std::uint64_t pixel_count, int& max_pixels) const;
 
   // Releases open()'s memory: unmaps a mapping of `mapped` bytes, or frees
   // the aligned fallback buffer when `mapped` is 0.
@@ -258,6 +293,9 @@ class ModelIndex {
   std::uint32_t view_quality_count_ = 0;
   const std::uint8_t* look_alikes_ = nullptr;
   std::uint32_t look_alike_count_ = 0;
+  const std::uint8_t* appearances_ = nullptr;
+  const std::uint8_t* appearance_pixels_ = nullptr;
+  int max_appearance_pixels_ = 0;
 };
 
 }  // namespace kg

@@ -171,6 +171,11 @@ struct RansacParams {
   double min_verification_z = 4.0;
   int max_instances = 4;            // RANSAC attempts (so instances) per model and frame
   std::uint64_t seed = 0x6b657967;  // RANSAC random state, fixed for reproducibility
+  // Not in the paper: the smallest normalised cross-correlation, in [-1, 1],
+  // between a model's stored appearance (ViewParams::appearance_size),
+  // aligned onto the frame under the pose, and the frame for a detection to
+  // be kept. Format 6.2; 0 in older files.
+  float min_appearance = 0.f;
 };
 
 // Not in the paper: simulated views of each model, rendered by the builder
@@ -197,6 +202,12 @@ struct ViewParams {
   // another view only when its descriptor differs by more than this
   // (Euclidean) or its scale attributes by more than one grid step.
   float dedupe_distance = 0.05f;
+  // Long edge, in pixels, of the grey image of each model the index stores
+  // (its appearance, format 6.2: the model image downsampled by area
+  // averaging, never upsampled), which the detector aligns onto the frame
+  // to refine and check a pose. 0 stores none (and files older than 6.2
+  // read as 0).
+  int appearance_size = 128;
 };
 
 struct Params {

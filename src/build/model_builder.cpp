@@ -303,6 +303,29 @@ Status build_views(const cv::Mat& gray, const Params& params, BuiltModel& out) {
   return Status::ok();
 }
 
+// The model image resampled by area averaging with one scale on both axes,
+// so that its long edge is `size` pixels, or a copy of it when it is not
+// larger than that (ModelAppearance). A short edge that would round to
+// nothing keeps one pixel.
+void model_appearance(const cv::Mat& gray, int size, cv::Mat& out, float& scale) {
+  const int long_edge = std::max(gray.cols, gray.rows);
+  if (long_edge <= size) {
+    out = gray.clone();
+    scale = 1.f;
+    return;
+  }
+  const double factor = static_cast<double>(size) / long_edge;
+  const cv::Size at_factor(cvRound(gray.cols * factor), cvRound(gray.rows * factor));
+  if (at_factor.width >= 1 && at_factor.height >= 1) {
+    // dsize from the factors: the same factor along both axes.
+    cv::resize(gray, out, cv::Size(), factor, factor, cv::INTER_AREA);
+  } else {
+    cv::resize(gray, out, cv::Size(std::max(1, at_factor.width), std::max(1, at_factor.height)), 0,
+               0, cv::INTER_AREA);
+  }
+  scale = static_cast<float>(factor);
+}
+
 }  // namespace
 
 Status build_model(const cv::Mat& gray, const std::string& name, const Params& params,
@@ -403,6 +426,8 @@ Status build_model(const cv::Mat& gray, const std::string& name, const Params& p
   if (out.arcs.empty())
     return {StatusCode::kInvalidArgument, name + ": no model arcs (" + std::to_string(n) +
                                               " keypoints); image too small or flat"};
+  if (params.views.appearance_size > 0)
+    model_appearance(gray, params.views.appearance_size, out.appearance, out.appearance_scale);
   return Status::ok();
 }
 
@@ -514,6 +539,46 @@ Status encode_quality(const std::vector<BuiltModel>& models, const QualityReport
   return Status::ok();
 }
 
+// Sections 15-16: every model's appearance when the parameters ask for
+// them (empty when views.appearance_size is 0), checked as the reader will
+// check them.
+Status encode_appearances(const std::vector<BuiltModel>& models, const Params& params,
+                          std::vector<std::uint8_t>& record_bytes,
+                          std::vector<std::uint8_t>& pixel_bytes) {
+  using namespace format;
+  record_bytes.clear();
+  pixel_bytes.clear();
+  const int size = params.views.appearance_size;
+  if (size == 0) return Status::ok();
+  record_bytes.assign(models.size() * kAppearanceSize, 0);
+  for (std::size_t m = 0; m < models.size(); ++m) {
+    const BuiltModel& model = models[m];
+    const cv::Mat& a = model.appearance;
+    const int long_edge = std::max(model.width, model.height);
+    const int want = std::min(size, long_edge);
+    if (a.empty() || a.type() != CV_8UC1 || std::max(a.cols, a.rows) != want ||
+        !(model.appearance_scale > 0.f && model.appearance_scale <= 1.f) ||
+        (model.appearance_scale < 1.f) != (long_edge > size))
+      return {StatusCode::kInvalidArgument,
+              model.name + ": no appearance of " + std::to_string(want) +
+                  " px on its long edge (build the model with the parameters of the index: "
+                  "views.appearance_size " +
+                  std::to_string(size) + ")"};
+    if (pixel_bytes.size() + a.total() > 0xFFFFFFFFu)
+      return {StatusCode::kInvalidArgument, "more than 2^32 - 1 appearance pixels"};
+    std::uint8_t* r = record_bytes.data() + m * kAppearanceSize;
+    store<std::uint32_t>(r + kApWidth, static_cast<std::uint32_t>(a.cols));
+    store<std::uint32_t>(r + kApHeight, static_cast<std::uint32_t>(a.rows));
+    store<float>(r + kApScale, model.appearance_scale);
+    store<std::uint32_t>(r + kApFirstPixel, static_cast<std::uint32_t>(pixel_bytes.size()));
+    for (int y = 0; y < a.rows; ++y) {
+      const std::uint8_t* row = a.ptr<std::uint8_t>(y);
+      pixel_bytes.insert(pixel_bytes.end(), row, row + a.cols);
+    }
+  }
+  return Status::ok();
+}
+
 }  // namespace
 
 Status serialize_index(const std::vector<BuiltModel>& models, const Params& params,
@@ -524,6 +589,9 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
   if (models.empty()) return {StatusCode::kInvalidArgument, "no models to write"};
   std::vector<std::uint8_t> quality_bytes, view_quality_bytes, look_alike_bytes;
   s = encode_quality(models, quality, quality_bytes, view_quality_bytes, look_alike_bytes);
+  if (!s) return s;
+  std::vector<std::uint8_t> appearance_bytes, appearance_pixels;
+  s = encode_appearances(models, params, appearance_bytes, appearance_pixels);
   if (!s) return s;
 
   // Gather global arrays.
@@ -675,6 +743,10 @@ Status serialize_index(const std::vector<BuiltModel>& models, const Params& para
        static_cast<std::uint32_t>(view_quality_bytes.size() / kViewQualitySize)},
       {kSectionLookAlikes, 0, look_alike_bytes.data(), look_alike_bytes.size(),
        static_cast<std::uint32_t>(look_alike_bytes.size() / kLookAlikeSize)},
+      {kSectionAppearances, 0, appearance_bytes.data(), appearance_bytes.size(),
+       static_cast<std::uint32_t>(appearance_bytes.size() / kAppearanceSize)},
+      {kSectionAppearancePixels, 0, appearance_pixels.data(), appearance_pixels.size(),
+       static_cast<std::uint32_t>(appearance_pixels.size())},
   };
   const std::size_t params_offset = kHeaderSize;
   const std::size_t table_offset = params_offset + kParamsSize;

@@ -51,6 +51,11 @@ struct BuiltModel {
   std::vector<std::array<float, 2>> arc_attributes;
   std::vector<ViewSummary> views;
   std::uint64_t keygraphs = 0;
+  // The model's appearance (ModelAppearance, format 6.2): the model image
+  // downsampled by area averaging to Params::views.appearance_size pixels
+  // on its long edge (never upsampled), 8-bit grey; empty when that is 0.
+  cv::Mat appearance;
+  float appearance_scale = 0.f;  // appearance pixels per model pixel
 };
 
 // Builds one model from an 8-bit gray image.

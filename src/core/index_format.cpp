@@ -60,6 +60,10 @@ const char* section_name(std::uint32_t id) {
       return "view quality";
     case kSectionLookAlikes:
       return "look-alikes";
+    case kSectionAppearances:
+      return "model appearance";
+    case kSectionAppearancePixels:
+      return "appearance pixels";
     default:
       return "(unknown)";
   }
@@ -196,6 +200,12 @@ Status validate_params(const Params& p) {
   if (!(std::isfinite(p.views.dedupe_distance) && p.views.dedupe_distance >= 0.f &&
         p.views.dedupe_distance <= 2.f))
     return bad("views.dedupe_distance", "must be in [0, 2]");
+  if (p.views.appearance_size < 0 || p.views.appearance_size > kMaxAppearanceSize)
+    return bad("views.appearance_size",
+               "must be in 0.." + std::to_string(kMaxAppearanceSize) + " (0: none)");
+  if (!(std::isfinite(p.ransac.min_appearance) && p.ransac.min_appearance >= -1.f &&
+        p.ransac.min_appearance <= 1.f))
+    return bad("ransac.min_appearance", "must be in [-1, 1]");
   return Status::ok();
 }
 

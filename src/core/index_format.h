@@ -24,8 +24,10 @@ inline constexpr std::uint8_t kMagic[8] = {0x89, 'K', 'G', 'I', '\r', '\n', 0x1A
 // 6.0: model views (parameters views.*; arcs and their scale attributes
 // from simulated views) and the keypoint views section (11).
 // 6.1: the model quality report (sections 12-14); 6.0 files have none.
+// 6.2: each model's appearance (sections 15-16, parameters
+// views.appearance_size and ransac.min_appearance); older files have none.
 inline constexpr std::uint16_t kVersionMajor = 6;
-inline constexpr std::uint16_t kVersionMinor = 1;
+inline constexpr std::uint16_t kVersionMinor = 2;
 inline constexpr std::size_t kAlignment = 64;
 
 inline constexpr std::size_t kHeaderSize = 64;
@@ -66,13 +68,19 @@ enum SectionId : std::uint32_t {
   kSectionModelQuality = 12,      // quality record per model (6.1), or empty: no report
   kSectionViewQuality = 13,       // quality record per model view (6.1)
   kSectionLookAlikes = 14,        // (shown, detected) model pairs (6.1)
+  kSectionAppearances = 15,       // appearance record per model (6.2), or empty: none
+  kSectionAppearancePixels = 16,  // 8-bit grey pixels of every model's appearance (6.2)
 };
 // Sections 1..kSectionCount are in every index and required (empty ones
-// included); from minor version 1 on, sections 12..kLastSectionId too.
-// Ids above are skipped by the reader: room for later minor versions.
+// included); from minor version 1 on, sections 12..14 too, and from minor
+// version 2 on, 15..kLastSectionId. Ids above are skipped by the reader:
+// room for later minor versions.
 inline constexpr std::uint32_t kSectionCount = 11;
-inline constexpr std::uint32_t kFirstQualitySection = 12;
-inline constexpr std::uint32_t kLastSectionId = 14;
+inline constexpr std::uint32_t kLastSectionId = 16;
+// The last section id a file of minor version `minor` must have.
+inline constexpr std::uint32_t last_required_section(std::uint16_t minor) {
+  return minor >= 2 ? kSectionAppearancePixels : minor == 1 ? kSectionLookAlikes : kSectionCount;
+}
 
 // View scale codes (section 11): code = round(-log2(scale) * 8), 0 for the
 // model image's own scale, one step per eighth of an octave; the scale of a
@@ -129,6 +137,17 @@ inline constexpr std::size_t kVqKeygraphs = 20;  // u32, saturated
 // Look-alike record (section 14, kLookAlikeSize bytes): u32 the model whose
 // scene was rendered, u32 the other model detected in it; sorted, distinct.
 inline constexpr std::size_t kLookAlikeSize = 8;
+
+// Appearance record (section 15, kAppearanceSize bytes), one per model in
+// model order when views.appearance_size > 0, else none. The pixels
+// (section 16) are the appearances row-major without padding, models
+// consecutive in model order.
+inline constexpr std::size_t kAppearanceSize = 16;
+inline constexpr std::size_t kApWidth = 0;        // u32, 1..appearance_size
+inline constexpr std::size_t kApHeight = 4;       // u32, 1..appearance_size
+inline constexpr std::size_t kApScale = 8;        // f32, (0, 1]: appearance px per model px
+inline constexpr std::size_t kApFirstPixel = 12;  // u32, offset into section 16
+inline constexpr int kMaxAppearanceSize = 512;    // largest views.appearance_size
 
 inline std::size_t align_up(std::size_t v) {
   return (v + kAlignment - 1) & ~(kAlignment - 1);
@@ -196,6 +215,8 @@ void visit_params(P& p, F&& f) {
   f("views.tilt_levels", p.views.tilt_levels);
   f("views.merge_distance", p.views.merge_distance);
   f("views.dedupe_distance", p.views.dedupe_distance);
+  f("views.appearance_size", p.views.appearance_size);  // 6.2
+  f("ransac.min_appearance", p.ransac.min_appearance);  // 6.2
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }

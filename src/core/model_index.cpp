@@ -293,8 +293,9 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
     if (crc32(d + sec.offset, static_cast<std::size_t>(sec.size)) != sec.crc)
       return corrupt(std::string(name) + " section: checksum mismatch");
   }
-  // Minor version 1 added the quality sections: required from then on.
-  const std::uint32_t required = minor >= 1 ? kLastSectionId : kSectionCount;
+  // Minor version 1 added the quality sections, 2 the appearance sections:
+  // required from then on.
+  const std::uint32_t required = last_required_section(minor);
   for (std::uint32_t id = 1; id <= required; ++id) {
     if (!sections[id].present) return corrupt(std::string(section_name(id)) + " section missing");
   }
@@ -521,6 +522,35 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
     }
   }
 
+  // Appearances: one per model exactly when the parameters ask for them
+  // (older files, without the sections, only when they do not).
+  {
+    const Section& records = sections[kSectionAppearances];
+    const Section& pixels = sections[kSectionAppearancePixels];
+    if (records.present != pixels.present)
+      return corrupt("model appearance and appearance pixels sections: one without the other");
+    if (records.present) {
+      if (!(s = expect_size(kSectionAppearances, kAppearanceSize))) return s;
+      if (!(s = expect_size(kSectionAppearancePixels, 1))) return s;
+    }
+    const std::uint32_t record_count = records.present ? records.count : 0;
+    const std::uint32_t pixel_count = pixels.present ? pixels.count : 0;
+    const std::uint32_t want = params_.views.appearance_size > 0 ? models.count : 0;
+    if (record_count != want)
+      return corrupt("model appearance section: count " + std::to_string(record_count) +
+                     ", expected " + std::to_string(want) +
+                     " (one per model when parameter views.appearance_size, here " +
+                     std::to_string(params_.views.appearance_size) + ", is above 0)");
+    int max_pixels = 0;
+    if (!(s = validate_appearances(d + records.offset, record_count, pixel_count, max_pixels)))
+      return s;
+    if (record_count > 0) {
+      appearances_ = d + records.offset;
+      appearance_pixels_ = d + pixels.offset;
+      max_appearance_pixels_ = max_pixels;
+    }
+  }
+
   data_ = d;
   size_ = size;
   version_major_ = major;
@@ -600,6 +630,63 @@ Status ModelIndex::validate_quality(const std::uint8_t* quality, std::uint32_t q
     }
   }
   return Status::ok();
+}
+
+// The appearance records (section 15) against the models and the pixel
+// count of section 16: each size within views.appearance_size and what the
+// model's size and the scale give, pixel ranges consecutive and covering
+// the pixels. `max_pixels` gets the largest width * height.
+Status ModelIndex::validate_appearances(const std::uint8_t* records, std::uint32_t record_count,
+                                        std::uint64_t pixel_count, int& max_pixels) const {
+  max_pixels = 0;
+  const auto limit = static_cast<std::uint32_t>(params_.views.appearance_size);
+  std::uint64_t next_pixel = 0;
+  for (std::uint32_t m = 0; m < record_count; ++m) {
+    const std::uint8_t* r = records + static_cast<std::size_t>(m) * kAppearanceSize;
+    auto bad = [m](const std::string& what) {
+      return corrupt("model appearance " + std::to_string(m) + ": " + what);
+    };
+    const auto width = load<std::uint32_t>(r + kApWidth);
+    const auto height = load<std::uint32_t>(r + kApHeight);
+    const float scale = load<float>(r + kApScale);
+    if (width < 1 || height < 1 || width > limit || height > limit)
+      return bad("size " + std::to_string(width) + "x" + std::to_string(height) +
+                 " not within 1.." + std::to_string(limit) + " (views.appearance_size)");
+    if (!(scale > 0.f && scale <= 1.f)) return bad("scale not in (0, 1]");
+    // The model's size at that scale, to the pixel; downsampled only as far
+    // as the appearance size.
+    const std::uint8_t* model = models_ + static_cast<std::size_t>(m) * kModelRecordSize;
+    const double model_width = load<float>(model + kModWidth);
+    const double model_height = load<float>(model + kModHeight);
+    if (std::fabs(width - model_width * scale) > 1.0 ||
+        std::fabs(height - model_height * scale) > 1.0)
+      return bad("size " + std::to_string(width) + "x" + std::to_string(height) +
+                 " is not the model's size times the scale");
+    if (scale < 1.f && std::max(width, height) != limit)
+      return bad("downsampled, but its long edge is not views.appearance_size");
+    if (load<std::uint32_t>(r + kApFirstPixel) != next_pixel)
+      return bad("pixel range not contiguous");
+    const std::uint64_t pixels = std::uint64_t{width} * height;  // <= 512 x 512
+    if (pixels > pixel_count - next_pixel) return bad("pixel range out of bounds");
+    next_pixel += pixels;
+    max_pixels = std::max(max_pixels, static_cast<int>(pixels));
+  }
+  if (next_pixel != pixel_count)
+    return corrupt("appearance pixels section: " + std::to_string(pixel_count) +
+                   " pixels, the appearances cover " + std::to_string(next_pixel));
+  return Status::ok();
+}
+
+ModelAppearance ModelIndex::appearance(int model) const {
+  ModelAppearance a;
+  if (appearances_ == nullptr || model < 0 || static_cast<std::uint32_t>(model) >= model_count_)
+    return a;
+  const std::uint8_t* r = appearances_ + static_cast<std::size_t>(model) * kAppearanceSize;
+  a.pixels = appearance_pixels_ + load<std::uint32_t>(r + kApFirstPixel);
+  a.width = static_cast<int>(load<std::uint32_t>(r + kApWidth));
+  a.height = static_cast<int>(load<std::uint32_t>(r + kApHeight));
+  a.scale = load<float>(r + kApScale);
+  return a;
 }
 
 ModelQuality ModelIndex::model_quality(int i) const {

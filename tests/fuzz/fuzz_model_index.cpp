@@ -151,6 +151,28 @@ void exercise(const kg::ModelIndex& index) {
               "look-alike model id out of bounds");
     }
   }
+  // The appearances (format 6.2): sizes as documented, every pixel inside
+  // the index (each one read, for ASan).
+  if (index.has_appearance()) {
+    const std::uint8_t* begin = index.data();
+    const std::uint8_t* end = begin + index.byte_size();
+    const int limit = index.params().views.appearance_size;
+    for (int i = 0; i < index.model_count(); ++i) {
+      const kg::ModelAppearance a = index.appearance(i);
+      require(!a.empty() && a.width >= 1 && a.height >= 1 && a.width <= limit &&
+                  a.height <= limit && a.scale > 0.f && a.scale <= 1.f,
+              "appearance size or scale out of range");
+      const std::size_t pixels = static_cast<std::size_t>(a.width) * a.height;
+      require(pixels <= static_cast<std::size_t>(index.max_appearance_pixels()),
+              "appearance larger than max_appearance_pixels()");
+      require(a.pixels >= begin && pixels <= static_cast<std::size_t>(end - a.pixels),
+              "appearance pixels outside the index");
+      for (std::size_t k = 0; k < pixels; ++k) name_bytes += a.pixels[k] & 1u;
+    }
+  } else {
+    require(index.max_appearance_pixels() == 0 && index.appearance(0).empty(),
+            "appearance without has_appearance()");
+  }
   counts.name_bytes += name_bytes;
   if (reader_only) return;
 

@@ -107,6 +107,15 @@ next_case
 expect_failure "build: unknown option" "$KG" build --bogus "$DATA/box.png" -o "$CASE/out.kgi"
 next_case
 expect_failure "build: bad --encoding" "$KG" build --encoding int4 "$DATA/box.png" -o "$CASE/o.kgi"
+# The appearance parameters (format 6.2) are range-checked, naming the field.
+for assignment in views.appearance_size=9999 views.appearance_size=-1 ransac.min_appearance=1.5 \
+  ransac.min_appearance=nan; do
+  next_case
+  expect_failure "build: --set $assignment" \
+    "$KG" build --set "$assignment" "$DATA/box.png" -o "$CASE/o.kgi"
+  grep -q "${assignment%%=*}" "$LOG/stderr" ||
+    bad "build: --set $assignment: the message does not name the parameter: $(cat "$LOG/stderr")"
+done
 next_case
 expect_failure "build: --name after the last image" \
   "$KG" build "$DATA/box.png" --name late -o "$CASE/out.kgi"
@@ -203,8 +212,13 @@ if "$KG" inspect "$INDEX" >"$LOG/stdout" 2>"$LOG/stderr"; then
   grep -Eq '^ +[0-9]+ +box +[0-9]+ +[0-9]+ ' "$LOG/stdout" ||
     bad "inspect: no model line for 'box' in: $(cat "$LOG/stdout")"
   # Every section, every checksum verified.
-  [ "$(grep -Ec '^ +[0-9]+ .* crc ok$' "$LOG/stdout")" -eq 14 ] ||
-    bad "inspect: expected 14 'crc ok' sections in: $(cat "$LOG/stdout")"
+  [ "$(grep -Ec '^ +[0-9]+ .* crc ok$' "$LOG/stdout")" -eq 16 ] ||
+    bad "inspect: expected 16 'crc ok' sections in: $(cat "$LOG/stdout")"
+  # box.png (324x223) stored at the default 128 px: 128x88, 16 + 11264 bytes.
+  grep -Eq '^appearance: 128 px long edge, 11\.0 KB$' "$LOG/stdout" ||
+    bad "inspect: no appearance line in: $(cat "$LOG/stdout")"
+  grep -Eq '^ +[0-9]+ +box +[0-9]+ .* 128x88$' "$LOG/stdout" ||
+    bad "inspect: no 128x88 appearance in the model line for 'box'"
   grep -q 'crc BAD' "$LOG/stdout" && bad "inspect: a good index shows 'crc BAD'"
   grep -Eq '^format 6\.[0-9]+, ' "$LOG/stdout" || bad "inspect: no format line"
   grep -Eq '^  descriptor\.encoding +(float32|int16|int8)$' "$LOG/stdout" ||

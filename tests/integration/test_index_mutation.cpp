@@ -68,7 +68,8 @@ Bytes build_index(const cv::Mat& gray, const std::string& name) {
   BuiltModel model;
   Status s = build_model(gray, name, params, model);
   EXPECT_TRUE(s.is_ok()) << s.message();
-  // With the quality report keygraph build stores (format 6.1).
+  // With the quality report keygraph build stores (format 6.1) and the
+  // appearance the default parameters ask for (6.2).
   QualityReport quality;
   s = measure_quality({model}, {gray}, params, QualityOptions{}, quality);
   EXPECT_TRUE(s.is_ok()) << s.message();
@@ -132,6 +133,15 @@ int try_mutant(const Bytes& mutant, Tally& tally) {
     EXPECT_LE(std::uint64_t{m.keypoint_begin} + m.keypoint_count, index.keypoint_count());
   }
   EXPECT_LE(name_bytes, mutant.size());
+  // Every appearance pixel is read (ASan reports a read past the buffer).
+  std::size_t appearance_bytes = 0;
+  for (int i = 0; i < index.model_count(); ++i) {
+    const ModelAppearance a = index.appearance(i);
+    const std::size_t n = static_cast<std::size_t>(a.width) * static_cast<std::size_t>(a.height);
+    EXPECT_LE(n, static_cast<std::size_t>(index.max_appearance_pixels()));
+    for (std::size_t k = 0; k < n; ++k) appearance_bytes += a.pixels[k] != 0 ? 1 : 0;
+  }
+  EXPECT_LE(appearance_bytes, mutant.size());
   const cv::Mat& scene = corpus().scene;
   Detector detector(index);
   DetectionList found;

@@ -60,6 +60,7 @@ void make(Scenario& s, int inliers, int outliers, double noise, unsigned seed) {
   const BuiltModel model = grid_model(random);
   Params params;
   params.views.min_size = 0.f;
+  params.views.appearance_size = 0;  // a model without an image has no appearance
   ASSERT_TRUE(s.index.build({model}, params));
   // A perspective view: scale 1.4, rotation 20 degrees, some tilt.
   const double a = 20.0 * 3.14159265358979 / 180.0;

@@ -20,14 +20,17 @@
 #include <map>
 #include <memory>
 #include <new>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "alloc_counter.h"
 #include "build/desktop_detect.h"
+#include "build/eval_index.h"
 #include "build/model_builder.h"
 #include "build/model_quality.h"
 #include "core/arc_attributes.h"
@@ -262,6 +265,8 @@ void expect_same_params(const Params& got, const Params& want) {
   EXPECT_EQ(got.ransac.inlier_threshold, want.ransac.inlier_threshold);
   EXPECT_EQ(got.ransac.max_instances, want.ransac.max_instances);
   EXPECT_EQ(got.ransac.seed, want.ransac.seed);
+  EXPECT_EQ(got.ransac.min_appearance, want.ransac.min_appearance);
+  EXPECT_EQ(got.views.appearance_size, want.views.appearance_size);
 }
 
 // The descriptor components of a tree point.
@@ -324,6 +329,18 @@ void expect_matches(const ModelIndex& index, const std::vector<BuiltModel>& mode
     }
     for (std::size_t i = 0; i < bm.arcs.size(); ++i)
       built[{bm.arcs[i].from + kp_begin, bm.arcs[i].to + kp_begin}] = bm.descriptors[i];
+    // The appearance, byte for byte, when the parameters store one.
+    const ModelAppearance look = index.appearance(m);
+    EXPECT_EQ(look.empty(), index.params().views.appearance_size == 0);
+    if (!look.empty()) {
+      ASSERT_EQ(look.width, bm.appearance.cols);
+      ASSERT_EQ(look.height, bm.appearance.rows);
+      EXPECT_EQ(look.scale, bm.appearance_scale);
+      for (int y = 0; y < look.height; ++y)
+        ASSERT_EQ(0, std::memcmp(look.pixels + static_cast<std::size_t>(y) * look.width,
+                                 bm.appearance.ptr<std::uint8_t>(y), look.width))
+            << "appearance row " << y;
+    }
     // Owner lookups at both ends of each range (and the middle).
     if (info.keypoint_count > 0) {
       EXPECT_EQ(index.model_of_keypoint(kp_begin), m);
@@ -515,6 +532,8 @@ TEST_F(ModelIndexTest, NonDefaultParamsRoundTrip) {
   p.ransac.inlier_threshold = 3.25;
   p.ransac.max_instances = 7;
   p.ransac.seed = 0x0123456789abcdefULL;
+  p.ransac.min_appearance = -0.25f;
+  p.views.appearance_size = 0;  // none stored, though the models have one
   Bytes b;
   ASSERT_TRUE(serialize_index(models(), p, b));
   AlignedBytes buffer(b);
@@ -522,6 +541,7 @@ TEST_F(ModelIndexTest, NonDefaultParamsRoundTrip) {
   const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
   ASSERT_TRUE(s) << s.message();
   expect_same_params(index.params(), p);
+  EXPECT_FALSE(index.has_appearance());
 }
 
 TEST_F(ModelIndexTest, OwnerLookupsOnManyModels) {
@@ -1069,13 +1089,33 @@ TEST(Golden, EveryGoldenLoadsAndDetects) {
   }
   std::sort(goldens.begin(), goldens.end());
   ASSERT_GE(goldens.size(), 2u) << "no golden files in " << golden_dir();
+  std::set<int> minors;  // every minor version of this major must have its files
   for (const auto& path : goldens) {
     SCOPED_TRACE(path.filename().string());
     ModelIndex index;
     const Status s = ModelIndex::open(path.string(), index);
     ASSERT_TRUE(s) << s.message();
+    minors.insert(index.version_minor());
     ASSERT_EQ(index.model_count(), 1);
     EXPECT_EQ(index.model(0).name, "box_crop");
+    // From 6.2 on the crop's own pixels (96 px: below the 128 px appearance
+    // size, so not resampled); earlier files have no appearance and read
+    // the new parameters as 0.
+    if (index.version_minor() >= 2) {
+      ASSERT_TRUE(index.has_appearance());
+      const ModelAppearance look = index.appearance(0);
+      ASSERT_EQ(look.width, kGoldenCrop.width);
+      ASSERT_EQ(look.height, kGoldenCrop.height);
+      EXPECT_EQ(look.scale, 1.f);
+      const cv::Mat crop = box(kGoldenCrop).clone();
+      EXPECT_EQ(0, std::memcmp(look.pixels, crop.data, crop.total()));
+    } else {
+      EXPECT_FALSE(index.has_appearance());
+      EXPECT_TRUE(index.appearance(0).empty());
+      EXPECT_EQ(index.max_appearance_pixels(), 0);
+      EXPECT_EQ(index.params().views.appearance_size, 0);
+      EXPECT_EQ(index.params().ransac.min_appearance, 0.f);
+    }
     DesktopDetector detector(index);
     DetectionList found;
     ASSERT_TRUE(detector.detect(box, found));
@@ -1090,6 +1130,8 @@ TEST(Golden, EveryGoldenLoadsAndDetects) {
       EXPECT_NEAR(found[0].corners[c].y, want[c].y, 3.f) << "corner " << c;
     }
   }
+  for (int minor = 0; minor <= format::kVersionMinor; ++minor)
+    EXPECT_EQ(minors.count(minor), 1u) << "no golden file of format 6." << minor;
 }
 
 // --- Corruption -------------------------------------------------------------
@@ -1260,9 +1302,12 @@ TEST_F(ModelIndexTest, RejectsHeaderDamage) {
 }
 
 TEST_F(ModelIndexTest, RejectsFlippedByteInEachSection) {
-  for (std::uint32_t id = 1; id <= format::kSectionCount; ++id) {
-    // The vertex descriptor section is empty here (SIFT tests cover it).
-    if (id == format::kSectionVertexDescriptors) continue;
+  for (std::uint32_t id = 1; id <= format::kLastSectionId; ++id) {
+    // The vertex descriptor and quality sections are empty here (the SIFT
+    // and quality tests cover them).
+    if (id == format::kSectionVertexDescriptors ||
+        (id >= format::kSectionModelQuality && id <= format::kSectionLookAlikes))
+      continue;
     const char* name = format::section_name(id);
     ASSERT_GT(section_size(bytes(), id), 0u) << name;
     for (std::size_t where :
@@ -1578,6 +1623,22 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
     }
   }
 
+  // The appearance parameters (format 6.2).
+  for (const int size : {-1, 513, 1 << 30}) {
+    p = paper_params();
+    p.views.appearance_size = size;
+    b = bytes();
+    put_params(b, p);
+    EXPECT_TRUE(rejected(b, "parameter views.appearance_size must be in 0..512"));
+  }
+  for (const float ncc : {-1.01f, 1.5f, std::nanf(""), std::numeric_limits<float>::infinity()}) {
+    p = paper_params();
+    p.ransac.min_appearance = ncc;
+    b = bytes();
+    put_params(b, p);
+    EXPECT_TRUE(rejected(b, "parameter ransac.min_appearance must be in [-1, 1]"));
+  }
+
   b = bytes();
   store<std::uint32_t>(b.data() + format::kOffParamsSize, 16);
   fix_header_crc(b);
@@ -1678,8 +1739,8 @@ TEST_F(ModelIndexTest, ResealedMutationsAreRejectedOrHarmless) {
     for (int k = 0; k < 1500; ++k) {
       Bytes b = good;
       // A section with bytes (1..6: models to tree nodes; 12..14: the
-      // quality report), a byte in it.
-      constexpr std::uint32_t kIds[] = {1, 2, 3, 4, 5, 6, 12, 13, 14};
+      // quality report; 15..16: the appearances), a byte in it.
+      constexpr std::uint32_t kIds[] = {1, 2, 3, 4, 5, 6, 12, 13, 14, 15, 16};
       const std::uint32_t id = kIds[next() % std::size(kIds)];
       const std::size_t size = section_size(b, id);
       if (size == 0) continue;
@@ -1896,6 +1957,266 @@ TEST_F(ModelIndexTest, SerializeRejectsBadQualityReport) {
   q = corpus().small_quality;
   q.views.pop_back();
   EXPECT_FALSE(serialize_index(small, corpus().params, b, &q));
+}
+
+// --- Model appearance (format 6.2, sections 15-16) ------------------------
+
+// What ModelAppearance documents, computed without OpenCV: the mean of the
+// model pixels that appearance pixel (u, v) covers, [u / scale, (u + 1) /
+// scale) x [v / scale, (v + 1) / scale), each weighted by its area inside
+// that cell (cut at the image's edge).
+double covered_mean(const cv::Mat& gray, double scale, int u, int v) {
+  const double x0 = u / scale, x1 = (u + 1) / scale, y0 = v / scale, y1 = (v + 1) / scale;
+  double sum = 0.0, area = 0.0;
+  for (int y = static_cast<int>(y0); y < std::min<double>(y1, gray.rows); ++y) {
+    const double wy = std::min(y + 1.0, y1) - std::max<double>(y, y0);
+    for (int x = static_cast<int>(x0); x < std::min<double>(x1, gray.cols); ++x) {
+      const double w = wy * (std::min(x + 1.0, x1) - std::max<double>(x, x0));
+      sum += w * gray.at<std::uint8_t>(y, x);
+      area += w;
+    }
+  }
+  return sum / area;
+}
+
+// Checks a stored appearance against the model image: its size and scale
+// for a long edge of `size` px, its pixels against an independent
+// cv::resize (INTER_AREA, the same factor on both axes) and against
+// covered_mean(), both within one grey level.
+void expect_appearance_of(const ModelAppearance& look, const cv::Mat& gray, int size) {
+  ASSERT_FALSE(look.empty());
+  const int long_edge = std::max(gray.cols, gray.rows);
+  const double factor = long_edge > size ? static_cast<double>(size) / long_edge : 1.0;
+  EXPECT_EQ(look.scale, static_cast<float>(factor));
+  EXPECT_EQ(std::max(look.width, look.height), std::min(size, long_edge));
+  EXPECT_EQ(look.width, static_cast<int>(std::lround(gray.cols * factor)));
+  EXPECT_EQ(look.height, static_cast<int>(std::lround(gray.rows * factor)));
+  cv::Mat resized;
+  cv::resize(gray, resized, cv::Size(), factor, factor, cv::INTER_AREA);
+  ASSERT_EQ(resized.cols, look.width);
+  ASSERT_EQ(resized.rows, look.height);
+  int worst_resize = 0;
+  double worst_mean = 0.0;
+  for (int v = 0; v < look.height; ++v) {
+    for (int u = 0; u < look.width; ++u) {
+      const int stored = look.pixels[static_cast<std::size_t>(v) * look.width + u];
+      worst_resize = std::max(worst_resize, std::abs(stored - resized.at<std::uint8_t>(v, u)));
+      worst_mean = std::max(worst_mean, std::fabs(stored - covered_mean(gray, factor, u, v)));
+    }
+  }
+  EXPECT_LE(worst_resize, 1) << "against cv::resize";
+  EXPECT_LE(worst_mean, 1.0) << "against the mean of the covered model pixels";
+}
+
+TEST_F(ModelIndexTest, AppearanceIsTheAreaAveragedModelImage) {
+  AlignedBytes buffer(bytes());
+  ModelIndex index;
+  ASSERT_TRUE(ModelIndex::view(buffer.data(), buffer.size(), index));
+  ASSERT_EQ(index.params().views.appearance_size, 128);  // the default
+  ASSERT_TRUE(index.has_appearance());
+  // box.png, 324x223: 128x88 at 128 / 324.
+  const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+  const ModelAppearance look = index.appearance(0);
+  EXPECT_EQ(look.width, 128);
+  EXPECT_EQ(look.height, 88);
+  EXPECT_EQ(look.scale, 128.f / 324.f);
+  expect_appearance_of(look, box, 128);
+  // The 200x200 crop of graf1.png: 128x128 at 0.64.
+  const cv::Mat graf = test::load_gray(test::opencv_data("graf1.png"));
+  expect_appearance_of(index.appearance(1), graf(cv::Rect(300, 220, 200, 200)).clone(), 128);
+  EXPECT_EQ(index.max_appearance_pixels(), 128 * 128);
+  // The pixels of the two models are consecutive in the pixel section.
+  EXPECT_EQ(index.appearance(1).pixels, look.pixels + 128 * 88);
+  EXPECT_EQ(index.appearance(1).pixels + 128 * 128, index.data() + index.byte_size());
+  EXPECT_TRUE(index.appearance(-1).empty());
+  EXPECT_TRUE(index.appearance(2).empty());
+}
+
+TEST(Appearance, SmallModelsKeepTheirSizeAndTallOnesScaleByTheirHeight) {
+  const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+  ASSERT_FALSE(box.empty());
+  Params params = paper_params();
+  // Smaller than the appearance size: its own pixels at scale 1.
+  const cv::Mat crop = box(cv::Rect(100, 50, 96, 96)).clone();
+  BuiltModel small;
+  ASSERT_TRUE(build_model(crop, "crop", params, small));
+  // Taller than wide (box.png transposed, 223x324): the long edge is the
+  // height, and scale = 128 / 324 on both axes (not width / model width).
+  cv::Mat tall;
+  cv::transpose(box, tall);
+  BuiltModel portrait;
+  ASSERT_TRUE(build_model(tall, "tall", params, portrait));
+  // A smaller appearance size: 64 px.
+  params.views.appearance_size = 64;
+  BuiltModel box64;
+  ASSERT_TRUE(build_model(box, "box64", params, box64));
+
+  struct Case {
+    const BuiltModel* model;
+    const cv::Mat* image;
+    int size;
+  };
+  for (const Case& c :
+       {Case{&small, &crop, 128}, Case{&portrait, &tall, 128}, Case{&box64, &box, 64}}) {
+    const BuiltModel* model = c.model;
+    const cv::Mat* image = c.image;
+    const int size = c.size;
+    SCOPED_TRACE(model->name);
+    Params p = paper_params();
+    p.views.appearance_size = size;
+    Bytes b;
+    ASSERT_TRUE(serialize_index(std::vector<BuiltModel>{*model}, p, b));
+    AlignedBytes buffer(b);
+    ModelIndex index;
+    const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
+    ASSERT_TRUE(s) << s.message();
+    expect_appearance_of(index.appearance(0), *image, size);
+    EXPECT_EQ(index.max_appearance_pixels(),
+              index.appearance(0).width * index.appearance(0).height);
+  }
+  EXPECT_EQ(small.appearance_scale, 1.f);
+  EXPECT_EQ(0, cv::norm(small.appearance, crop, cv::NORM_INF));
+  EXPECT_EQ(portrait.appearance.cols, 88);
+  EXPECT_EQ(portrait.appearance.rows, 128);
+  EXPECT_EQ(box64.appearance.cols, 64);
+  EXPECT_EQ(box64.appearance.rows, 44);
+}
+
+TEST(Appearance, NoneStoredWithAppearanceSizeZero) {
+  const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+  ASSERT_FALSE(box.empty());
+  Params params = paper_params();
+  params.views.appearance_size = 0;
+  BuiltModel model;
+  ASSERT_TRUE(build_model(box(cv::Rect(100, 50, 96, 96)).clone(), "crop", params, model));
+  EXPECT_TRUE(model.appearance.empty());
+  Bytes b;
+  ASSERT_TRUE(serialize_index({model}, params, b));
+  // Both sections are there (required from 6.2 on), empty.
+  EXPECT_EQ(section_size(b, format::kSectionAppearances), 0u);
+  EXPECT_EQ(section_size(b, format::kSectionAppearancePixels), 0u);
+  AlignedBytes buffer(b);
+  ModelIndex index;
+  ASSERT_TRUE(ModelIndex::view(buffer.data(), buffer.size(), index));
+  EXPECT_FALSE(index.has_appearance());
+  EXPECT_TRUE(index.appearance(0).empty());
+  EXPECT_EQ(index.max_appearance_pixels(), 0);
+}
+
+// keygraph eval's in-memory indexes go through the same writer.
+TEST_F(ModelIndexTest, EvalIndexCarriesTheAppearances) {
+  EvalIndex eval;
+  const Status s = eval.build(models(), paper_params());
+  ASSERT_TRUE(s) << s.message();
+  ASSERT_TRUE(eval.index().has_appearance());
+  expect_matches(eval.index(), models());
+  EXPECT_EQ(eval.index().max_appearance_pixels(), 128 * 128);
+}
+
+TEST_F(ModelIndexTest, SerializeRejectsMissingOrMismatchedAppearance) {
+  Bytes b;
+  Params p = paper_params();
+  p.views.appearance_size = 64;  // the models were built at 128
+  Status s = serialize_index(models(), p, b);
+  EXPECT_FALSE(s);
+  EXPECT_NE(s.message().find("box: no appearance of 64 px"), std::string::npos) << s.message();
+  std::vector<BuiltModel> without = models();
+  without[1].appearance.release();
+  s = serialize_index(without, paper_params(), b);
+  EXPECT_FALSE(s);
+  EXPECT_NE(s.message().find("graf1_crop: no appearance"), std::string::npos) << s.message();
+}
+
+TEST_F(ModelIndexTest, RejectsBadAppearanceSections) {
+  using namespace format;
+  const Bytes& good = bytes();  // box.png 128x88, then graf1 crop 128x128
+  const std::size_t first = section_offset(good, kSectionAppearances);
+  const std::size_t second = first + kAppearanceSize;
+  ASSERT_EQ(load<std::uint32_t>(good.data() + second + kApFirstPixel), 128u * 88u);
+  auto damaged = [&](auto&& change) {
+    Bytes b = good;
+    change(b);
+    reseal(b);
+    return b;
+  };
+  auto set_u32 = [&](std::size_t at, std::uint32_t v) {
+    return damaged([&](Bytes& b) { store<std::uint32_t>(b.data() + at, v); });
+  };
+  EXPECT_TRUE(rejected(set_u32(first + kApWidth, 129),
+                       "model appearance 0: size 129x88 not within 1..128"));
+  EXPECT_TRUE(rejected(set_u32(first + kApWidth, 0), "model appearance 0: size 0x88 not within"));
+  EXPECT_TRUE(rejected(set_u32(second + kApHeight, 0xFFFFFFFFu),
+                       "model appearance 1: size 128x4294967295 not within"));
+  for (const float scale :
+       {0.f, -0.5f, 1.5f, std::nanf(""), std::numeric_limits<float>::infinity()})
+    EXPECT_TRUE(
+        rejected(damaged([&](Bytes& b) { store<float>(b.data() + second + kApScale, scale); }),
+                 "model appearance 1: scale not in (0, 1]"));
+  EXPECT_TRUE(rejected(damaged([&](Bytes& b) { store<float>(b.data() + first + kApScale, 0.5f); }),
+                       "model appearance 0: size 128x88 is not the model's size times the scale"));
+  // 127 px at 127 / 324 would be a consistent resampling, but not to 128 px.
+  EXPECT_TRUE(rejected(damaged([&](Bytes& b) {
+                         store<std::uint32_t>(b.data() + first + kApWidth, 127);
+                         store<float>(b.data() + first + kApScale, 127.f / 324.f);
+                       }),
+                       "model appearance 0: downsampled, but its long edge is not"));
+  EXPECT_TRUE(rejected(set_u32(first + kApFirstPixel, 1),
+                       "model appearance 0: pixel range not "
+                       "contiguous"));
+  EXPECT_TRUE(rejected(set_u32(second + kApFirstPixel, 128 * 88 - 1),
+                       "model appearance 1: pixel range not contiguous"));
+  // Fewer pixels than the records cover, and more.
+  EXPECT_TRUE(rejected(damaged([&](Bytes& b) {
+                         const std::size_t e = entry(b, kSectionAppearancePixels);
+                         store<std::uint32_t>(b.data() + e + kEntCount, 128 * 88 + 128 * 127);
+                         store<std::uint64_t>(b.data() + e + kEntSize, 128 * 88 + 128 * 127);
+                       }),
+                       "model appearance 1: pixel range out of bounds"));
+  EXPECT_TRUE(rejected(set_u32(second + kApHeight, 127),
+                       "appearance pixels section: 27648 pixels, the appearances cover 27520"));
+  // Counts against sizes, the models and the parameter.
+  EXPECT_TRUE(rejected(damaged([&](Bytes& b) {
+                         store<std::uint32_t>(b.data() + entry(b, kSectionAppearances) + kEntCount,
+                                              3);
+                       }),
+                       "model appearance section: size 32 does not match count 3 x 16 bytes"));
+  EXPECT_TRUE(rejected(damaged([&](Bytes& b) {
+                         const std::size_t e = entry(b, kSectionAppearances);
+                         store<std::uint32_t>(b.data() + e + kEntCount, 1);
+                         store<std::uint64_t>(b.data() + e + kEntSize, kAppearanceSize);
+                       }),
+                       "model appearance section: count 1, expected 2"));
+  Params none = paper_params();
+  none.views.appearance_size = 0;
+  Bytes b = good;
+  put_params(b, none);
+  EXPECT_TRUE(rejected(b, "model appearance section: count 2, expected 0"));
+  // Sections missing: one of the two (in a 6.2 file, or in an older one
+  // that names either), or both in a 6.2 file.
+  auto renamed = [&](std::initializer_list<std::uint32_t> ids, std::uint16_t minor) {
+    Bytes r = good;
+    for (std::uint32_t id : ids) store<std::uint32_t>(r.data() + entry(r, id) + kEntId, 90 + id);
+    store<std::uint16_t>(r.data() + kOffMinor, minor);
+    fix_header_crc(r);
+    return r;
+  };
+  EXPECT_TRUE(
+      rejected(renamed({kSectionAppearancePixels}, 2), "appearance pixels section missing"));
+  EXPECT_TRUE(rejected(renamed({kSectionAppearancePixels}, 1), "one without the other"));
+  EXPECT_TRUE(rejected(renamed({kSectionAppearances, kSectionAppearancePixels}, 2),
+                       "model appearance section missing"));
+  // A 6.1 file has neither, and zeros for the new parameters: it loads
+  // without appearances; with an appearance size it is inconsistent.
+  Bytes older = renamed({kSectionAppearances, kSectionAppearancePixels}, 1);
+  EXPECT_TRUE(rejected(older, "model appearance section: count 0, expected 2"));
+  put_params(older, none);
+  AlignedBytes buffer(older);
+  ModelIndex index;
+  const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_EQ(index.version_minor(), 1);
+  EXPECT_FALSE(index.has_appearance());
+  EXPECT_EQ(index.max_appearance_pixels(), 0);
 }
 
 }  // namespace

@@ -1,7 +1,8 @@
 // keygraph inspect: its options are the Options table below (keygraph inspect --help).
 // Prints the header, every parameter, the section table with each section's
-// checksum verified, per-model counts and sizes, the bytes per arc, and
-// the model quality report (cli/device/quality_report.h).
+// checksum verified, per-model counts, sizes and appearance sizes, the
+// stored appearance, the bytes per arc, and the model quality report
+// (cli/device/quality_report.h).
 // A file the reader rejects exits 1 with the reader's message on one stderr
 // line (after the header and table, when those could be read, so that the
 // damaged section shows as "crc BAD").
@@ -135,18 +136,25 @@ void print_index(const ModelIndex& index) {
       "\nmodels (bytes: record, name, keypoints%s, arcs with descriptors, share of the "
       "tree nodes and leaf bounds):\n",
       sift ? " with vertex descriptors" : "");
-  std::printf("  %3s  %-20s %9s %9s %12s %12s %9s\n", "#", "name", "keypoints", "arcs", "keygraphs",
-              "bytes", "bytes/arc");
+  std::printf("  %3s  %-20s %9s %9s %12s %12s %9s %11s\n", "#", "name", "keypoints", "arcs",
+              "keygraphs", "bytes", "bytes/arc", "appearance");
+  double appearance_bytes = 0.0;  // sections 15 and 16
   for (int m = 0; m < index.model_count(); ++m) {
     const ModelInfo info = index.model(m);
     const double bytes = static_cast<double>(kModelRecordSize + info.name.size()) +
                          per_keypoint * info.keypoint_count +
                          (kTreeArcBytes + descriptor_bytes) * info.arc_count +
                          (arcs > 0 ? (node_bytes + bound_bytes) * info.arc_count / arcs : 0.0);
-    std::printf("  %3d  %-20.*s %9u %9u %12" PRIu64 " %12.0f %9.2f\n", m,
+    const ModelAppearance look = index.appearance(m);
+    const std::string look_size =
+        look.empty() ? "-" : std::to_string(look.width) + "x" + std::to_string(look.height);
+    if (!look.empty())
+      appearance_bytes +=
+          static_cast<double>(kAppearanceSize) + double{1} * look.width * look.height;
+    std::printf("  %3d  %-20.*s %9u %9u %12" PRIu64 " %12.0f %9.2f %11s\n", m,
                 static_cast<int>(info.name.size()), info.name.data(), info.keypoint_count,
                 info.arc_count, info.keygraph_count, bytes,
-                info.arc_count > 0 ? bytes / info.arc_count : 0.0);
+                info.arc_count > 0 ? bytes / info.arc_count : 0.0, look_size.c_str());
   }
   const double size = static_cast<double>(index.byte_size());
   std::printf(
@@ -154,14 +162,23 @@ void print_index(const ModelIndex& index) {
       "descriptors\n",
       index.model_count(), index.keypoint_count(), index.arc_count(), index.tree_node_count(),
       index.tree_depth(), encoding_name(encoding));
+  if (index.has_appearance()) {
+    std::printf("appearance: %d px long edge, %.1f KB\n", index.params().views.appearance_size,
+                appearance_bytes / 1024.0);
+  } else {
+    std::printf("appearance: none (%s)\n", index.version_minor() < 2
+                                               ? "format older than 6.2; rebuild the index"
+                                               : "views.appearance_size is 0");
+  }
   if (arcs > 0) {
     std::printf(
         "bytes per arc: %.2f (file %zu bytes / %u arcs): tree arcs %.0f, descriptors %.0f, "
-        "tree nodes %.2f, leaf bounds %.2f, keypoints %.2f, the rest %.2f\n",
+        "tree nodes %.2f, leaf bounds %.2f, keypoints %.2f, appearance %.2f, the rest %.2f\n",
         size / arcs, index.byte_size(), index.arc_count(), kTreeArcBytes, descriptor_bytes,
         node_bytes / arcs, bound_bytes / arcs, per_keypoint * index.keypoint_count() / arcs,
+        appearance_bytes / arcs,
         (size - node_bytes - bound_bytes - (kTreeArcBytes + descriptor_bytes) * arcs -
-         per_keypoint * index.keypoint_count()) /
+         per_keypoint * index.keypoint_count() - appearance_bytes) /
             arcs);
   }
 }
