@@ -2,7 +2,7 @@
 """Fits the detection confidence model (src/core/confidence.h) and reports
 precision against recall by confidence threshold.
 
-  fit-confidence.py TUNE/synth-detections.csv [REPORT/synth-detections.csv]
+  fit-confidence.py [--appearance] TUNE/synth-detections.csv [REPORT/synth-detections.csv]
 
 Each CSV is written by `keygraph eval --synth DIR --methods keygraph --out
 OUT`. The logistic model is fitted (Newton's method, a small L2 penalty)
@@ -19,7 +19,7 @@ import sys
 
 def features(row):
     inliers = max(1, int(row["inliers"]))
-    return [
+    out = [
         1.0,
         math.log(inliers),
         min(int(row["inlier_keygraphs"]), 50) / 10.0,
@@ -27,10 +27,17 @@ def features(row):
         float(row["score"]) - float(row["chance"]),
         float(row["rms_error"]),
     ]
+    if WITH_APPEARANCE:
+        out.append(float(row["appearance"]))
+    return out
 
 
+# With --appearance, the model with the appearance correlation (indexes of
+# format 6.2, kConfidenceModel); without, the one for detections that have
+# none (kConfidenceModelNoAppearance).
+WITH_APPEARANCE = False
 NAMES = ["bias", "log_inliers", "inlier_keygraphs", "verification_z", "score_over_chance",
-         "rms_error"]
+         "rms_error", "appearance"]
 
 
 def solve(a, b):
@@ -68,7 +75,10 @@ def fit(xs, ys, l2=1e-2, rounds=50):
 
 def read(path):
     with open(path, newline="") as f:
-        return [r for r in csv.DictReader(f) if r["method"] == "keygraph"]
+        rows = [r for r in csv.DictReader(f) if r["method"] == "keygraph"]
+    if WITH_APPEARANCE:
+        rows = [r for r in rows if float(r["appearance"]) >= 0.0]
+    return rows
 
 
 def frames_per_size(rows_path):
@@ -105,16 +115,23 @@ def report(path, w):
 
 
 def main():
-    if len(sys.argv) < 2:
+    global WITH_APPEARANCE
+    args = sys.argv[1:]
+    if args and args[0] == "--appearance":
+        WITH_APPEARANCE = True
+        args = args[1:]
+    if not args:
         print(__doc__.strip().splitlines()[2], file=sys.stderr)
         return 2
+    sys.argv[1:] = args
     rows = read(sys.argv[1])
     xs = [features(r) for r in rows]
     ys = [1.0 if r["right"] == "1" else 0.0 for r in rows]
     w = fit(xs, ys)
     print(f"fitted on {len(rows)} detections ({int(sum(ys))} right) of {sys.argv[1]}")
-    print("inline constexpr ConfidenceModel kConfidenceModel = {" +
-          ", ".join(f"{v:.4f}" for v in w) + "};  // " + ", ".join(NAMES))
+    name = "kConfidenceModel" if WITH_APPEARANCE else "kConfidenceModelNoAppearance"
+    print(f"inline constexpr ConfidenceModel {name} = {{" +
+          ", ".join(f"{v:.4f}" for v in w) + "};  // " + ", ".join(NAMES[:len(w)]))
     for path in sys.argv[1:]:
         report(path, w)
     return 0

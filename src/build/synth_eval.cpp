@@ -464,14 +464,14 @@ Status write_synth_report(const std::string& dir, const SynthEvalOptions& option
   // Every detection with its support, for precision-recall by confidence.
   std::ostringstream det;
   det << "method,index_size,frame,sign,model,right,corner_error,inliers,inlier_keygraphs,"
-         "verification_z,score,chance,rms_error,confidence\n";
+         "verification_z,score,chance,rms_error,appearance,confidence\n";
   for (const SynthCase& c : cases) {
     for (const SynthScoredDetection& d : c.scored) {
       det << c.method << ',' << c.index_size << ',' << c.frame << ',' << c.sign << ',' << d.model
           << ',' << d.right << ',' << d.corner_error << ',' << d.support.inliers << ','
           << d.support.inlier_keygraphs << ',' << d.support.verification_z << ',' << d.support.score
           << ',' << d.support.chance << ',' << d.support.rms_error << ','
-          << (c.has_confidence ? d.support.confidence : -1.0) << '\n';
+          << d.support.appearance << ',' << (c.has_confidence ? d.support.confidence : -1.0) << '\n';
     }
   }
   if (s = write_text_file(dir + "/synth-detections.csv", det.str()); !s) return s;

@@ -55,9 +55,9 @@ int cmd_detect(const Args& args) {
     } else {
       std::printf("%s: %zu detection(s) in %.1f ms\n", scene.c_str(), found.size(), ms);
       for (const Detection& d : found) {
-        std::printf("  %.*s: inliers %d, score %.3f, confidence %.2f, corners",
+        std::printf("  %.*s: inliers %d, score %.3f, appearance %.2f, confidence %.2f, corners",
                     static_cast<int>(d.model_name.size()), d.model_name.data(), d.inliers, d.score,
-                    d.confidence);
+                    d.appearance, d.confidence);
         for (const Point2f& c : d.corners) std::printf(" (%.1f, %.1f)", c.x, c.y);
         std::printf("\n");
       }

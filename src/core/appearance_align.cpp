@@ -47,15 +47,15 @@ bool invert(const double m[9], double out[9]) {
 
 // The level's normalised coordinates (centred, half the long edge = 1,
 // which keeps the normal equations well conditioned) -> model pixels.
-void level_to_model(int width, int height, float scale, double out[9]) {
+void level_to_model(int width, int height, float scale_x, float scale_y, double out[9]) {
   const double half_long = 0.5 * std::max(width, height);
-  const double s = scale;
-  out[0] = half_long / s;
+  const double sx = scale_x, sy = scale_y;
+  out[0] = half_long / sx;
   out[1] = 0.0;
-  out[2] = (0.5 * (width - 1) + 0.5) / s - 0.5;
+  out[2] = (0.5 * (width - 1) + 0.5) / sx - 0.5;
   out[3] = 0.0;
-  out[4] = half_long / s;
-  out[5] = (0.5 * (height - 1) + 0.5) / s - 0.5;
+  out[4] = half_long / sy;
+  out[5] = (0.5 * (height - 1) + 0.5) / sy - 0.5;
   out[6] = 0.0;
   out[7] = 0.0;
   out[8] = 1.0;
@@ -112,13 +112,16 @@ AppearanceAligner::AppearanceAligner(std::pmr::memory_resource* memory)
 
 void AppearanceAligner::reserve(int max_pixels) {
   const auto n = static_cast<std::size_t>(std::max(0, max_pixels));
+  // The Gauss-Newton steps use at most this many pixels (refine_level).
+  const std::size_t selected = std::max(
+      kMinSelected, static_cast<std::size_t>(std::ceil(kSelected * static_cast<double>(n))));
   full_.reserve(n);
   half_.reserve(n / 4 + 1);
-  steepest_.reserve(n * kParams);
+  steepest_.reserve(selected * kParams);
   warped_.reserve(n);
   valid_.reserve(n);
   magnitude_.reserve(n);
-  selected_.reserve(n);
+  selected_.reserve(selected);
   interior_.reserve(n);
 }
 
@@ -346,8 +349,8 @@ int AppearanceAligner::refine_level(const Level& level, ImageView frame, double 
 bool AppearanceAligner::prepare(const AppearanceImage& appearance, ImageView frame) {
   const int w = appearance.width, hgt = appearance.height;
   const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(hgt);
-  if (appearance.pixels == nullptr || w < 3 || hgt < 3 || !(appearance.scale > 0.f) ||
-      n > full_.capacity() || frame.width < 2 || frame.height < 2)
+  if (appearance.pixels == nullptr || w < 3 || hgt < 3 || !(appearance.scale_x > 0.f) ||
+      !(appearance.scale_y > 0.f) || n > full_.capacity() || frame.width < 2 || frame.height < 2)
     return false;
   // The appearance lightly smoothed ([1 2 1] / 4 each way), matching the
   // blur of the frame it is compared with.
@@ -375,9 +378,10 @@ bool AppearanceAligner::prepare(const AppearanceImage& appearance, ImageView fra
 double AppearanceAligner::correlate(const AppearanceImage& appearance, ImageView frame,
                                     const Homography& h) {
   if (!prepare(appearance, frame)) return -1.0;
-  const Level full{full_.data(), appearance.width, appearance.height, appearance.scale};
+  const Level full{full_.data(), appearance.width, appearance.height, appearance.scale_x,
+                   appearance.scale_y};
   double to_model[9], g[9];
-  level_to_model(full.width, full.height, full.scale, to_model);
+  level_to_model(full.width, full.height, full.scale_x, full.scale_y, to_model);
   multiply(h.data(), to_model, g);
   return correlation(full, frame, g);
 }
@@ -387,12 +391,13 @@ AppearanceFit AppearanceAligner::align(const AppearanceImage& appearance, ImageV
   AppearanceFit fit;
   if (!prepare(appearance, frame)) return fit;
   const int w = appearance.width, hgt = appearance.height;
-  const Level full{full_.data(), w, hgt, appearance.scale};
+  const Level full{full_.data(), w, hgt, appearance.scale_x, appearance.scale_y};
   Level half{};
   if (w / 2 >= kMinHalfWidth && hgt / 2 >= kMinHalfWidth / 2) {
     half.width = w / 2;
     half.height = hgt / 2;
-    half.scale = appearance.scale * 0.5f;
+    half.scale_x = appearance.scale_x * 0.5f;
+    half.scale_y = appearance.scale_y * 0.5f;
     half_.resize(static_cast<std::size_t>(half.width) * half.height);
     for (int v = 0; v < half.height; ++v)
       for (int u = 0; u < half.width; ++u) {
@@ -404,7 +409,7 @@ AppearanceFit AppearanceAligner::align(const AppearanceImage& appearance, ImageV
   }
 
   double to_model[9], from_model[9], g[9];
-  level_to_model(w, hgt, full.scale, to_model);
+  level_to_model(w, hgt, full.scale_x, full.scale_y, to_model);
   multiply(h.data(), to_model, g);
   fit.ncc_before = correlation(full, frame, g);
   fit.ncc = fit.ncc_before;
@@ -414,7 +419,7 @@ AppearanceFit AppearanceAligner::align(const AppearanceImage& appearance, ImageV
   std::copy(h.begin(), h.end(), refined);
   if (half.values != nullptr) {
     double half_to_model[9], half_from_model[9];
-    level_to_model(half.width, half.height, half.scale, half_to_model);
+    level_to_model(half.width, half.height, half.scale_x, half.scale_y, half_to_model);
     if (!invert(half_to_model, half_from_model)) return fit;
     multiply(refined, half_to_model, g);
     fit.iterations += refine_level(half, frame, g);

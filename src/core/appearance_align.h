@@ -23,12 +23,14 @@
 namespace kg {
 
 // An appearance image and where it lies in model pixels: pixel (u, v)
-// covers model pixels [u / scale, (u + 1) / scale) x [v / scale, (v + 1) / scale).
+// covers model pixels [u / scale_x, (u + 1) / scale_x) x
+// [v / scale_y, (v + 1) / scale_y) (area resampling to a given size).
 struct AppearanceImage {
   const std::uint8_t* pixels = nullptr;  // width * height bytes, row-major
   int width = 0;
   int height = 0;
-  float scale = 0.f;  // appearance pixels per model pixel
+  float scale_x = 0.f;  // appearance pixels per model pixel, each axis
+  float scale_y = 0.f;
 };
 
 struct AppearanceFit {
@@ -60,7 +62,7 @@ class AppearanceAligner {
   struct Level {
     const float* values = nullptr;
     int width = 0, height = 0;
-    float scale = 0.f;
+    float scale_x = 0.f, scale_y = 0.f;
   };
   // Smooths the appearance into full_; false when it cannot be used.
   bool prepare(const AppearanceImage& appearance, ImageView frame);

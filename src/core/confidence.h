@@ -20,23 +20,41 @@ struct ConfidenceModel {
   double verification_z;     // min(z, 40) / 10
   double score_over_chance;  // score - chance
   double rms_error;          // pixels
+  double appearance;         // Detection::appearance (normalised cross-correlation)
 };
 
-// Fitted by docs/fit-confidence.py on the 344 detections (310 right) of
-// the sign benchmark's tuning set, seed 1, 300 frames, indexes of 1, 10 and
-// 50 signs (`keygraph synth -o SIGNS --seed 1 --signs 50 --frames 300`,
-// `keygraph eval --synth SIGNS --methods keygraph --out OUT`); the support
-// above chance and the number of inliers carry it.
-inline constexpr ConfidenceModel kConfidenceModel = {-5.3556, 1.7664, -0.0354,
-                                                     -0.0491, 8.0887, -0.7759};
+// Both fitted by docs/fit-confidence.py on the detections of the sign
+// benchmark's tuning set: seed 1, 300 frames, indexes of 1, 10 and 50 signs
+// (`keygraph synth -o SIGNS --seed 1 --signs 50 --frames 300`, then
+// `keygraph eval --synth SIGNS --methods keygraph --out OUT`).
+//
+// kConfidenceModel, for detections with an appearance correlation (indexes
+// of format 6.2): fitted with the appearance gate off
+// (`--set ransac.min_appearance=0`, 342 detections, 331 right), so that it
+// also saw the poses the gate removes; the correlation carries it.
+inline constexpr ConfidenceModel kConfidenceModel = {-8.9334, 0.2967,  0.9920, -0.6087,
+                                                     5.8882,  -0.2979, 10.9652};
+// kConfidenceModelNoAppearance, for detections without one (indexes of
+// format 6.0 and 6.1, or a pose with most of the model outside the frame):
+// fitted on an index without appearances (`--set views.appearance_size=0`,
+// 344 detections, 310 right); the support above chance and the number of
+// inliers carry it.
+inline constexpr ConfidenceModel kConfidenceModelNoAppearance = {-5.3556, 1.7664,  -0.0354, -0.0491,
+                                                                 8.0887,  -0.7759, 0.0};
 
-inline double detection_confidence(const Detection& d,
-                                   const ConfidenceModel& m = kConfidenceModel) {
+inline double detection_confidence(const Detection& d, const ConfidenceModel& m) {
   const double logit = m.bias + m.log_inliers * std::log(std::max(1, d.inliers)) +
                        m.inlier_keygraphs * std::min(d.inlier_keygraphs, 50) / 10.0 +
                        m.verification_z * std::min(d.verification_z, 40.0) / 10.0 +
-                       m.score_over_chance * (d.score - d.chance) + m.rms_error * d.rms_error;
+                       m.score_over_chance * (d.score - d.chance) + m.rms_error * d.rms_error +
+                       m.appearance * std::max(d.appearance, -1.0);
   return 1.0 / (1.0 + std::exp(-logit));
+}
+
+// The model that fits what the detection measured.
+inline double detection_confidence(const Detection& d) {
+  return detection_confidence(
+      d, d.appearance >= 0.0 ? kConfidenceModel : kConfidenceModelNoAppearance);
 }
 
 }  // namespace kg

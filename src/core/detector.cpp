@@ -167,7 +167,8 @@ Detector::Impl::Impl(const ModelIndex& idx, const Limits& l, std::pmr::memory_re
   matches.reserve(correspondences);
   grouped.reserve(correspondences);
   model_begin.reserve(static_cast<std::size_t>(idx.model_count()) + 1);
-  pose.reserve(l.max_correspondences, vertex_count(params.graph.structure), largest_model(idx));
+  pose.reserve(l.max_correspondences, vertex_count(params.graph.structure), largest_model(idx),
+               idx.max_appearance_pixels());
   grid.reserve(l.max_keypoints, l.max_width, l.max_height,
                std::max(4.f, static_cast<float>(params.ransac.inlier_threshold)));
   if (const std::uint8_t* v = idx.vertex_descriptors()) {
@@ -455,6 +456,7 @@ Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count
   frame_keypoints.count = count;
   frame_keypoints.width = frame.width;
   frame_keypoints.height = frame.height;
+  frame_keypoints.image = view_of(blurred);
   if (!matches.empty()) {
     grid.build(keypoints, count, frame.width, frame.height,
                std::max(4.f, static_cast<float>(params.ransac.inlier_threshold)));

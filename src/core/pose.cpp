@@ -251,9 +251,11 @@ PoseEstimator::PoseEstimator(std::pmr::memory_resource* memory)
       inlier_model_(memory),
       inlier_scene_(memory),
       guided_model_(memory),
-      guided_scene_(memory) {}
+      guided_scene_(memory),
+      aligner_(memory) {}
 
-void PoseEstimator::reserve(int max_matches, int k, std::uint32_t max_model_keypoints) {
+void PoseEstimator::reserve(int max_matches, int k, std::uint32_t max_model_keypoints,
+                            int max_appearance_pixels) {
   const auto n = static_cast<std::size_t>(std::max(0, max_matches));
   const std::size_t pairs = n * static_cast<std::size_t>(k);
   pairs_.reserve(pairs);
@@ -268,34 +270,44 @@ void PoseEstimator::reserve(int max_matches, int k, std::uint32_t max_model_keyp
   inlier_scene_.reserve(pairs);
   guided_model_.reserve(max_model_keypoints);
   guided_scene_.reserve(max_model_keypoints);
+  aligner_.reserve(max_appearance_pixels);
+}
+
+PoseEstimator::Support PoseEstimator::guided_pairs(const ModelIndex& index, const ModelInfo& info,
+                                                   const FrameKeypoints& frame,
+                                                   const Homography& h) {
+  const RansacParams& rp = index.params().ransac;
+  const Point2f* model_points = index.keypoints() + info.keypoint_begin;
+  const std::uint8_t* views = index.keypoint_views() + 2 * std::size_t{info.keypoint_begin};
+  guided_model_.clear();
+  guided_scene_.clear();
+  int inside = 0;
+  const int code = pose_view_code(h, info);
+  const float radius = verification_radius(rp, code);
+  for (std::uint32_t i = 0; i < info.keypoint_count; ++i) {
+    if (!seen_at(views, i, code)) continue;
+    const Point2f p = kg::apply(h, model_points[i]);
+    if (!(p.x >= 0.f && p.y >= 0.f && p.x <= static_cast<float>(frame.width - 1) &&
+          p.y <= static_cast<float>(frame.height - 1)))
+      continue;
+    ++inside;
+    const int j = frame.grid->nearest(p, radius);
+    if (j < 0) continue;
+    guided_model_.push_back(model_points[i]);
+    guided_scene_.push_back({frame.keypoints[j].x, frame.keypoints[j].y});
+  }
+  Support support;
+  support.inside = inside;
+  support.fraction = inside > 0 ? static_cast<double>(guided_model_.size()) / inside : 0.0;
+  return support;
 }
 
 PoseEstimator::Support PoseEstimator::guided_refine(const ModelIndex& index, const ModelInfo& info,
                                                     const FrameKeypoints& frame, Homography& h) {
   const RansacParams& rp = index.params().ransac;
-  const Point2f* model_points = index.keypoints() + info.keypoint_begin;
-  const std::uint8_t* views = index.keypoint_views() + 2 * std::size_t{info.keypoint_begin};
   Support support;
   for (int round = 0; round < 2; ++round) {
-    guided_model_.clear();
-    guided_scene_.clear();
-    int inside = 0;
-    const int code = pose_view_code(h, info);
-    const float radius = verification_radius(rp, code);
-    for (std::uint32_t i = 0; i < info.keypoint_count; ++i) {
-      if (!seen_at(views, i, code)) continue;
-      const Point2f p = kg::apply(h, model_points[i]);
-      if (!(p.x >= 0.f && p.y >= 0.f && p.x <= static_cast<float>(frame.width - 1) &&
-            p.y <= static_cast<float>(frame.height - 1)))
-        continue;
-      ++inside;
-      const int j = frame.grid->nearest(p, radius);
-      if (j < 0) continue;
-      guided_model_.push_back(model_points[i]);
-      guided_scene_.push_back({frame.keypoints[j].x, frame.keypoints[j].y});
-    }
-    support.inside = inside;
-    support.fraction = inside > 0 ? static_cast<double>(guided_model_.size()) / inside : 0.0;
+    support = guided_pairs(index, info, frame, h);
     if (guided_model_.size() < 8) break;
     Homography candidate = h;
     refine_homography(guided_model_.data(), guided_scene_.data(),
@@ -433,7 +445,24 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
 
     // Guided refinement over all model keypoints, then the support that
     // the descriptors gave is recounted under the final pose.
-    const Support support = guided_refine(index, info, frame, refined);
+    Support support = guided_refine(index, info, frame, refined);
+    // Photometric refinement: the model's appearance aligned onto the frame
+    // takes the corners from keypoint accuracy to sub-pixel, and its
+    // correlation checks the identity (core/appearance_align.h).
+    double appearance = -1.0;
+    const ModelAppearance stored = index.appearance(model_id);
+    if (!stored.empty() && !frame.image.empty()) {
+      Homography aligned = refined;
+      const AppearanceFit fit =
+          aligner_.align({stored.pixels, stored.width, stored.height, stored.scale, stored.scale},
+                         frame.image, aligned);
+      appearance = fit.ncc;
+      if (fit.aligned &&
+          is_plausible_pose(aligned, info.width, info.height, rp, estimator.min_area)) {
+        refined = aligned;
+        support = guided_pairs(index, info, frame, refined);
+      }
+    }
     const double chance = chance_fraction(index, info, frame, refined);
     // Binomial z-score of the re-found model keypoints against chance.
     const double spread = std::sqrt(std::max(1e-9, support.inside * chance * (1.0 - chance)));
@@ -460,7 +489,7 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     for (int c = 0; c < 4; ++c) corners[c] = kg::apply(refined, info.outline[c]);
     const bool accepted =
         distinct >= rp.min_inliers && final_score.sample_inliers >= rp.min_inlier_keygraphs &&
-        z >= rp.min_verification_z &&
+        z >= rp.min_verification_z && (appearance < 0.0 || appearance >= rp.min_appearance) &&
         is_plausible_pose(refined, info.width, info.height, rp, estimator.min_area) &&
         !repeats_instance(out, model_id, corners);
     if (accepted && static_cast<int>(out.size()) >= max_out) {
@@ -479,6 +508,7 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
       d.chance = chance;
       d.rms_error = rms;
       d.verification_z = z;
+      d.appearance = appearance;
       d.confidence = detection_confidence(d);
       d.ransac_iterations = stats.iterations;
       out.push_back(d);

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/appearance_align.h"
 #include "core/point_grid.h"
 #include "core/rng.h"
 #include "core/workspace.h"
@@ -30,6 +31,8 @@ struct FrameKeypoints {
   const PointGrid* grid = nullptr;
   int width = 0;
   int height = 0;
+  // The frame, lightly blurred, for the photometric refinement (empty: none).
+  ImageView image;
 };
 
 // Whether two detections' outlines cover the same part of the frame: the
@@ -45,9 +48,10 @@ class PoseEstimator {
  public:
   explicit PoseEstimator(std::pmr::memory_resource* memory = std::pmr::get_default_resource());
   // Sizes the buffers for up to max_matches keygraph correspondences of k
-  // vertices and models of up to max_model_keypoints keypoints: estimate()
-  // then allocates nothing.
-  void reserve(int max_matches, int k, std::uint32_t max_model_keypoints);
+  // vertices, models of up to max_model_keypoints keypoints and appearance
+  // images of up to max_appearance_pixels: estimate() then allocates nothing.
+  void reserve(int max_matches, int k, std::uint32_t max_model_keypoints,
+               int max_appearance_pixels);
 
   // Appends the instances of `model_id` found among matches[0..n) (all of
   // that model) to `out`, at most `max_out` in total in `out`. Returns the
@@ -62,6 +66,11 @@ class PoseEstimator {
     int inside = 0;         // model keypoints projecting inside the frame
     double fraction = 0.0;  // of those, the fraction that found a frame keypoint
   };
+  // Pairs every model keypoint the pose's scale shows with the nearest
+  // frame keypoint within the verification radius (guided_model_,
+  // guided_scene_) and returns the support they give.
+  Support guided_pairs(const ModelIndex& index, const ModelInfo& info, const FrameKeypoints& frame,
+                       const Homography& h);
   // Refines h on guided pairs and measures the support of the final pose.
   Support guided_refine(const ModelIndex& index, const ModelInfo& info, const FrameKeypoints& frame,
                         Homography& h);
@@ -81,6 +90,7 @@ class PoseEstimator {
   WorkVector<Point2f> inlier_scene_;
   WorkVector<Point2f> guided_model_;
   WorkVector<Point2f> guided_scene_;
+  AppearanceAligner aligner_;
 };
 
 }  // namespace kg

@@ -124,7 +124,7 @@ struct Result {
 Result estimate(const Scenario& s) {
   Result r;
   PoseEstimator pose;
-  pose.reserve(static_cast<int>(s.matches.size()), 3, kGrid * kGrid);
+  pose.reserve(static_cast<int>(s.matches.size()), 3, kGrid * kGrid, 0);
   PointGrid grid;
   grid.reserve(static_cast<int>(s.frame_keypoints.size()), 640, 480, 4.f);
   grid.build(s.frame_keypoints.data(), static_cast<int>(s.frame_keypoints.size()), 640, 480, 4.f);

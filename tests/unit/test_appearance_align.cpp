@@ -23,7 +23,7 @@ constexpr int kAppearanceSize = 128;
 struct Scene {
   cv::Mat model;       // the model image (model pixels)
   cv::Mat appearance;  // model resampled by area to a 128 px long edge
-  float scale = 0.f;
+  float scale_x = 0.f, scale_y = 0.f;
   cv::Mat frame;       // blurred frame holding the model
   Homography truth{};  // model pixels -> frame pixels
 };
@@ -49,9 +49,14 @@ Scene make_scene(const std::vector<cv::Point2f>& corners) {
   s.model = test::load_gray(test::opencv_data("box.png"));
   cv::Mat background = test::load_gray(test::opencv_data("building.jpg"));
   if (s.model.empty() || background.empty()) return s;
+  // As the index stores it: resampled by area to a given size, so each
+  // axis has its own scale.
   const double factor = static_cast<double>(kAppearanceSize) / std::max(s.model.cols, s.model.rows);
-  cv::resize(s.model, s.appearance, cv::Size(), factor, factor, cv::INTER_AREA);
-  s.scale = static_cast<float>(s.appearance.cols) / static_cast<float>(s.model.cols);
+  const cv::Size size(static_cast<int>(std::lround(s.model.cols * factor)),
+                      static_cast<int>(std::lround(s.model.rows * factor)));
+  cv::resize(s.model, s.appearance, size, 0, 0, cv::INTER_AREA);
+  s.scale_x = static_cast<float>(s.appearance.cols) / static_cast<float>(s.model.cols);
+  s.scale_y = static_cast<float>(s.appearance.rows) / static_cast<float>(s.model.rows);
   cv::resize(background, background, cv::Size(640, 480), 0, 0, cv::INTER_AREA);
   s.truth = from_corners(s.model, corners);
   cv::Mat frame = background.clone();
@@ -62,7 +67,7 @@ Scene make_scene(const std::vector<cv::Point2f>& corners) {
 }
 
 AppearanceImage image_of(const Scene& s) {
-  return {s.appearance.data, s.appearance.cols, s.appearance.rows, s.scale};
+  return {s.appearance.data, s.appearance.cols, s.appearance.rows, s.scale_x, s.scale_y};
 }
 
 double max_corner_error(const Scene& s, const Homography& h) {
@@ -127,8 +132,8 @@ TEST(AppearanceAlign, AnotherImageAtTheSamePoseCorrelatesPoorly) {
   aligner.reserve(kAppearanceSize * kAppearanceSize);
   Homography right = s.truth, wrong = s.truth;
   const AppearanceFit fit_right = aligner.align(image_of(s), test::view(s.frame), right);
-  const AppearanceFit fit_wrong =
-      aligner.align({other.data, other.cols, other.rows, s.scale}, test::view(s.frame), wrong);
+  const AppearanceFit fit_wrong = aligner.align(
+      {other.data, other.cols, other.rows, s.scale_x, s.scale_y}, test::view(s.frame), wrong);
   EXPECT_GT(fit_right.ncc, 0.95);
   EXPECT_LT(fit_wrong.ncc, 0.4);
 }

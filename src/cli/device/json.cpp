@@ -63,6 +63,7 @@ std::string detection_json(const std::string& scene, int width, int height, doub
            "]";
     }
     s += "], \"inliers\": " + std::to_string(d.inliers) + ", \"score\": " + json_number(d.score) +
+         ", \"appearance\": " + json_number(d.appearance) +
          ", \"confidence\": " + json_number(d.confidence) + "}";
   }
   s += "], \"stats\": {\"keypoints\": " + std::to_string(stats.keypoints) +
