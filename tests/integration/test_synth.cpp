@@ -4,6 +4,8 @@
 // keygraph detector finds signs in a small generated set.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 #include <filesystem>
 #include <set>
@@ -324,6 +326,45 @@ TEST(SynthEval, KeygraphFindsTheSignsOfASmallGeneratedSet) {
   SynthEvalOptions missing;
   missing.directory = dir + "/nonexistent";
   EXPECT_FALSE(evaluate_synth(missing, cases).is_ok());
+}
+
+// The photometric refinement (format 6.2 appearances) on frames whose
+// truth is exact: the same detections with and without the models'
+// appearances in the index.
+TEST(SynthEval, AppearanceBringsTheCornersWithinAPixel) {
+  namespace fs = std::filesystem;
+  const std::string dir = std::string(KG_TEST_OUTPUT_DIR) + "/synth_tiny_appearance";
+  fs::remove_all(dir);
+  SynthSetOptions set = tiny_set(3);
+  set.directory = dir;
+  ASSERT_TRUE(write_synth_set(set).is_ok());
+  double median[2] = {0.0, 0.0};
+  int found[2] = {0, 0};
+  for (const int appearance_size : {0, 128}) {
+    SynthEvalOptions options;
+    options.directory = dir;
+    options.index_sizes = {3};
+    options.params.views.appearance_size = appearance_size;
+    std::vector<SynthCase> cases;
+    const Status s = evaluate_synth(options, cases);
+    ASSERT_TRUE(s.is_ok()) << s.message();
+    std::vector<double> errors;
+    for (const SynthCase& c : cases) {
+      if (c.found) errors.push_back(c.corner_error);
+      for (const SynthScoredDetection& d : c.scored)
+        EXPECT_EQ(d.support.appearance >= 0.0, appearance_size > 0);
+    }
+    ASSERT_FALSE(errors.empty());
+    std::sort(errors.begin(), errors.end());
+    const int k = appearance_size > 0 ? 1 : 0;
+    median[k] = errors[errors.size() / 2];
+    found[k] = static_cast<int>(errors.size());
+    std::printf("appearance %d px: %d of 6 signs found, median worst-corner error %.2f px\n",
+                appearance_size, found[k], median[k]);
+  }
+  EXPECT_GE(found[1], found[0]);
+  EXPECT_LT(median[1], 1.0);
+  EXPECT_LT(median[1], 0.5 * median[0]);
 }
 
 }  // namespace
