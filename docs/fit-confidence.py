@@ -28,8 +28,18 @@ def features(row):
         float(row["rms_error"]),
     ]
     if WITH_APPEARANCE:
+        # The z-score and the support above chance measure the same thing;
+        # fitted together the z-score's weight comes out negative, which
+        # would make a better-verified pose less trusted. The appearance
+        # model leaves it out (weight 0).
+        del out[3]
         out.append(float(row["appearance"]))
     return out
+
+
+def coefficients(w):
+    # The weights in ConfidenceModel's order (verification_z 0 when left out).
+    return w[:3] + [0.0] + w[3:] if WITH_APPEARANCE else w
 
 
 # With --appearance, the model with the appearance correlation (indexes of
@@ -131,7 +141,8 @@ def main():
     print(f"fitted on {len(rows)} detections ({int(sum(ys))} right) of {sys.argv[1]}")
     name = "kConfidenceModel" if WITH_APPEARANCE else "kConfidenceModelNoAppearance"
     print(f"inline constexpr ConfidenceModel {name} = {{" +
-          ", ".join(f"{v:.4f}" for v in w) + "};  // " + ", ".join(NAMES[:len(w)]))
+          ", ".join(f"{v:.4f}" for v in coefficients(w)) + "};  // " +
+          ", ".join(NAMES[:len(coefficients(w))]))
     for path in sys.argv[1:]:
         report(path, w)
     return 0

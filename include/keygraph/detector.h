@@ -69,10 +69,11 @@ struct Detection {
   // Binomial z-score of `score` against `chance` (over the model keypoints
   // the views say the pose's scale should show): the verification's test.
   double verification_z = 0.0;
-  // Normalised cross-correlation, in [-1, 1], of the model's appearance
-  // image (stored in the index, format 6.2) with the frame under the final
-  // pose, after the photometric refinement aligned it; -1 when the index
-  // stores no appearance or too little of the model is inside the frame.
+  // Normalised cross-correlation of the model's appearance image (stored in
+  // the index, format 6.2) with the frame under the final pose, after the
+  // photometric refinement aligned it: in [0, 1] (a negative correlation is
+  // reported as 0); -1 when not measured (an index without appearances, or
+  // most of the model outside the frame).
   double appearance = -1.0;
   // Estimated probability, in [0, 1], that the detection is right (the right
   // model, every corner within 10 px): a logistic model of the support

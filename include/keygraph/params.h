@@ -178,6 +178,15 @@ struct RansacParams {
   // detection rate above what it was without appearances while removing
   // the wrong identities and most loose poses (docs/RESULTS.md, "Appearance").
   float min_appearance = 0.7f;
+  // Not in the paper: a pose with less keypoint support than min_inliers and
+  // min_verification_z ask is still kept when its appearance confirms it:
+  // at least confirmed_min_inliers distinct inliers (0: never), a
+  // verification z of confirmed_min_verification_z and an appearance
+  // correlation of confirmed_min_appearance. Small and far signs carry few
+  // keypoints but still look like themselves. Format 6.2; 0 in older files.
+  int confirmed_min_inliers = 8;
+  float confirmed_min_verification_z = 2.f;
+  float confirmed_min_appearance = 0.8f;
 };
 
 // Not in the paper: simulated views of each model, rendered by the builder

@@ -7,13 +7,17 @@ namespace kg {
 
 namespace {
 
-constexpr int kParams = 8;          // homography parameters (h33 fixed)
-constexpr int kMaxIterations = 10;  // Gauss-Newton steps per level
-constexpr double kConverged = 0.1;  // largest corner step, level pixels
-constexpr double kMinInside = 0.7;  // share of the level that must be in the frame
-constexpr int kMinHalfWidth = 16;   // smaller half levels carry too little
-constexpr int kMaxSubsamples = 2;   // per axis, where the frame is finer than the level
-constexpr double kSelected = 0.3;   // share of the pixels the Gauss-Newton steps use
+constexpr int kParams = 8;                   // homography parameters (h33 fixed)
+constexpr int kMaxIterations = 10;           // Gauss-Newton steps per level
+constexpr double kConverged = 0.1;           // largest corner step, level pixels
+constexpr double kMinInside = 0.7;           // share of the level that must be in the frame
+constexpr int kMinHalfLongEdge = 16;         // smaller half levels carry too little
+constexpr std::size_t kMinScorePixels = 64;  // fewer make a correlation meaningless
+constexpr double kMinVariance = 1.0;         // grey levels squared: flat below
+// Frame pixels per appearance pixel below which the half level is scored.
+constexpr double kScoreOnHalfBelow = 0.6;
+constexpr int kMaxSubsamples = 2;  // per axis, where the frame is finer than the level
+constexpr double kSelected = 0.3;  // share of the pixels the Gauss-Newton steps use
 constexpr std::size_t kMinSelected = 200;
 constexpr double kTukey = 4.685;           // Tukey's biweight constant (95 % efficiency)
 constexpr double kMinResidualScale = 2.0;  // grey levels: the noise floor of the residuals
@@ -142,7 +146,13 @@ void AppearanceAligner::warp_level(const Level& level, ImageView frame, const do
   at(1.0 / half_long, 0.0, ux, uy);
   at(0.0, 1.0 / half_long, vx, vy);
   const double footprint = std::sqrt(std::fabs((ux - ox) * (vy - oy) - (uy - oy) * (vx - ox)));
-  const int sub = std::clamp(static_cast<int>(std::ceil(footprint - 0.25)), 1, kMaxSubsamples);
+  // NaN or huge for a degenerate pose: one sample (which then fails the
+  // bounds test) rather than a float-to-int conversion out of range.
+  const double wanted = std::ceil(footprint - 0.25);
+  const int sub =
+      std::isfinite(wanted)
+          ? static_cast<int>(std::clamp(wanted, 1.0, static_cast<double>(kMaxSubsamples)))
+          : 1;
   const double max_x = frame.width - 1.001, max_y = frame.height - 1.001;
   const double step = 1.0 / (sub * half_long);
   const double first = (0.5 / sub - 0.5) / half_long;
@@ -171,12 +181,14 @@ void AppearanceAligner::warp_level(const Level& level, ImageView frame, const do
   }
 }
 
-double AppearanceAligner::correlation(const Level& level, ImageView frame, const double g[9]) {
+bool AppearanceAligner::correlation(const Level& level, ImageView frame, const double g[9],
+                                    double& ncc) {
   const int w = level.width, h = level.height;
-  if (w < 3 || h < 3) return -1.0;
+  if (w < 3 || h < 3) return false;
   interior_.clear();
   for (int v = 1; v + 1 < h; ++v)
     for (int u = 1; u + 1 < w; ++u) interior_.push_back(static_cast<std::uint32_t>(v * w + u));
+  if (interior_.size() < kMinScorePixels) return false;
   warp_level(level, frame, g, interior_.data(), interior_.size());
   double n = 0, st = 0, si = 0, stt = 0, sii = 0, sti = 0;
   for (const std::uint32_t i : interior_) {
@@ -189,10 +201,27 @@ double AppearanceAligner::correlation(const Level& level, ImageView frame, const
     sii += s * s;
     sti += t * s;
   }
-  if (n < kMinInside * static_cast<double>(interior_.size())) return -1.0;
+  if (n < kMinInside * static_cast<double>(interior_.size())) return false;
   const double vt = stt - st * st / n, vi = sii - si * si / n;
-  if (!(vt > 1e-9 && vi > 1e-9)) return 0.0;
-  return (sti - st * si / n) / std::sqrt(vt * vi);
+  // A flat appearance cannot be compared with anything; a flat frame where
+  // the model should be is no match.
+  if (!(vt > kMinVariance * n)) return false;
+  ncc = vi > kMinVariance * n ? (sti - st * si / n) / std::sqrt(vt * vi) : 0.0;
+  return std::isfinite(ncc);
+}
+
+double AppearanceAligner::footprint(const Level& level, const double g[9]) {
+  const double half_long = 0.5 * std::max(level.width, level.height);
+  const auto at = [&](double xn, double yn, double& x, double& y) {
+    const double z = 1.0 / (g[6] * xn + g[7] * yn + g[8]);
+    x = (g[0] * xn + g[1] * yn + g[2]) * z;
+    y = (g[3] * xn + g[4] * yn + g[5]) * z;
+  };
+  double ox, oy, ux, uy, vx, vy;
+  at(0.0, 0.0, ox, oy);
+  at(1.0 / half_long, 0.0, ux, uy);
+  at(0.0, 1.0 / half_long, vx, vy);
+  return std::sqrt(std::fabs((ux - ox) * (vy - oy) - (uy - oy) * (vx - ox)));
 }
 
 int AppearanceAligner::refine_level(const Level& level, ImageView frame, double g[9]) {
@@ -288,7 +317,7 @@ int AppearanceAligner::refine_level(const Level& level, ImageView frame, double 
     if (count < kMinInside * static_cast<double>(n)) break;
     const double mi = si / count, mt = st / count;
     const double vi = sii / count - mi * mi, vt = stt / count - mt * mt;
-    if (!(vi > 1e-6 && vt > 1e-6)) break;
+    if (!(vi > kMinVariance && vt > kMinVariance)) break;
     const double gain = std::sqrt(vt / vi);
     // Robust scale of the residuals (median absolute value): occluders,
     // glare and the background at the model's border give residuals far
@@ -375,17 +404,6 @@ bool AppearanceAligner::prepare(const AppearanceImage& appearance, ImageView fra
   return true;
 }
 
-double AppearanceAligner::correlate(const AppearanceImage& appearance, ImageView frame,
-                                    const Homography& h) {
-  if (!prepare(appearance, frame)) return -1.0;
-  const Level full{full_.data(), appearance.width, appearance.height, appearance.scale_x,
-                   appearance.scale_y};
-  double to_model[9], g[9];
-  level_to_model(full.width, full.height, full.scale_x, full.scale_y, to_model);
-  multiply(h.data(), to_model, g);
-  return correlation(full, frame, g);
-}
-
 AppearanceFit AppearanceAligner::align(const AppearanceImage& appearance, ImageView frame,
                                        Homography& h) {
   AppearanceFit fit;
@@ -393,7 +411,7 @@ AppearanceFit AppearanceAligner::align(const AppearanceImage& appearance, ImageV
   const int w = appearance.width, hgt = appearance.height;
   const Level full{full_.data(), w, hgt, appearance.scale_x, appearance.scale_y};
   Level half{};
-  if (w / 2 >= kMinHalfWidth && hgt / 2 >= kMinHalfWidth / 2) {
+  if (std::max(w, hgt) / 2 >= kMinHalfLongEdge && std::min(w, hgt) / 2 >= kMinHalfLongEdge / 2) {
     half.width = w / 2;
     half.height = hgt / 2;
     half.scale_x = appearance.scale_x * 0.5f;
@@ -410,29 +428,42 @@ AppearanceFit AppearanceAligner::align(const AppearanceImage& appearance, ImageV
 
   double to_model[9], from_model[9], g[9];
   level_to_model(w, hgt, full.scale_x, full.scale_y, to_model);
+  if (!invert(to_model, from_model)) return fit;
   multiply(h.data(), to_model, g);
-  fit.ncc_before = correlation(full, frame, g);
+  double half_to_model[9] = {}, half_from_model[9] = {};
+  if (half.values != nullptr) {
+    level_to_model(half.width, half.height, half.scale_x, half.scale_y, half_to_model);
+    if (!invert(half_to_model, half_from_model)) half.values = nullptr;
+  }
+  // The correlation is scored on the level closest to the frame's
+  // resolution: a sign smaller in the frame than its appearance would
+  // otherwise be marked down for the detail the frame cannot show.
+  const bool score_half = half.values != nullptr && footprint(full, g) < kScoreOnHalfBelow;
+  const Level& score_level = score_half ? half : full;
+  const auto score = [&](const double* hom, double& ncc) {
+    double gs[9];
+    multiply(hom, score_half ? half_to_model : to_model, gs);
+    return correlation(score_level, frame, gs, ncc);
+  };
+  fit.measured = score(h.data(), fit.ncc_before);
+  if (!fit.measured) return fit;
   fit.ncc = fit.ncc_before;
-  if (fit.ncc_before <= -1.0) return fit;
 
   double refined[9];
   std::copy(h.begin(), h.end(), refined);
   if (half.values != nullptr) {
-    double half_to_model[9], half_from_model[9];
-    level_to_model(half.width, half.height, half.scale_x, half.scale_y, half_to_model);
-    if (!invert(half_to_model, half_from_model)) return fit;
     multiply(refined, half_to_model, g);
     fit.iterations += refine_level(half, frame, g);
     multiply(g, half_from_model, refined);
   }
-  if (!invert(to_model, from_model)) return fit;
   multiply(refined, to_model, g);
   fit.iterations += refine_level(full, frame, g);
-  const double ncc = correlation(full, frame, g);
-  if (!(ncc > fit.ncc_before)) return fit;
   multiply(g, from_model, refined);
   if (!(std::fabs(refined[8]) > 1e-12)) return fit;
-  for (int i = 0; i < 9; ++i) h[static_cast<std::size_t>(i)] = refined[i] / refined[8];
+  for (double& v : refined) v /= refined[8];
+  double ncc = -1.0;
+  if (!score(refined, ncc) || !(ncc > fit.ncc_before)) return fit;
+  for (int i = 0; i < 9; ++i) h[static_cast<std::size_t>(i)] = refined[i];
   fit.aligned = true;
   fit.ncc = ncc;
   return fit;

@@ -34,12 +34,16 @@ struct AppearanceImage {
 };
 
 struct AppearanceFit {
+  // Whether the correlation could be measured: false when under 70 % of the
+  // appearance falls inside the frame, the appearance is flat or too small
+  // (under 64 interior pixels), or the pose is degenerate.
+  bool measured = false;
   bool aligned = false;  // the refined pose was kept (it correlates better)
   // Normalised cross-correlation of the appearance with the frame under the
-  // pose given and under the pose returned; -1 where too little of the
-  // appearance falls inside the frame to measure it.
-  double ncc_before = -1.0;
-  double ncc = -1.0;
+  // pose given and under the pose returned (when measured), scored at the
+  // appearance's level closest to the frame's resolution.
+  double ncc_before = 0.0;
+  double ncc = 0.0;
   int iterations = 0;  // Gauss-Newton steps over both levels
 };
 
@@ -52,11 +56,8 @@ class AppearanceAligner {
   // Refines h (model pixels -> frame pixels) by aligning `appearance` to
   // `frame` (best a lightly blurred frame: the appearance is area-averaged),
   // and keeps the refinement only when it raises the correlation. An
-  // appearance larger than reserved is not aligned (ncc stays -1).
+  // appearance larger than reserved is not aligned (measured stays false).
   AppearanceFit align(const AppearanceImage& appearance, ImageView frame, Homography& h);
-  // The correlation of `appearance` with `frame` under h, without aligning
-  // (as AppearanceFit::ncc_before).
-  double correlate(const AppearanceImage& appearance, ImageView frame, const Homography& h);
 
  private:
   struct Level {
@@ -69,9 +70,11 @@ class AppearanceAligner {
   // Runs Gauss-Newton on one level; g maps the level's normalised
   // coordinates to frame pixels and is updated in place.
   int refine_level(const Level& level, ImageView frame, double g[9]);
-  // NCC of the level with the frame under g; -1 when under 70 % of it is
-  // inside the frame.
-  double correlation(const Level& level, ImageView frame, const double g[9]);
+  // NCC of the level with the frame under g (AppearanceFit::measured says
+  // when it cannot be measured).
+  bool correlation(const Level& level, ImageView frame, const double g[9], double& ncc);
+  // Frame pixels per level pixel at the level's centre under g.
+  static double footprint(const Level& level, const double g[9]);
   // Samples the frame under g at the listed pixels of the level (into
   // warped_ and valid_, indexed by pixel).
   void warp_level(const Level& level, ImageView frame, const double g[9],

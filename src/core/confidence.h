@@ -29,11 +29,14 @@ struct ConfidenceModel {
 // `keygraph eval --synth SIGNS --methods keygraph --out OUT`).
 //
 // kConfidenceModel, for detections with an appearance correlation (indexes
-// of format 6.2): fitted with the appearance gate off
-// (`--set ransac.min_appearance=0`, 342 detections, 331 right), so that it
-// also saw the poses the gate removes; the correlation carries it.
-inline constexpr ConfidenceModel kConfidenceModel = {-8.9334, 0.2967,  0.9920, -0.6087,
-                                                     5.8882,  -0.2979, 10.9652};
+// of format 6.2): fitted with the appearance gates off
+// (`--set ransac.min_appearance=0 --set ransac.confirmed_min_appearance=0`,
+// 460 detections, 422 right), so that it also saw the poses the gates
+// remove; the correlation carries it. The verification z-score is left out
+// (weight 0): with the support above chance beside it, its fitted weight
+// came out negative.
+inline constexpr ConfidenceModel kConfidenceModel = {-11.4715, 1.6673,  0.5090, 0.0,
+                                                     2.1110,   -1.1113, 12.1473};
 // kConfidenceModelNoAppearance, for detections without one (indexes of
 // format 6.0 and 6.1, or a pose with most of the model outside the frame):
 // fitted on an index without appearances (`--set views.appearance_size=0`,

@@ -200,12 +200,24 @@ Status validate_params(const Params& p) {
   if (!(std::isfinite(p.views.dedupe_distance) && p.views.dedupe_distance >= 0.f &&
         p.views.dedupe_distance <= 2.f))
     return bad("views.dedupe_distance", "must be in [0, 2]");
-  if (p.views.appearance_size < 0 || p.views.appearance_size > kMaxAppearanceSize)
-    return bad("views.appearance_size",
-               "must be in 0.." + std::to_string(kMaxAppearanceSize) + " (0: none)");
+  if (p.views.appearance_size < 0 || p.views.appearance_size > kMaxAppearanceSize ||
+      (p.views.appearance_size > 0 && p.views.appearance_size < kMinAppearanceSize))
+    return bad("views.appearance_size", "must be 0 (none) or in " +
+                                            std::to_string(kMinAppearanceSize) + ".." +
+                                            std::to_string(kMaxAppearanceSize));
   if (!(std::isfinite(p.ransac.min_appearance) && p.ransac.min_appearance >= -1.f &&
         p.ransac.min_appearance <= 1.f))
     return bad("ransac.min_appearance", "must be in [-1, 1]");
+  if (p.ransac.confirmed_min_inliers != 0 &&
+      (p.ransac.confirmed_min_inliers < 4 || p.ransac.confirmed_min_inliers > 100000))
+    return bad("ransac.confirmed_min_inliers", "must be 0 (never) or in 4..100000");
+  if (!(std::isfinite(p.ransac.confirmed_min_verification_z) &&
+        p.ransac.confirmed_min_verification_z >= 0.f &&
+        p.ransac.confirmed_min_verification_z <= 1000.f))
+    return bad("ransac.confirmed_min_verification_z", "must be in [0, 1000]");
+  if (!(std::isfinite(p.ransac.confirmed_min_appearance) &&
+        p.ransac.confirmed_min_appearance >= -1.f && p.ransac.confirmed_min_appearance <= 1.f))
+    return bad("ransac.confirmed_min_appearance", "must be in [-1, 1]");
   return Status::ok();
 }
 

@@ -25,7 +25,8 @@ inline constexpr std::uint8_t kMagic[8] = {0x89, 'K', 'G', 'I', '\r', '\n', 0x1A
 // from simulated views) and the keypoint views section (11).
 // 6.1: the model quality report (sections 12-14); 6.0 files have none.
 // 6.2: each model's appearance (sections 15-16, parameters
-// views.appearance_size and ransac.min_appearance); older files have none.
+// views.appearance_size, ransac.min_appearance and ransac.confirmed_*);
+// older files have none.
 inline constexpr std::uint16_t kVersionMajor = 6;
 inline constexpr std::uint16_t kVersionMinor = 2;
 inline constexpr std::size_t kAlignment = 64;
@@ -148,6 +149,7 @@ inline constexpr std::size_t kApHeight = 4;       // u32, 1..appearance_size
 inline constexpr std::size_t kApScale = 8;        // f32, (0, 1]: appearance px per model px
 inline constexpr std::size_t kApFirstPixel = 12;  // u32, offset into section 16
 inline constexpr int kMaxAppearanceSize = 512;    // largest views.appearance_size
+inline constexpr int kMinAppearanceSize = 16;     // smallest non-zero views.appearance_size
 
 inline std::size_t align_up(std::size_t v) {
   return (v + kAlignment - 1) & ~(kAlignment - 1);
@@ -215,8 +217,11 @@ void visit_params(P& p, F&& f) {
   f("views.tilt_levels", p.views.tilt_levels);
   f("views.merge_distance", p.views.merge_distance);
   f("views.dedupe_distance", p.views.dedupe_distance);
-  f("views.appearance_size", p.views.appearance_size);  // 6.2
-  f("ransac.min_appearance", p.ransac.min_appearance);  // 6.2
+  f("views.appearance_size", p.views.appearance_size);                              // 6.2
+  f("ransac.min_appearance", p.ransac.min_appearance);                              // 6.2
+  f("ransac.confirmed_min_inliers", p.ransac.confirmed_min_inliers);                // 6.2
+  f("ransac.confirmed_min_verification_z", p.ransac.confirmed_min_verification_z);  // 6.2
+  f("ransac.confirmed_min_appearance", p.ransac.confirmed_min_appearance);          // 6.2
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }

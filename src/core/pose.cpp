@@ -414,7 +414,10 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     const RansacStats stats = ransac(estimator, options, rng, best);
     iterations += stats.iterations;
     // The best cluster left cannot make an instance: neither can weaker ones.
-    if (stats.best.point_inliers < rp.min_inliers ||
+    const bool can_confirm = rp.confirmed_min_inliers > 0 && !index.appearance(model_id).empty();
+    const int least_inliers =
+        can_confirm ? std::min(rp.min_inliers, rp.confirmed_min_inliers) : rp.min_inliers;
+    if (stats.best.point_inliers < least_inliers ||
         stats.best.sample_inliers < rp.min_inlier_keygraphs)
       break;
 
@@ -449,18 +452,22 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     // Photometric refinement: the model's appearance aligned onto the frame
     // takes the corners from keypoint accuracy to sub-pixel, and its
     // correlation checks the identity (core/appearance_align.h).
-    double appearance = -1.0;
+    double appearance = -1.0;  // -1: not measured
     const ModelAppearance stored = index.appearance(model_id);
     if (!stored.empty() && !frame.image.empty()) {
       Homography aligned = refined;
       const AppearanceFit fit =
           aligner_.align({stored.pixels, stored.width, stored.height, stored.scale, stored.scale},
                          frame.image, aligned);
-      appearance = fit.ncc;
-      if (fit.aligned &&
-          is_plausible_pose(aligned, info.width, info.height, rp, estimator.min_area)) {
-        refined = aligned;
-        support = guided_pairs(index, info, frame, refined);
+      if (fit.measured) {
+        // The correlation of the pose kept; a negative one counts as none.
+        const bool keep = fit.aligned && is_plausible_pose(aligned, info.width, info.height, rp,
+                                                           estimator.min_area);
+        appearance = std::max(0.0, keep ? fit.ncc : fit.ncc_before);
+        if (keep) {
+          refined = aligned;
+          support = guided_pairs(index, info, frame, refined);
+        }
       }
     }
     const double chance = chance_fraction(index, info, frame, refined);
@@ -487,9 +494,16 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     }
     Point2f corners[4];
     for (int c = 0; c < 4; ++c) corners[c] = kg::apply(refined, info.outline[c]);
+    // Enough keypoint support, and an appearance that does not contradict
+    // it; or less support that the appearance confirms.
+    const bool measured = appearance >= 0.0;
+    const bool supported = distinct >= rp.min_inliers && z >= rp.min_verification_z &&
+                           (!measured || appearance >= rp.min_appearance);
+    const bool confirmed =
+        measured && rp.confirmed_min_inliers > 0 && distinct >= rp.confirmed_min_inliers &&
+        z >= rp.confirmed_min_verification_z && appearance >= rp.confirmed_min_appearance;
     const bool accepted =
-        distinct >= rp.min_inliers && final_score.sample_inliers >= rp.min_inlier_keygraphs &&
-        z >= rp.min_verification_z && (appearance < 0.0 || appearance >= rp.min_appearance) &&
+        (supported || confirmed) && final_score.sample_inliers >= rp.min_inlier_keygraphs &&
         is_plausible_pose(refined, info.width, info.height, rp, estimator.min_area) &&
         !repeats_instance(out, model_id, corners);
     if (accepted && static_cast<int>(out.size()) >= max_out) {

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
@@ -101,6 +102,7 @@ TEST(AppearanceAlign, BringsAPoseSeveralPixelsOffToSubPixel) {
   AppearanceAligner aligner;
   aligner.reserve(kAppearanceSize * kAppearanceSize);
   const AppearanceFit fit = aligner.align(image_of(s), test::view(s.frame), h);
+  EXPECT_TRUE(fit.measured);
   EXPECT_TRUE(fit.aligned);
   EXPECT_LT(max_corner_error(s, h), 0.5);
   EXPECT_GT(fit.ncc, 0.95);
@@ -134,6 +136,8 @@ TEST(AppearanceAlign, AnotherImageAtTheSamePoseCorrelatesPoorly) {
   const AppearanceFit fit_right = aligner.align(image_of(s), test::view(s.frame), right);
   const AppearanceFit fit_wrong = aligner.align(
       {other.data, other.cols, other.rows, s.scale_x, s.scale_y}, test::view(s.frame), wrong);
+  ASSERT_TRUE(fit_right.measured);
+  ASSERT_TRUE(fit_wrong.measured);
   EXPECT_GT(fit_right.ncc, 0.95);
   EXPECT_LT(fit_wrong.ncc, 0.4);
 }
@@ -148,8 +152,8 @@ TEST(AppearanceAlign, LeavesAPoseMostlyOutsideTheFrameAlone) {
   AppearanceAligner aligner;
   aligner.reserve(kAppearanceSize * kAppearanceSize);
   const AppearanceFit fit = aligner.align(image_of(s), test::view(s.frame), h);
+  EXPECT_FALSE(fit.measured);
   EXPECT_FALSE(fit.aligned);
-  EXPECT_EQ(fit.ncc, -1.0);
   EXPECT_EQ(h, before);
 }
 
@@ -161,8 +165,41 @@ TEST(AppearanceAlign, RefusesAnAppearanceLargerThanReserved) {
   AppearanceAligner aligner;
   aligner.reserve(64 * 64);
   const AppearanceFit fit = aligner.align(image_of(s), test::view(s.frame), h);
+  EXPECT_FALSE(fit.measured);
   EXPECT_FALSE(fit.aligned);
   EXPECT_EQ(h, before);
+}
+
+// A model 60 px wide in the frame, half its appearance's size: scored at
+// the half level, it still correlates like itself.
+TEST(AppearanceAlign, ASmallInstanceIsScoredAtItsOwnResolution) {
+  const std::vector<cv::Point2f> corners = {
+      {300.f, 200.f}, {360.f, 206.f}, {358.f, 247.f}, {298.f, 242.f}};
+  const Scene s = make_scene(corners);
+  ASSERT_FALSE(s.frame.empty());
+  Homography h = s.truth;
+  AppearanceAligner aligner;
+  aligner.reserve(kAppearanceSize * kAppearanceSize);
+  const AppearanceFit fit = aligner.align(image_of(s), test::view(s.frame), h);
+  ASSERT_TRUE(fit.measured);
+  EXPECT_GT(fit.ncc, 0.85);
+  EXPECT_LT(max_corner_error(s, h), 1.0);
+}
+
+TEST(AppearanceAlign, ADegeneratePoseIsNotMeasured) {
+  const Scene s = make_scene(kCorners);
+  ASSERT_FALSE(s.frame.empty());
+  AppearanceAligner aligner;
+  aligner.reserve(kAppearanceSize * kAppearanceSize);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const Homography& bad : {Homography{nan, 0, 0, 0, 1, 0, 0, 0, 1},
+                                Homography{1, 0, inf, 0, 1, 0, 0, 0, 1}, Homography{}}) {
+    Homography h = bad;
+    const AppearanceFit fit = aligner.align(image_of(s), test::view(s.frame), h);
+    EXPECT_FALSE(fit.measured);
+    EXPECT_FALSE(fit.aligned);
+  }
 }
 
 TEST(AppearanceAlign, AllocatesNothingOnceReserved) {

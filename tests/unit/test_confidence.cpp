@@ -42,5 +42,29 @@ TEST(Confidence, RisesWithInliersAndSupportAboveChance) {
   EXPECT_GT(detection_confidence(with_support(50, 0.5, 0.05, 1.0)), 0.95);
 }
 
+// With an appearance correlation (format 6.2 indexes) the other model is
+// used; it too must rise with every kind of support.
+TEST(Confidence, WithAnAppearanceRisesWithSupportAndCorrelation) {
+  const auto with = [](int inliers, double score, double rms, double appearance) {
+    Detection d = with_support(inliers, score, 0.05, rms);
+    d.appearance = appearance;
+    return detection_confidence(d);
+  };
+  const double base = with(12, 0.15, 1.5, 0.8);
+  EXPECT_NE(base, detection_confidence(with_support(12, 0.15, 0.05, 1.5)));  // the other model
+  EXPECT_GT(with(40, 0.15, 1.5, 0.8), base);
+  EXPECT_GT(with(12, 0.45, 1.5, 0.8), base);
+  EXPECT_GT(with(12, 0.15, 1.5, 0.95), base);
+  EXPECT_LT(with(12, 0.15, 3.5, 0.8), base);
+  Detection more_z = with_support(12, 0.15, 0.05, 1.5);
+  more_z.appearance = 0.8;
+  more_z.verification_z = 30.0;
+  EXPECT_GE(detection_confidence(more_z), base);
+  // A pose whose image does not match is unlikely whatever its keypoints;
+  // a well-supported one that matches is near certain.
+  EXPECT_LT(with(50, 0.5, 1.0, 0.3), 0.5);
+  EXPECT_GT(with(50, 0.5, 1.0, 0.95), 0.95);
+}
+
 }  // namespace
 }  // namespace kg

@@ -1624,12 +1624,34 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
   }
 
   // The appearance parameters (format 6.2).
-  for (const int size : {-1, 513, 1 << 30}) {
+  for (const int size : {-1, 1, 15, 513, 1 << 30}) {
     p = paper_params();
     p.views.appearance_size = size;
     b = bytes();
     put_params(b, p);
-    EXPECT_TRUE(rejected(b, "parameter views.appearance_size must be in 0..512"));
+    EXPECT_TRUE(rejected(b, "parameter views.appearance_size must be 0 (none) or in 16..512"));
+  }
+  for (const int inliers : {-1, 1, 3, 100001}) {
+    p = paper_params();
+    p.ransac.confirmed_min_inliers = inliers;
+    b = bytes();
+    put_params(b, p);
+    EXPECT_TRUE(
+        rejected(b, "parameter ransac.confirmed_min_inliers must be 0 (never) or in 4..100000"));
+  }
+  for (const float z : {-0.5f, 1001.f, std::nanf("")}) {
+    p = paper_params();
+    p.ransac.confirmed_min_verification_z = z;
+    b = bytes();
+    put_params(b, p);
+    EXPECT_TRUE(rejected(b, "parameter ransac.confirmed_min_verification_z must be in [0, 1000]"));
+  }
+  for (const float ncc : {-1.01f, 1.5f, std::nanf("")}) {
+    p = paper_params();
+    p.ransac.confirmed_min_appearance = ncc;
+    b = bytes();
+    put_params(b, p);
+    EXPECT_TRUE(rejected(b, "parameter ransac.confirmed_min_appearance must be in [-1, 1]"));
   }
   for (const float ncc : {-1.01f, 1.5f, std::nanf(""), std::numeric_limits<float>::infinity()}) {
     p = paper_params();
