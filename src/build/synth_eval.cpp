@@ -470,8 +470,8 @@ Status write_synth_report(const std::string& dir, const SynthEvalOptions& option
       det << c.method << ',' << c.index_size << ',' << c.frame << ',' << c.sign << ',' << d.model
           << ',' << d.right << ',' << d.corner_error << ',' << d.support.inliers << ','
           << d.support.inlier_keygraphs << ',' << d.support.verification_z << ',' << d.support.score
-          << ',' << d.support.chance << ',' << d.support.rms_error << ','
-          << d.support.appearance << ',' << (c.has_confidence ? d.support.confidence : -1.0) << '\n';
+          << ',' << d.support.chance << ',' << d.support.rms_error << ',' << d.support.appearance
+          << ',' << (c.has_confidence ? d.support.confidence : -1.0) << '\n';
     }
   }
   if (s = write_text_file(dir + "/synth-detections.csv", det.str()); !s) return s;
