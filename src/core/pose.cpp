@@ -114,16 +114,28 @@ bool outlines_overlap(const Point2f* a, const Point2f* b) {
   return inside_quad(a, centre_of(b)) || inside_quad(b, centre_of(a));
 }
 
+// Difference of appearance correlations that decides between two models
+// explaining the same part of the frame (a second instance of one model
+// correlates alike).
+constexpr double kClearlyBetterAppearance = 0.05;
+
 void keep_best_of_overlapping(DetectionList& found) {
   std::size_t kept = 0;
   for (std::size_t i = 0; i < found.size(); ++i) {
     bool beaten = false;
     for (std::size_t j = 0; j < found.size() && !beaten; ++j) {
       if (j == i || !outlines_overlap(found[i].corners, found[j].corners)) continue;
-      // More inliers wins; ties go to the higher score over chance, then
-      // to the earlier detection.
+      // Where both images were compared with the frame and one clearly
+      // matches better, it wins (look-alike signs share keypoints, not
+      // pixels). Otherwise more inliers wins; ties go to the higher score
+      // over chance, then to the earlier detection.
       const Detection& a = found[i];
       const Detection& b = found[j];
+      if (a.appearance >= 0.0 && b.appearance >= 0.0 &&
+          std::fabs(a.appearance - b.appearance) > kClearlyBetterAppearance) {
+        beaten = b.appearance > a.appearance;
+        continue;
+      }
       const double margin_a = a.score - a.chance, margin_b = b.score - b.chance;
       beaten = b.inliers > a.inliers ||
                (b.inliers == a.inliers && (margin_b > margin_a || (margin_b == margin_a && j < i)));

@@ -39,9 +39,10 @@ struct FrameKeypoints {
 // centre of either lies inside the other.
 bool outlines_overlap(const Point2f* a, const Point2f* b);
 
-// Where detections of different models overlap (look-alike signs, or one
-// sign explained by two models), keeps the best supported one: the most
-// inliers, then the largest score over chance. Keeps the order of the rest.
+// Where detections overlap (look-alike signs, or one sign explained by two
+// models or twice), keeps the best supported one: the clearly better
+// appearance correlation where both have one, else the most inliers, then
+// the largest score over chance. Keeps the order of the rest.
 void keep_best_of_overlapping(DetectionList& found);
 
 class PoseEstimator {

@@ -64,5 +64,37 @@ TEST(Overlap, TiesGoToTheLargerMarginThenTheEarlier) {
   EXPECT_EQ(same[0].model_id, 4);
 }
 
+// With appearances, the model whose image matches the frame clearly better
+// wins over one with more keypoint support; alike correlations leave it to
+// the inliers.
+TEST(Overlap, TheClearlyBetterAppearanceWins) {
+  DetectionList found;
+  Detection left = at(0, 0, 0, 100, 30), right = at(1, 4, 2, 100, 14);
+  left.appearance = 0.72;
+  right.appearance = 0.93;
+  found.push_back(left);
+  found.push_back(right);
+  keep_best_of_overlapping(found);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].model_id, 1);
+
+  DetectionList alike;
+  right.appearance = 0.75;
+  alike.push_back(left);
+  alike.push_back(right);
+  keep_best_of_overlapping(alike);
+  ASSERT_EQ(alike.size(), 1u);
+  EXPECT_EQ(alike[0].model_id, 0);  // more inliers
+
+  DetectionList one_measured;
+  right.appearance = 0.93;
+  left.appearance = -1.0;  // not measured
+  one_measured.push_back(left);
+  one_measured.push_back(right);
+  keep_best_of_overlapping(one_measured);
+  ASSERT_EQ(one_measured.size(), 1u);
+  EXPECT_EQ(one_measured[0].model_id, 0);
+}
+
 }  // namespace
 }  // namespace kg
