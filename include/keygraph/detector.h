@@ -72,8 +72,9 @@ struct Detection {
   // Normalised cross-correlation of the model's appearance image (stored in
   // the index, format 6.2) with the frame under the final pose, after the
   // photometric refinement aligned it: in [0, 1] (a negative correlation is
-  // reported as 0); -1 when not measured (an index without appearances, or
-  // most of the model outside the frame).
+  // reported as 0); -1 when not measured (an index without appearances,
+  // most of the model outside the frame, a flat or tiny appearance, or a
+  // degenerate pose).
   double appearance = -1.0;
   // Estimated probability, in [0, 1], that the detection is right (the right
   // model, every corner within 10 px): a logistic model of the support

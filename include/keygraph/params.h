@@ -174,7 +174,8 @@ struct RansacParams {
   // Not in the paper: the smallest normalised cross-correlation, in [-1, 1],
   // between a model's stored appearance (ViewParams::appearance_size),
   // aligned onto the frame under the pose, and the frame for a detection to
-  // be kept. Format 6.2; 0 in older files. 0.7 keeps the sign benchmark's
+  // be kept (measured correlations are reported from 0 up, so a negative
+  // threshold acts as 0). Format 6.2; 0 in older files. 0.7 keeps the sign benchmark's
   // detection rate above what it was without appearances while removing
   // the wrong identities and most loose poses (docs/RESULTS.md, "Appearance").
   float min_appearance = 0.7f;

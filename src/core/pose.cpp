@@ -1,6 +1,7 @@
 #include "core/pose.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "core/confidence.h"
@@ -114,35 +115,59 @@ bool outlines_overlap(const Point2f* a, const Point2f* b) {
   return inside_quad(a, centre_of(b)) || inside_quad(b, centre_of(a));
 }
 
+namespace {
+
 // Difference of appearance correlations that decides between two models
 // explaining the same part of the frame (a second instance of one model
 // correlates alike).
 constexpr double kClearlyBetterAppearance = 0.05;
 
+bool clearly_better_appearance(const Detection& a, const Detection& b) {
+  return a.appearance >= 0.0 && b.appearance >= 0.0 &&
+         a.appearance - b.appearance > kClearlyBetterAppearance;
+}
+
+}  // namespace
+
 void keep_best_of_overlapping(DetectionList& found) {
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < found.size(); ++i) {
-    bool beaten = false;
-    for (std::size_t j = 0; j < found.size() && !beaten; ++j) {
-      if (j == i || !outlines_overlap(found[i].corners, found[j].corners)) continue;
-      // Where both images were compared with the frame and one clearly
-      // matches better, it wins (look-alike signs share keypoints, not
-      // pixels). Otherwise more inliers wins; ties go to the higher score
-      // over chance, then to the earlier detection.
-      const Detection& a = found[i];
-      const Detection& b = found[j];
-      if (a.appearance >= 0.0 && b.appearance >= 0.0 &&
-          std::fabs(a.appearance - b.appearance) > kClearlyBetterAppearance) {
-        beaten = b.appearance > a.appearance;
-        continue;
-      }
-      const double margin_a = a.score - a.chance, margin_b = b.score - b.chance;
-      beaten = b.inliers > a.inliers ||
-               (b.inliers == a.inliers && (margin_b > margin_a || (margin_b == margin_a && j < i)));
+  // Greedy over a total order (more inliers, then the higher score over
+  // chance, then the earlier detection): a candidate is kept when it
+  // overlaps nothing kept, and replaces what it overlaps only when its
+  // image matches clearly better than each of them (look-alike signs share
+  // keypoints, not pixels). Replacements only raise the correlation, so
+  // every group of overlapping detections keeps one.
+  const std::size_t n = found.size();
+  std::array<std::uint8_t, kMaxDetections> order{};
+  std::array<bool, kMaxDetections> kept{};
+  for (std::size_t i = 0; i < n; ++i) order[i] = static_cast<std::uint8_t>(i);
+  std::sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(n),
+            [&](std::uint8_t i, std::uint8_t j) {
+              const Detection& a = found[i];
+              const Detection& b = found[j];
+              if (a.inliers != b.inliers) return a.inliers > b.inliers;
+              const double margin_a = a.score - a.chance, margin_b = b.score - b.chance;
+              if (margin_a != margin_b) return margin_a > margin_b;
+              return i < j;
+            });
+  for (std::size_t r = 0; r < n; ++r) {
+    const std::size_t c = order[r];
+    bool overlaps = false, better_than_all = true;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (!kept[k] || !outlines_overlap(found[c].corners, found[k].corners)) continue;
+      overlaps = true;
+      better_than_all = better_than_all && clearly_better_appearance(found[c], found[k]);
     }
-    if (!beaten) found[kept++] = found[i];
+    if (overlaps && !better_than_all) continue;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (kept[k] && outlines_overlap(found[c].corners, found[k].corners)) kept[k] = false;
+    }
+    kept[c] = true;
   }
-  found.truncate(kept);
+  std::size_t out = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (kept[i]) found[out++] = found[i];
+  }
+  found.truncate(out);
 }
 
 // RANSAC estimator over the active keygraph correspondences.
@@ -426,7 +451,8 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     const RansacStats stats = ransac(estimator, options, rng, best);
     iterations += stats.iterations;
     // The best cluster left cannot make an instance: neither can weaker ones.
-    const bool can_confirm = rp.confirmed_min_inliers > 0 && !index.appearance(model_id).empty();
+    const bool can_confirm =
+        rp.confirmed_min_inliers > 0 && !frame.image.empty() && !index.appearance(model_id).empty();
     const int least_inliers =
         can_confirm ? std::min(rp.min_inliers, rp.confirmed_min_inliers) : rp.min_inliers;
     if (stats.best.point_inliers < least_inliers ||

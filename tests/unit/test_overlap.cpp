@@ -96,5 +96,23 @@ TEST(Overlap, TheClearlyBetterAppearanceWins) {
   EXPECT_EQ(one_measured[0].model_id, 0);
 }
 
+// Three detections of one sign whose pairwise preferences would form a
+// cycle (A's image clearly better than B's, C more inliers than A with an
+// image only slightly better than B's): one of them is kept, never none.
+TEST(Overlap, AGroupAlwaysKeepsOne) {
+  Detection a = at(0, 0, 0, 100, 10), b = at(1, 2, 1, 100, 30), c = at(2, 1, 2, 100, 20);
+  a.appearance = 0.90;
+  b.appearance = 0.84;
+  c.appearance = 0.87;
+  for (int rotation = 0; rotation < 3; ++rotation) {
+    DetectionList found;
+    const Detection order[3] = {a, b, c};
+    for (int i = 0; i < 3; ++i) found.push_back(order[(i + rotation) % 3]);
+    keep_best_of_overlapping(found);
+    ASSERT_EQ(found.size(), 1u) << "rotation " << rotation;
+    EXPECT_EQ(found[0].model_id, 0);  // the best image that beat the best-supported one
+  }
+}
+
 }  // namespace
 }  // namespace kg
