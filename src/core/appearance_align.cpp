@@ -65,6 +65,13 @@ void level_to_model(int width, int height, float scale_x, float scale_y, double 
   out[8] = 1.0;
 }
 
+// The frame point of a level's normalised point (x, y) under g.
+void project(const double g[9], double xn, double yn, double& x, double& y) {
+  const double z = 1.0 / (g[6] * xn + g[7] * yn + g[8]);
+  x = (g[0] * xn + g[1] * yn + g[2]) * z;
+  y = (g[3] * xn + g[4] * yn + g[5]) * z;
+}
+
 float bilinear(ImageView f, double x, double y) {
   const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
   const auto fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
@@ -136,19 +143,9 @@ void AppearanceAligner::warp_level(const Level& level, ImageView frame, const do
   const double cx = 0.5 * (w - 1), cy = 0.5 * (level.height - 1);
   // Frame pixels per level pixel at the centre: where it exceeds one, each
   // level pixel averages a grid of samples (the appearance is area-averaged).
-  const auto at = [&](double xn, double yn, double& x, double& y) {
-    const double z = 1.0 / (g[6] * xn + g[7] * yn + g[8]);
-    x = (g[0] * xn + g[1] * yn + g[2]) * z;
-    y = (g[3] * xn + g[4] * yn + g[5]) * z;
-  };
-  double ox, oy, ux, uy, vx, vy;
-  at(0.0, 0.0, ox, oy);
-  at(1.0 / half_long, 0.0, ux, uy);
-  at(0.0, 1.0 / half_long, vx, vy);
-  const double footprint = std::sqrt(std::fabs((ux - ox) * (vy - oy) - (uy - oy) * (vx - ox)));
+  const double wanted = std::ceil(footprint(level, g) - 0.25);
   // NaN or huge for a degenerate pose: one sample (which then fails the
   // bounds test) rather than a float-to-int conversion out of range.
-  const double wanted = std::ceil(footprint - 0.25);
   const int sub =
       std::isfinite(wanted)
           ? static_cast<int>(std::clamp(wanted, 1.0, static_cast<double>(kMaxSubsamples)))
@@ -168,7 +165,7 @@ void AppearanceAligner::warp_level(const Level& level, ImageView frame, const do
     for (int sy = 0; sy < sub && inside; ++sy) {
       for (int sx = 0; sx < sub; ++sx) {
         double x, y;
-        at(xn0 + sx * step, yn0 + sy * step, x, y);
+        project(g, xn0 + sx * step, yn0 + sy * step, x, y);
         if (!(x >= 0.0 && y >= 0.0 && x < max_x && y < max_y)) {
           inside = false;
           break;
@@ -211,16 +208,11 @@ bool AppearanceAligner::correlation(const Level& level, ImageView frame, const d
 }
 
 double AppearanceAligner::footprint(const Level& level, const double g[9]) {
-  const double half_long = 0.5 * std::max(level.width, level.height);
-  const auto at = [&](double xn, double yn, double& x, double& y) {
-    const double z = 1.0 / (g[6] * xn + g[7] * yn + g[8]);
-    x = (g[0] * xn + g[1] * yn + g[2]) * z;
-    y = (g[3] * xn + g[4] * yn + g[5]) * z;
-  };
+  const double step = 1.0 / (0.5 * std::max(level.width, level.height));
   double ox, oy, ux, uy, vx, vy;
-  at(0.0, 0.0, ox, oy);
-  at(1.0 / half_long, 0.0, ux, uy);
-  at(0.0, 1.0 / half_long, vx, vy);
+  project(g, 0.0, 0.0, ox, oy);
+  project(g, step, 0.0, ux, uy);
+  project(g, 0.0, step, vx, vy);
   return std::sqrt(std::fabs((ux - ox) * (vy - oy) - (uy - oy) * (vx - ox)));
 }
 

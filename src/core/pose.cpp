@@ -439,6 +439,13 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
   options.confidence = rp.confidence;
   options.max_iterations = rp.max_iterations;
   options.enumerate_small_pools = true;
+  // The model's appearance, when the index and the frame allow aligning it;
+  // poses it confirms may have less keypoint support.
+  const ModelAppearance stored = index.appearance(model_id);
+  const bool can_align = !stored.empty() && !frame.image.empty();
+  const int least_inliers = can_align && rp.confirmed_min_inliers > 0
+                                ? std::min(rp.min_inliers, rp.confirmed_min_inliers)
+                                : rp.min_inliers;
   int iterations = 0;
   // Each attempt finds one instance or rules out one false cluster.
   for (int attempt = 0; attempt < rp.max_instances; ++attempt) {
@@ -451,10 +458,6 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     const RansacStats stats = ransac(estimator, options, rng, best);
     iterations += stats.iterations;
     // The best cluster left cannot make an instance: neither can weaker ones.
-    const bool can_confirm =
-        rp.confirmed_min_inliers > 0 && !frame.image.empty() && !index.appearance(model_id).empty();
-    const int least_inliers =
-        can_confirm ? std::min(rp.min_inliers, rp.confirmed_min_inliers) : rp.min_inliers;
     if (stats.best.point_inliers < least_inliers ||
         stats.best.sample_inliers < rp.min_inlier_keygraphs)
       break;
@@ -491,8 +494,7 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     // takes the corners from keypoint accuracy to sub-pixel, and its
     // correlation checks the identity (core/appearance_align.h).
     double appearance = -1.0;  // -1: not measured
-    const ModelAppearance stored = index.appearance(model_id);
-    if (!stored.empty() && !frame.image.empty()) {
+    if (can_align) {
       Homography aligned = refined;
       const AppearanceFit fit =
           aligner_.align({stored.pixels, stored.width, stored.height, stored.scale, stored.scale},
