@@ -38,10 +38,14 @@ struct Limits {
   static constexpr int kMaxSide = 16384;  // the largest max_width, max_height
   int max_width = 640;                    // largest frame, pixels
   int max_height = 480;
-  int max_keypoints = 4000;         // detector output, strongest kept
-  int max_scene_keypoints = 2000;   // after Chebyshev sampling
-  int max_arc_matches = 4096;       // model arcs kept per scene arc query
-  int max_arc_pool = 1 << 19;       // model arcs kept over all queries of a frame
+  int max_keypoints = 4000;        // detector output, strongest kept
+  int max_scene_keypoints = 2000;  // after Chebyshev sampling
+  int max_arc_matches = 4096;      // model arcs kept per scene arc query
+  // Model arcs kept over all queries of a frame (8 bytes each): 2 M holds
+  // a 640x480 frame's look-ups in a 50-sign index, whose search budget
+  // grows with it (DescriptorParams::search_reference_models); 512 K cut
+  // them off.
+  int max_arc_pool = 1 << 21;
   int max_correspondences = 20000;  // keygraph correspondences per frame
   int max_detections = 16;          // at most kMaxDetections
   // The same limits for frames up to width x height.

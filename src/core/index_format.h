@@ -27,8 +27,10 @@ inline constexpr std::uint8_t kMagic[8] = {0x89, 'K', 'G', 'I', '\r', '\n', 0x1A
 // 6.2: each model's appearance (sections 15-16, parameters
 // views.appearance_size, ransac.min_appearance and ransac.confirmed_*);
 // older files have none.
+// 6.3: descriptor.search_reference_models (the search budget grows with
+// the index's models); older files read it as 0, a fixed budget, as they were searched.
 inline constexpr std::uint16_t kVersionMajor = 6;
-inline constexpr std::uint16_t kVersionMinor = 2;
+inline constexpr std::uint16_t kVersionMinor = 3;
 inline constexpr std::size_t kAlignment = 64;
 
 inline constexpr std::size_t kHeaderSize = 64;
@@ -222,6 +224,7 @@ void visit_params(P& p, F&& f) {
   f("ransac.confirmed_min_inliers", p.ransac.confirmed_min_inliers);                // 6.2
   f("ransac.confirmed_min_verification_z", p.ransac.confirmed_min_verification_z);  // 6.2
   f("ransac.confirmed_min_appearance", p.ransac.confirmed_min_appearance);          // 6.2
+  f("descriptor.search_reference_models", p.descriptor.search_reference_models);    // 6.3
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }

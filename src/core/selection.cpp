@@ -52,7 +52,23 @@ bool plausible_local_map(const Point2f* m, const Point2f* s, int k, const Params
 }  // namespace
 
 ArcSearch::ArcSearch(const ModelIndex& index)
-    : ArcSearch(index, index.params().descriptor.max_search_leaves) {}
+    : ArcSearch(index, leaves_for(index.params().descriptor, index.model_count())) {}
+
+int ArcSearch::leaves_for(const DescriptorParams& params, std::uint64_t models) {
+  const int base = params.max_search_leaves;
+  const auto reference = static_cast<std::uint64_t>(std::max(0, params.search_reference_models));
+  if (base <= 0 || reference == 0 || models <= reference) return std::max(0, base);
+  // Each model adds arcs near a query (alike signs most: one family's
+  // arrows, fonts and pictograms); a budget grown with the square root of
+  // the models keeps most of a sign's arcs within reach at a cost that
+  // grows more slowly than the index (docs/RESULTS.md, "Index size and
+  // recall"). The models, not the arcs: ten unrelated photos with 680 000
+  // arcs lose nothing at 20 leaves, fifty signs with 842 000 lose a quarter.
+  const double grown =
+      base * std::sqrt(static_cast<double>(models) / static_cast<double>(reference));
+  const double cap = static_cast<double>(base) * kMaxLeavesGrowth;
+  return static_cast<int>(std::lround(std::min(grown, cap)));
+}
 
 ArcSearch::ArcSearch(const ModelIndex& index, int max_leaves) {
   const Params& params = index.params();

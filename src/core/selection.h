@@ -36,9 +36,16 @@ class ArcSearch {
  public:
   ArcSearch() = default;
   // max_leaves: at most that many tree leaves per query (0: exact), by
-  // default the index's descriptor.max_search_leaves.
+  // default leaves_for() the index's parameters and model count.
   explicit ArcSearch(const ModelIndex& index);
   ArcSearch(const ModelIndex& index, int max_leaves);
+
+  // Leaves per query for an index of `models` models built with `params`:
+  // max_search_leaves, grown with the square root of models over
+  // search_reference_models (at most kMaxLeavesGrowth-fold); 0: exact.
+  static int leaves_for(const DescriptorParams& params, std::uint64_t models);
+  static constexpr int kMaxLeavesGrowth = 8;
+  int max_leaves() const { return max_leaves_; }
 
   DescriptorEncoding encoding() const { return encoding_; }
   // Slots of the model arcs whose descriptor is within

@@ -281,3 +281,29 @@ TEST(Selection, TruncatedArcPoolSelectsASubset) {
 
 }  // namespace
 }  // namespace kg
+
+namespace kg {
+namespace {
+
+// The search budget grows with the square root of the index's models
+// beyond the reference (format 6.3), capped, and stays as recorded when
+// either parameter turns the growth off.
+TEST(ArcSearchBudget, GrowsWithTheSquareRootOfTheModelsBeyondTheReference) {
+  DescriptorParams p;
+  ASSERT_EQ(p.max_search_leaves, 20);
+  ASSERT_EQ(p.search_reference_models, 10);
+  EXPECT_EQ(ArcSearch::leaves_for(p, 1), 20);
+  EXPECT_EQ(ArcSearch::leaves_for(p, 10), 20);
+  EXPECT_EQ(ArcSearch::leaves_for(p, 40), 40);  // 4x the models: 2x the leaves
+  EXPECT_EQ(ArcSearch::leaves_for(p, 50), 45);
+  EXPECT_EQ(ArcSearch::leaves_for(p, 202), 90);
+  EXPECT_EQ(ArcSearch::leaves_for(p, 1'000'000), 20 * ArcSearch::kMaxLeavesGrowth);
+  p.search_reference_models = 0;  // files before 6.3: a fixed budget
+  EXPECT_EQ(ArcSearch::leaves_for(p, 1'000'000), 20);
+  p.search_reference_models = 10;
+  p.max_search_leaves = 0;  // exact search stays exact
+  EXPECT_EQ(ArcSearch::leaves_for(p, 1'000'000'000), 0);
+}
+
+}  // namespace
+}  // namespace kg

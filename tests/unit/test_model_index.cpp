@@ -1623,6 +1623,20 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
     }
   }
 
+  // The search budget (format 6.3).
+  for (const int leaves : {-1, 100001}) {
+    p = paper_params();
+    p.descriptor.max_search_leaves = leaves;
+    b = bytes();
+    put_params(b, p);
+    EXPECT_TRUE(rejected(b, "parameter descriptor.max_search_leaves must be in 0..100000"));
+  }
+  p = paper_params();
+  p.descriptor.search_reference_models = -1;
+  b = bytes();
+  put_params(b, p);
+  EXPECT_TRUE(rejected(b, "parameter descriptor.search_reference_models must be >= 0"));
+
   // The appearance parameters (format 6.2).
   for (const int size : {-1, 1, 15, 513, 1 << 30}) {
     p = paper_params();
