@@ -33,7 +33,8 @@ inline constexpr int kMaxDetections = 64;  // capacity of a DetectionList
 // Capacities of the per-frame work, from which the workspace is sized.
 // Reaching one degrades detection (the stats say what was cut); it never
 // overflows. Detector::workspace_bytes() gives the memory they need (about
-// 17 MB for the defaults at 640x480: tests/integration/test_runtime_memory.cpp).
+// 30 MB for the defaults at 640x480, 16 MB of it the arc pool:
+// tests/integration/test_runtime_memory.cpp).
 struct Limits {
   static constexpr int kMaxSide = 16384;  // the largest max_width, max_height
   int max_width = 640;                    // largest frame, pixels
@@ -44,7 +45,9 @@ struct Limits {
   // Model arcs kept over all queries of a frame (8 bytes each): 2 M holds
   // a 640x480 frame's look-ups in a 50-sign index, whose search budget
   // grows with it (DescriptorParams::search_reference_models); 512 K cut
-  // them off.
+  // them off. Indexes of hundreds of models may fill it again, and a grown
+  // budget may find more than max_arc_matches arcs for one query: both
+  // degrade as any limit does (DetectStats::truncated_arc_matches).
   int max_arc_pool = 1 << 21;
   int max_correspondences = 20000;  // keygraph correspondences per frame
   int max_detections = 16;          // at most kMaxDetections

@@ -113,8 +113,8 @@ Status validate_params(const Params& p) {
     return bad("max_scale_error", "must be in [0, 10]");
   if (!(std::isfinite(p.graph.max_relative_length) && p.graph.max_relative_length >= 0.f))
     return bad("max_relative_length", "must be >= 0");
-  if (p.descriptor.max_search_leaves < 0 || p.descriptor.max_search_leaves > 100000)
-    return bad("descriptor.max_search_leaves", "must be in 0..100000");
+  if (p.descriptor.max_search_leaves < 0)
+    return bad("descriptor.max_search_leaves", "must be >= 0");
   if (p.descriptor.search_reference_models < 0)
     return bad("descriptor.search_reference_models", "must be >= 0 (0: a fixed search budget)");
   if (!(std::isfinite(p.keypoints.hessian_threshold) && p.keypoints.hessian_threshold >= 0.f))

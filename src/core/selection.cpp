@@ -66,7 +66,8 @@ int ArcSearch::leaves_for(const DescriptorParams& params, std::uint64_t models) 
   // arcs lose nothing at 20 leaves, fifty signs with 842 000 lose a quarter.
   const double grown =
       base * std::sqrt(static_cast<double>(models) / static_cast<double>(reference));
-  const double cap = static_cast<double>(base) * kMaxLeavesGrowth;
+  const double cap = std::min(static_cast<double>(base) * kMaxLeavesGrowth,
+                              static_cast<double>(std::numeric_limits<int>::max()));
   return static_cast<int>(std::lround(std::min(grown, cap)));
 }
 

@@ -225,6 +225,9 @@ if "$KG" inspect "$INDEX" >"$LOG/stdout" 2>"$LOG/stderr"; then
   grep -Eq '^  descriptor\.encoding +(float32|int16|int8)$' "$LOG/stdout" ||
     bad "inspect: parameter descriptor.encoding not shown"
   grep -Eq '^bytes per arc: [0-9.]+ ' "$LOG/stdout" || bad "inspect: no bytes-per-arc line"
+  # One model: the budget as recorded (it grows beyond 10 models).
+  grep -Eq '^search: 20 leaves per query \(descriptor\.max_search_leaves 20, grown beyond 10 models: this index has 1\)$' \
+    "$LOG/stdout" || bad "inspect: no search budget line in: $(cat "$LOG/stdout")"
 else
   bad "inspect of a good index failed: $(cat "$LOG/stderr")"
 fi

@@ -19,6 +19,7 @@
 
 #include "build/desktop_detect.h"
 #include "build/model_builder.h"
+#include "core/selection.h"
 #include "opencv_scenes.h"
 #include "test_data.h"
 
@@ -72,6 +73,10 @@ class SearchRecall : public ::testing::Test {
     test::InMemoryIndex index;
     const Status s = test::view_in_memory(models, Params{}, index);
     ASSERT_TRUE(s.is_ok()) << s.message();
+    // The detector's search uses the grown budget (20 leaves up to 10 models).
+    EXPECT_EQ(ArcSearch(index.index).max_leaves(),
+              ArcSearch::leaves_for(Params{}.descriptor, models.size()));
+    if (models.size() == 2 + kMostOthers) EXPECT_EQ(ArcSearch(index.index).max_leaves(), 90);
     DesktopDetector detector(index.index);
     for (std::size_t t = 0; t < std::size(kTargets); ++t) {
       const Target& target = kTargets[t];

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <limits>
 #include <set>
 #include <vector>
 
@@ -298,6 +299,9 @@ TEST(ArcSearchBudget, GrowsWithTheSquareRootOfTheModelsBeyondTheReference) {
   EXPECT_EQ(ArcSearch::leaves_for(p, 50), 45);
   EXPECT_EQ(ArcSearch::leaves_for(p, 202), 90);
   EXPECT_EQ(ArcSearch::leaves_for(p, 1'000'000), 20 * ArcSearch::kMaxLeavesGrowth);
+  p.max_search_leaves = 2'000'000'000;  // no overflow at the cap
+  EXPECT_EQ(ArcSearch::leaves_for(p, 1'000'000), std::numeric_limits<int>::max());
+  p.max_search_leaves = 20;
   p.search_reference_models = 0;  // files before 6.3: a fixed budget
   EXPECT_EQ(ArcSearch::leaves_for(p, 1'000'000), 20);
   p.search_reference_models = 10;

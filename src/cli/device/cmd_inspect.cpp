@@ -21,6 +21,7 @@
 #include "core/descriptor_encoding.h"
 #include "core/index_format.h"
 #include "core/param_names.h"
+#include "core/selection.h"
 #include "keygraph/model_index.h"
 #include "platform/files/regular_file.h"
 
@@ -162,6 +163,19 @@ void print_index(const ModelIndex& index) {
       "descriptors\n",
       index.model_count(), index.keypoint_count(), index.arc_count(), index.tree_node_count(),
       index.tree_depth(), encoding_name(encoding));
+  // The search's budget as the detector applies it (format 6.3 grows it
+  // with the models).
+  const int leaves = ArcSearch::leaves_for(index.params().descriptor,
+                                           static_cast<std::uint64_t>(index.model_count()));
+  if (leaves == 0) {
+    std::printf("search: exact\n");
+  } else {
+    std::printf(
+        "search: %d leaves per query (descriptor.max_search_leaves %d, grown beyond %d "
+        "models: this index has %d)\n",
+        leaves, index.params().descriptor.max_search_leaves,
+        index.params().descriptor.search_reference_models, index.model_count());
+  }
   if (index.has_appearance()) {
     std::printf("appearance: %d px long edge, %.1f KB\n", index.params().views.appearance_size,
                 appearance_bytes / 1024.0);
