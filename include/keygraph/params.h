@@ -43,6 +43,17 @@ struct KeypointParams {
   float model_merge_distance = 2.0f;
   // Strongest model keypoints kept per model (bounds arcs: ~n * neighbours).
   int max_model_keypoints = 1500;
+  // Not in the paper: 2 upsamples each frame 2x (bilinear) before the whole
+  // scene side (keypoints, arcs, descriptors, pose) and maps the poses back
+  // to frame pixels; 1 is off. The scene side's pixel sizes (sampling
+  // distance, shortest arc, finest Hessian scale, inlier threshold) then
+  // count half a frame pixel, and the Detector reserves its buffers for
+  // frames twice its Limits' width and height. It pays on sharp low-resolution
+  // frames (the sign benchmark downsampled to 320x240: 21 % -> 34 % of the
+  // signs found) and not on 640x480 renderings with blur and noise (44 % ->
+  // 26-42 %), at about 3x the frame's time (docs/RESULTS.md, "Upsampled
+  // frames"). Not applied to the model side. Files before it hold 0: read as 1.
+  int scene_upsample = 1;
 };
 
 // Descriptor of the keygraph vertices (paper section 6: SIFT). Off by
