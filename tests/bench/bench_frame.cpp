@@ -10,7 +10,8 @@
 // 300x300 centre crops of starry_night.jpg, baboon.jpg, building.jpg and
 // butterfly.jpg, built in-process with the default parameters; and, for
 // the paper's one-object setting, an index of box.png alone; and the 10
-// models without their appearances (detect_no_appearance/). Frames:
+// models without their appearances (detect_no_appearance/) and with the
+// frames upsampled 2x (keypoints.scene_upsample, detect_upsampled/). Frames:
 // box_in_scene.png (holds box), graf3.png (holds the graf crop), aero1.jpg,
 // leuvenA.jpg, messi5.jpg and fruits.jpg, resized to 640x480 (INTER_AREA).
 //
@@ -96,6 +97,9 @@ struct Data {
   // The 10 models without their appearances (views.appearance_size 0): the
   // cost of the photometric refinement is detect/ against this.
   EvalIndex no_appearance;
+  // The 10 models searched on frames upsampled 2x (keypoints.scene_upsample
+  // 2; the model side is the same).
+  EvalIndex upsampled;
   std::vector<Frame> frames;
 };
 
@@ -124,6 +128,9 @@ Status load_models(Data& d) {
   Params without = d.params;
   without.views.appearance_size = 0;
   if (Status s = d.no_appearance.build(built, without); !s) return s;
+  Params upsampled = d.params;
+  upsampled.keypoints.scene_upsample = 2;
+  if (Status s = d.upsampled.build(built, upsampled); !s) return s;
   return d.index.build(built, d.params);
 }
 
@@ -211,6 +218,10 @@ void detect_frame(benchmark::State& state, const Frame* f) {
 
 void detect_no_appearance(benchmark::State& state, const Frame* f) {
   detect_with(state, f, data().no_appearance.index());
+}
+
+void detect_upsampled(benchmark::State& state, const Frame* f) {
+  detect_with(state, f, data().upsampled.index());
 }
 
 // The same frames against an index of box.png alone (the paper's timing
@@ -476,6 +487,7 @@ void register_benchmarks() {
   const std::pair<const char*, Fn> kinds[] = {{"detect/", detect_frame},
                                               {"detect_box_only/", detect_box_only},
                                               {"detect_no_appearance/", detect_no_appearance},
+                                              {"detect_upsampled/", detect_upsampled},
                                               {"orb_pipeline/", orb_pipeline},
                                               {"hessian/", hessian_stage},
                                               {"blur/", blur_stage},
