@@ -48,11 +48,13 @@ struct KeypointParams {
   // to frame pixels; 1 is off. The scene side's pixel sizes (sampling
   // distance, shortest arc, finest Hessian scale, inlier threshold) then
   // count half a frame pixel, and the Detector reserves its buffers for
-  // frames twice its Limits' width and height. It pays on sharp low-resolution
-  // frames (the sign benchmark downsampled to 320x240: 21 % -> 34 % of the
-  // signs found) and not on 640x480 renderings with blur and noise (44 % ->
-  // 26-42 %), at about 3x the frame's time (docs/RESULTS.md, "Upsampled
-  // frames"). Not applied to the model side. Files before it hold 0: read as 1.
+  // frames twice its Limits' width and height. It pays on small signs in
+  // sharp low-resolution frames (the sign benchmark downsampled to 320x240:
+  // 26 % -> 40 % found, seed 2) and loses signs near the models' own size,
+  // which upsampled outgrow every model view (the 640x480 benchmark at 50
+  // signs: 51.7 % -> 32.5 %; Oxford crops 77 % -> 38 %), at 2.8x the frame's
+  // time (docs/RESULTS.md, "Upsampled frames"). The model side is unchanged.
+  // Files written before it hold 0: read as 1.
   int scene_upsample = 1;
 };
 
