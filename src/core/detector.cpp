@@ -59,9 +59,9 @@ Status check_limits(const Limits& l) {
 }
 
 // The limits the scene side works within: the caller's, for frames upsampled
-// by KeypointParams::scene_upsample.
+// 2x when KeypointParams::scene_upsample asks for it (2 or 3).
 Limits work_limits(const Limits& l, const Params& params) {
-  const int f = params.keypoints.scene_upsample;
+  const int f = params.keypoints.scene_upsample >= 2 ? 2 : 1;
   return l.for_frame(f * l.max_width, f * l.max_height);
 }
 
@@ -125,7 +125,8 @@ struct Detector::Impl {
   // Keeps the limits.max_keypoints strongest of keypoints[0..count) (and
   // their descriptors) in `detected` (and detected_descriptors).
   void keep_strongest(const Keypoint* keypoints, int count, const std::uint8_t* descriptors);
-  bool upsampling() const { return index->params().keypoints.scene_upsample == 2; }
+  int mode() const { return index->params().keypoints.scene_upsample; }
+  bool upsampling() const { return mode() >= 2; }
   // The frame the scene side works on: `frame`, or its upsampled copy.
   ImageView work_frame(ImageView frame);
   // The caller's keypoints in upsampled pixels, in `detected` (the strongest
@@ -133,6 +134,12 @@ struct Detector::Impl {
   void upsample_keypoints(const Keypoint*& keypoints, int& count, const std::uint8_t*& descriptors);
   // Detections and sampled keypoints from upsampled to frame pixels.
   void map_to_frame(DetectionList& out);
+  // The Hessian's keypoints of `frame`, then run().
+  Status detect_keypoints_and_run(ImageView frame, DetectionList& out);
+  // scene_upsample 3: the upsampled pass's detections (frame pixels) added
+  // to the frame's, then the best of overlapping ones kept.
+  void merge(const DetectionList& more, DetectionList& out);
+  DetectionList upsampled_found;  // the upsampled pass's, with scene_upsample 3
   Status run(ImageView frame, const Keypoint* keypoints, int count, const std::uint8_t* descriptors,
              DetectionList& out, Clock::time_point start);
 };
@@ -350,15 +357,32 @@ Status Detector::detect(ImageView frame, DetectionList& out) {
     return {
         StatusCode::kInvalidArgument,
         "index was built with a keypoint detector the core does not have (MSER): pass keypoints"};
-  const auto start = Clock::now();
-  const ImageView work = impl_->work_frame(frame);
-  if (!impl_->hessian.detect(work, params.keypoints, limits_.max_keypoints, impl_->detected))
-    impl_->stats.truncated_keypoints = true;
-  impl_->stats.ms_keypoints = ms_since(start);
-  const Status s = impl_->run(work, impl_->detected.data(),
-                              static_cast<int>(impl_->detected.size()), nullptr, out, Clock::now());
-  if (impl_->upsampling()) impl_->map_to_frame(out);
+  const int mode = impl_->mode();
+  if (mode == 1) return impl_->detect_keypoints_and_run(frame, out);
+  if (mode == 3) {
+    if (Status s = impl_->detect_keypoints_and_run(frame, out); !s) return s;
+  }
+  DetectionList& up = mode == 3 ? impl_->upsampled_found : out;
+  up.clear();
+  const Status s = impl_->detect_keypoints_and_run(impl_->work_frame(frame), up);
+  impl_->map_to_frame(up);
+  if (mode == 3) impl_->merge(up, out);
   return s;
+}
+
+Status Detector::Impl::detect_keypoints_and_run(ImageView frame, DetectionList& out) {
+  const auto start = Clock::now();
+  if (!hessian.detect(frame, index->params().keypoints, limits.max_keypoints, detected))
+    stats.truncated_keypoints = true;
+  stats.ms_keypoints += ms_since(start);
+  return run(frame, detected.data(), static_cast<int>(detected.size()), nullptr, out, Clock::now());
+}
+
+void Detector::Impl::merge(const DetectionList& more, DetectionList& out) {
+  for (const Detection& d : more) {
+    if (!out.push_back(d)) stats.truncated_detections = true;
+  }
+  keep_best_of_overlapping(out);
 }
 
 Status Detector::detect(ImageView frame, const Keypoint* keypoints, int count, DetectionList& out) {
@@ -378,17 +402,24 @@ Status Detector::detect(ImageView frame, const Keypoint* keypoints, int count,
   } else if (vertex_descriptors == nullptr && count > 0) {
     return missing_vertex_descriptors();
   }
-  if (!impl_->upsampling())
-    return impl_->run(frame, keypoints, count, vertex_descriptors, out, Clock::now());
+  const int mode = impl_->mode();
+  if (mode != 2) {
+    if (Status s = impl_->run(frame, keypoints, count, vertex_descriptors, out, Clock::now());
+        mode == 1 || !s)
+      return s;
+  }
   const auto start = Clock::now();
   const ImageView work = impl_->work_frame(frame);
   const int given = count;
   impl_->upsample_keypoints(keypoints, count, vertex_descriptors);
   const bool truncated = count < given;
-  const Status s = impl_->run(work, keypoints, count, vertex_descriptors, out, start);
+  DetectionList& up = mode == 3 ? impl_->upsampled_found : out;
+  up.clear();
+  const Status s = impl_->run(work, keypoints, count, vertex_descriptors, up, start);
   impl_->stats.keypoints = given;
   impl_->stats.truncated_keypoints |= truncated;
-  impl_->map_to_frame(out);
+  impl_->map_to_frame(up);
+  if (mode == 3) impl_->merge(up, out);
   return s;
 }
 

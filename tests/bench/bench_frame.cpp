@@ -10,8 +10,9 @@
 // 300x300 centre crops of starry_night.jpg, baboon.jpg, building.jpg and
 // butterfly.jpg, built in-process with the default parameters; and, for
 // the paper's one-object setting, an index of box.png alone; and the 10
-// models without their appearances (detect_no_appearance/) and with the
-// frames upsampled 2x (keypoints.scene_upsample, detect_upsampled/). Frames:
+// models without their appearances (detect_no_appearance/) and searched in
+// each frame and in the frame upsampled 2x (keypoints.scene_upsample 3,
+// detect_upsampled/). Frames:
 // box_in_scene.png (holds box), graf3.png (holds the graf crop), aero1.jpg,
 // leuvenA.jpg, messi5.jpg and fruits.jpg, resized to 640x480 (INTER_AREA).
 //
@@ -97,8 +98,8 @@ struct Data {
   // The 10 models without their appearances (views.appearance_size 0): the
   // cost of the photometric refinement is detect/ against this.
   EvalIndex no_appearance;
-  // The 10 models searched on frames upsampled 2x (keypoints.scene_upsample
-  // 2; the model side is the same).
+  // The 10 models searched in the frame and in the frame upsampled 2x
+  // (keypoints.scene_upsample 3; the model side is the same).
   EvalIndex upsampled;
   std::vector<Frame> frames;
 };
@@ -129,7 +130,7 @@ Status load_models(Data& d) {
   without.views.appearance_size = 0;
   if (Status s = d.no_appearance.build(built, without); !s) return s;
   Params upsampled = d.params;
-  upsampled.keypoints.scene_upsample = 2;
+  upsampled.keypoints.scene_upsample = 3;
   if (Status s = d.upsampled.build(built, upsampled); !s) return s;
   return d.index.build(built, d.params);
 }

@@ -53,7 +53,7 @@ TEST(Upsample2x, HomographyMapsBackToFramePixels) {
 TEST(SceneUpsampleParam, RangeAndOlderFiles) {
   Params p;
   EXPECT_TRUE(format::validate_params(p));
-  for (int bad : {0, 3, -1}) {
+  for (int bad : {0, 4, -1}) {
     p.keypoints.scene_upsample = bad;
     const Status s = format::validate_params(p);
     EXPECT_FALSE(s) << bad;
@@ -107,8 +107,12 @@ class SceneUpsample : public ::testing::Test {
     ASSERT_TRUE(test::build_in_memory({{"box", *box_}}, params, *off_));
     params.keypoints.scene_upsample = 2;
     ASSERT_TRUE(test::build_in_memory({{"box", *box_}}, params, *on_));
+    both_ = new test::InMemoryIndex;
+    params.keypoints.scene_upsample = 3;
+    ASSERT_TRUE(test::build_in_memory({{"box", *box_}}, params, *both_));
   }
   static void TearDownTestSuite() {
+    delete both_;
     delete on_;
     delete off_;
     delete box_;
@@ -116,10 +120,12 @@ class SceneUpsample : public ::testing::Test {
   static cv::Mat* box_;
   static test::InMemoryIndex* off_;
   static test::InMemoryIndex* on_;
+  static test::InMemoryIndex* both_;  // scene_upsample 3: the frame and the upsampled frame
 };
 cv::Mat* SceneUpsample::box_ = nullptr;
 test::InMemoryIndex* SceneUpsample::off_ = nullptr;
 test::InMemoryIndex* SceneUpsample::on_ = nullptr;
+test::InMemoryIndex* SceneUpsample::both_ = nullptr;
 
 TEST_F(SceneUpsample, ParameterIsStored) {
   EXPECT_EQ(off_->index.params().keypoints.scene_upsample, 1);
@@ -186,6 +192,21 @@ TEST_F(SceneUpsample, CallerKeypointsAreMappedToo) {
           .is_ok());
   ASSERT_EQ(again.size(), 1u);
   EXPECT_LT(test::max_corner_error(again[0], scene.truth, on_->index.model(0)), 3.0);
+}
+
+// Both passes (3): the small box as upsampled finds it, and where both
+// passes find the box, one detection of it.
+TEST_F(SceneUpsample, BothPassesKeepOneDetectionPerInstance) {
+  for (const double scale : {0.35, 0.6}) {
+    const SmallScene scene = small_box_scene(*box_, scale);
+    ASSERT_FALSE(scene.image.empty());
+    DetectionList found;
+    DesktopDetector detector(both_->index);
+    ASSERT_TRUE(detector.detect(scene.image, found).is_ok());
+    ASSERT_EQ(found.size(), 1u) << "scale " << scale;
+    EXPECT_LT(test::max_corner_error(found[0], scene.truth, both_->index.model(0)), 3.0)
+        << "scale " << scale;
+  }
 }
 
 }  // namespace
