@@ -55,7 +55,7 @@ struct KeypointParams {
   // 45 % both) and loses signs near the models' own size, which upsampled
   // outgrow every model view (640x480, 50 signs: 51.7 % -> 32.5 %; Oxford
   // crops 77 % -> 38 %). Off by default: 2.8x the frame's time upsampled,
-  // more for both (docs/RESULTS.md, "Upsampled frames"). The model side is
+  // 3.9x for both (docs/RESULTS.md, "Upsampled frames"). The model side is
   // unchanged. Files written before it hold 0: read as 1.
   int scene_upsample = 1;
 };
