@@ -43,6 +43,21 @@ struct KeypointParams {
   float model_merge_distance = 2.0f;
   // Strongest model keypoints kept per model (bounds arcs: ~n * neighbours).
   int max_model_keypoints = 1500;
+  // Not in the paper: 1 searches the frame as it is; 2 upsamples it 2x
+  // (bilinear) and runs the whole scene side (keypoints, arcs, descriptors,
+  // pose) on that, mapping poses back to frame pixels; 3 does both and keeps
+  // the best of overlapping detections. Upsampled, the scene side's pixel
+  // sizes (sampling distance, shortest arc, finest Hessian scale, inlier
+  // threshold) count half a frame pixel, and the Detector reserves its
+  // buffers for frames twice its Limits' width and height. The upsampled
+  // pass finds small signs in sharp low-resolution frames (the sign
+  // benchmark downsampled to 320x240, seed 2: 26 % found, 40 % upsampled,
+  // 45 % both) and loses signs near the models' own size, which upsampled
+  // outgrow every model view (640x480, 50 signs: 51.7 % -> 32.5 %; Oxford
+  // crops 77 % -> 38 %). Off by default: 2.8x the frame's time upsampled,
+  // 3.9x for both (docs/RESULTS.md, "Upsampled frames"). The model side is
+  // unchanged. Files written before it hold 0: read as 1.
+  int scene_upsample = 1;
 };
 
 // Descriptor of the keygraph vertices (paper section 6: SIFT). Off by

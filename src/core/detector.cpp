@@ -18,6 +18,7 @@
 #include "core/sampling.h"
 #include "core/selection.h"
 #include "core/strongest.h"
+#include "core/upsample.h"
 #include "core/vertex_descriptor.h"
 #include "core/workspace.h"
 
@@ -57,6 +58,13 @@ Status check_limits(const Limits& l) {
               std::to_string(kMaxDetections) + ")"};
 }
 
+// The limits the scene side works within: the caller's, for frames upsampled
+// 2x when KeypointParams::scene_upsample asks for it (2 or 3).
+Limits work_limits(const Limits& l, const Params& params) {
+  const int f = params.keypoints.scene_upsample >= 2 ? 2 : 1;
+  return l.for_frame(f * l.max_width, f * l.max_height);
+}
+
 std::uint32_t largest_model(const ModelIndex& index) {
   std::uint32_t most = 0;
   for (int m = 0; m < index.model_count(); ++m)
@@ -83,10 +91,11 @@ struct Detector::Impl {
   Impl(const ModelIndex& index, const Limits& limits, std::pmr::memory_resource* memory, bool fill);
 
   const ModelIndex* index;
-  Limits limits;
+  Limits limits;  // work_limits(): frame sizes of the upsampled frame
   ArcSearch search;
   DetectStats stats;
 
+  Plane<std::uint8_t> upsampled;  // the frame, with scene_upsample 2
   HessianDetector hessian;
   WorkVector<Keypoint> detected;
   // Vertex descriptors: of the model keypoints' inverse norms (once), of the
@@ -116,15 +125,31 @@ struct Detector::Impl {
   // Keeps the limits.max_keypoints strongest of keypoints[0..count) (and
   // their descriptors) in `detected` (and detected_descriptors).
   void keep_strongest(const Keypoint* keypoints, int count, const std::uint8_t* descriptors);
+  int mode() const { return index->params().keypoints.scene_upsample; }
+  bool upsampling() const { return mode() >= 2; }
+  // The frame the scene side works on: `frame`, or its upsampled copy.
+  ImageView work_frame(ImageView frame);
+  // The caller's keypoints in upsampled pixels, in `detected` (the strongest
+  // limits.max_keypoints of them, with their descriptors).
+  void upsample_keypoints(const Keypoint*& keypoints, int& count, const std::uint8_t*& descriptors);
+  // Detections and sampled keypoints from upsampled to frame pixels.
+  void map_to_frame(DetectionList& out);
+  // The Hessian's keypoints of `frame`, then run().
+  Status detect_keypoints_and_run(ImageView frame, DetectionList& out);
+  // scene_upsample 3: the upsampled pass's detections (frame pixels) added
+  // to the frame's, then the best of overlapping ones kept.
+  void merge(const DetectionList& more, DetectionList& out);
+  DetectionList upsampled_found;  // the upsampled pass's, with scene_upsample 3
   Status run(ImageView frame, const Keypoint* keypoints, int count, const std::uint8_t* descriptors,
              DetectionList& out, Clock::time_point start);
 };
 
-Detector::Impl::Impl(const ModelIndex& idx, const Limits& l, std::pmr::memory_resource* memory,
+Detector::Impl::Impl(const ModelIndex& idx, const Limits& user, std::pmr::memory_resource* memory,
                      bool fill)
     : index(&idx),
-      limits(l),
+      limits(work_limits(user, idx.params())),
       search(idx),
+      upsampled(memory),
       hessian(memory),
       detected(memory),
       model_inverse_norms(memory),
@@ -148,6 +173,8 @@ Detector::Impl::Impl(const ModelIndex& idx, const Limits& l, std::pmr::memory_re
       pose(memory),
       grid(memory) {
   const Params& params = idx.params();
+  const Limits& l = limits;
+  if (upsampling()) upsampled.reserve(l.max_width, l.max_height);
   const auto frame_keypoints = static_cast<std::size_t>(l.max_keypoints);
   const auto scene = static_cast<std::size_t>(l.max_scene_keypoints);
   const auto correspondences = static_cast<std::size_t>(l.max_correspondences);
@@ -330,12 +357,32 @@ Status Detector::detect(ImageView frame, DetectionList& out) {
     return {
         StatusCode::kInvalidArgument,
         "index was built with a keypoint detector the core does not have (MSER): pass keypoints"};
+  const int mode = impl_->mode();
+  if (mode == 1) return impl_->detect_keypoints_and_run(frame, out);
+  if (mode == 3) {
+    if (Status s = impl_->detect_keypoints_and_run(frame, out); !s) return s;
+  }
+  DetectionList& up = mode == 3 ? impl_->upsampled_found : out;
+  up.clear();
+  const Status s = impl_->detect_keypoints_and_run(impl_->work_frame(frame), up);
+  impl_->map_to_frame(up);
+  if (mode == 3) impl_->merge(up, out);
+  return s;
+}
+
+Status Detector::Impl::detect_keypoints_and_run(ImageView frame, DetectionList& out) {
   const auto start = Clock::now();
-  if (!impl_->hessian.detect(frame, params.keypoints, limits_.max_keypoints, impl_->detected))
-    impl_->stats.truncated_keypoints = true;
-  impl_->stats.ms_keypoints = ms_since(start);
-  return impl_->run(frame, impl_->detected.data(), static_cast<int>(impl_->detected.size()),
-                    nullptr, out, Clock::now());
+  if (!hessian.detect(frame, index->params().keypoints, limits.max_keypoints, detected))
+    stats.truncated_keypoints = true;
+  stats.ms_keypoints += ms_since(start);
+  return run(frame, detected.data(), static_cast<int>(detected.size()), nullptr, out, Clock::now());
+}
+
+void Detector::Impl::merge(const DetectionList& more, DetectionList& out) {
+  for (const Detection& d : more) {
+    if (!out.push_back(d)) stats.truncated_detections = true;
+  }
+  keep_best_of_overlapping(out);
 }
 
 Status Detector::detect(ImageView frame, const Keypoint* keypoints, int count, DetectionList& out) {
@@ -355,7 +402,61 @@ Status Detector::detect(ImageView frame, const Keypoint* keypoints, int count,
   } else if (vertex_descriptors == nullptr && count > 0) {
     return missing_vertex_descriptors();
   }
-  return impl_->run(frame, keypoints, count, vertex_descriptors, out, Clock::now());
+  const int mode = impl_->mode();
+  if (mode != 2) {
+    if (Status s = impl_->run(frame, keypoints, count, vertex_descriptors, out, Clock::now());
+        mode == 1 || !s)
+      return s;
+  }
+  const auto start = Clock::now();
+  const ImageView work = impl_->work_frame(frame);
+  const int given = count;
+  impl_->upsample_keypoints(keypoints, count, vertex_descriptors);
+  const bool truncated = count < given;
+  DetectionList& up = mode == 3 ? impl_->upsampled_found : out;
+  up.clear();
+  const Status s = impl_->run(work, keypoints, count, vertex_descriptors, up, start);
+  impl_->stats.keypoints = given;
+  impl_->stats.truncated_keypoints |= truncated;
+  impl_->map_to_frame(up);
+  if (mode == 3) impl_->merge(up, out);
+  return s;
+}
+
+ImageView Detector::Impl::work_frame(ImageView frame) {
+  if (!upsampling()) return frame;
+  upsample2x(frame, upsampled);
+  return view_of(upsampled);
+}
+
+void Detector::Impl::upsample_keypoints(const Keypoint*& keypoints, int& count,
+                                        const std::uint8_t*& descriptors) {
+  if (count > limits.max_keypoints) {
+    keep_strongest(keypoints, count, descriptors);
+    if (descriptors != nullptr) descriptors = detected_descriptors.data();
+  } else {
+    detected.assign(keypoints, keypoints + count);
+  }
+  for (Keypoint& k : detected) {
+    k.x = to_upsampled(k.x);
+    k.y = to_upsampled(k.y);
+    k.scale *= 2.f;
+  }
+  keypoints = detected.data();
+  count = static_cast<int>(detected.size());
+}
+
+void Detector::Impl::map_to_frame(DetectionList& out) {
+  for (Detection& d : out) {
+    d.homography = homography_from_upsampled(d.homography);
+    for (Point2f& c : d.corners) c = {from_upsampled(c.x), from_upsampled(c.y)};
+    d.rms_error *= 0.5;
+  }
+  for (Keypoint& k : scene_keypoints) {
+    k.x = from_upsampled(k.x);
+    k.y = from_upsampled(k.y);
+    k.scale *= 0.5f;
+  }
 }
 
 void Detector::Impl::keep_strongest(const Keypoint* keypoints, int count,

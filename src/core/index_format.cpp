@@ -99,6 +99,8 @@ Status parse_params(const std::uint8_t* in, std::size_t size, Params& params) {
     }
     at += stored_size<T>();
   });
+  // Written before the parameter existed: its zero tail means off.
+  if (params.keypoints.scene_upsample == 0) params.keypoints.scene_upsample = 1;
   return validate_params(params);
 }
 
@@ -126,6 +128,8 @@ Status validate_params(const Params& p) {
   if (p.keypoints.mser_delta < 1 || p.keypoints.mser_min_area < 1 ||
       p.keypoints.mser_max_area < p.keypoints.mser_min_area)
     return bad("mser", "delta/areas out of range");
+  if (p.keypoints.scene_upsample < 1 || p.keypoints.scene_upsample > 3)
+    return bad("scene_upsample", "must be 1 (the frame), 2 (upsampled 2x) or 3 (both)");
   if (p.keypoints.model_scales < 1 || p.keypoints.model_scales > 8)
     return bad("model_scales", "must be in 1..8");
   if (!(std::isfinite(p.keypoints.model_merge_distance) && p.keypoints.model_merge_distance >= 0.f))

@@ -225,6 +225,7 @@ void visit_params(P& p, F&& f) {
   f("ransac.confirmed_min_verification_z", p.ransac.confirmed_min_verification_z);  // 6.2
   f("ransac.confirmed_min_appearance", p.ransac.confirmed_min_appearance);          // 6.2
   f("descriptor.search_reference_models", p.descriptor.search_reference_models);    // 6.3
+  f("keypoints.scene_upsample", p.keypoints.scene_upsample);  // 6.3; 0 in older files: read as 1
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }

@@ -10,7 +10,9 @@
 // 300x300 centre crops of starry_night.jpg, baboon.jpg, building.jpg and
 // butterfly.jpg, built in-process with the default parameters; and, for
 // the paper's one-object setting, an index of box.png alone; and the 10
-// models without their appearances (detect_no_appearance/). Frames:
+// models without their appearances (detect_no_appearance/) and searched in
+// each frame and in the frame upsampled 2x (keypoints.scene_upsample 3,
+// detect_upsampled/). Frames:
 // box_in_scene.png (holds box), graf3.png (holds the graf crop), aero1.jpg,
 // leuvenA.jpg, messi5.jpg and fruits.jpg, resized to 640x480 (INTER_AREA).
 //
@@ -96,6 +98,9 @@ struct Data {
   // The 10 models without their appearances (views.appearance_size 0): the
   // cost of the photometric refinement is detect/ against this.
   EvalIndex no_appearance;
+  // The 10 models searched in the frame and in the frame upsampled 2x
+  // (keypoints.scene_upsample 3; the model side is the same).
+  EvalIndex upsampled;
   std::vector<Frame> frames;
 };
 
@@ -124,6 +129,9 @@ Status load_models(Data& d) {
   Params without = d.params;
   without.views.appearance_size = 0;
   if (Status s = d.no_appearance.build(built, without); !s) return s;
+  Params upsampled = d.params;
+  upsampled.keypoints.scene_upsample = 3;
+  if (Status s = d.upsampled.build(built, upsampled); !s) return s;
   return d.index.build(built, d.params);
 }
 
@@ -211,6 +219,10 @@ void detect_frame(benchmark::State& state, const Frame* f) {
 
 void detect_no_appearance(benchmark::State& state, const Frame* f) {
   detect_with(state, f, data().no_appearance.index());
+}
+
+void detect_upsampled(benchmark::State& state, const Frame* f) {
+  detect_with(state, f, data().upsampled.index());
 }
 
 // The same frames against an index of box.png alone (the paper's timing
@@ -476,6 +488,7 @@ void register_benchmarks() {
   const std::pair<const char*, Fn> kinds[] = {{"detect/", detect_frame},
                                               {"detect_box_only/", detect_box_only},
                                               {"detect_no_appearance/", detect_no_appearance},
+                                              {"detect_upsampled/", detect_upsampled},
                                               {"orb_pipeline/", orb_pipeline},
                                               {"hessian/", hessian_stage},
                                               {"blur/", blur_stage},

@@ -76,7 +76,9 @@ class SearchRecall : public ::testing::Test {
     // The detector's search uses the grown budget (20 leaves up to 10 models).
     EXPECT_EQ(ArcSearch(index.index).max_leaves(),
               ArcSearch::leaves_for(Params{}.descriptor, models.size()));
-    if (models.size() == 2 + kMostOthers) EXPECT_EQ(ArcSearch(index.index).max_leaves(), 90);
+    if (models.size() == 2 + kMostOthers) {
+      EXPECT_EQ(ArcSearch(index.index).max_leaves(), 90);
+    }
     DesktopDetector detector(index.index);
     for (std::size_t t = 0; t < std::size(kTargets); ++t) {
       const Target& target = kTargets[t];
