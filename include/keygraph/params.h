@@ -56,7 +56,14 @@ struct KeypointParams {
   // outgrow every model view (640x480, 50 signs: 51.7 % -> 32.5 %; Oxford
   // crops 77 % -> 38 %). Off by default: 2.8x the frame's time upsampled,
   // 3.9x for both (docs/RESULTS.md, "Upsampled frames"). The model side is
-  // unchanged. Files written before it hold 0: read as 1.
+  // unchanged. Files written before it hold 0: read as 1. With 3, stats()
+  // and last_matches()/last_keypoints() describe the upsampled pass (the
+  // keypoint time and RANSAC iterations are summed over both), and an
+  // overlapping detection of either pass wins by inliers, which the
+  // upsampled frame has more of. Keypoints passed in by the caller (MSER,
+  // SIFT vertex descriptors: DesktopDetector) are only mapped, not found
+  // anew on the upsampled frame, so for those indexes the option changes
+  // little but the pixel sizes.
   int scene_upsample = 1;
 };
 

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "core/blur.h"
+#include "core/confidence.h"
 #include "core/delaunay.h"
 #include "core/hessian.h"
 #include "core/kdtree.h"
@@ -63,6 +64,19 @@ Status check_limits(const Limits& l) {
 Limits work_limits(const Limits& l, const Params& params) {
   const int f = params.keypoints.scene_upsample >= 2 ? 2 : 1;
   return l.for_frame(f * l.max_width, f * l.max_height);
+}
+
+// check_limits(), and the upsampled frame within the largest side too (a
+// larger one would ask for a workspace of gigabytes).
+Status check_limits(const Limits& l, const Params& params) {
+  if (Status s = check_limits(l); !s) return s;
+  const Limits work = work_limits(l, params);
+  if (work.max_width <= Limits::kMaxSide && work.max_height <= Limits::kMaxSide)
+    return Status::ok();
+  return {StatusCode::kInvalidArgument,
+          "detector limits out of range: with keypoints.scene_upsample 2 or 3 the frame is "
+          "upsampled 2x, so at most " +
+              std::to_string(Limits::kMaxSide / 2) + " px a side"};
 }
 
 std::uint32_t largest_model(const ModelIndex& index) {
@@ -223,7 +237,7 @@ std::size_t Detector::header_bytes() {
 }
 
 std::size_t Detector::workspace_bytes(const ModelIndex& index, const Limits& limits) {
-  if (!check_limits(limits)) return 0;
+  if (!check_limits(limits, index.params())) return 0;
   // The constructor's own reserve() calls, counted: nothing is allocated.
   MeasuringResource measure;
   const Impl dry(index, limits, &measure, false);
@@ -232,7 +246,7 @@ std::size_t Detector::workspace_bytes(const ModelIndex& index, const Limits& lim
 
 Detector::Detector(const ModelIndex& index, const Limits& limits)
     : index_(&index), limits_(limits) {
-  status_ = check_limits(limits);
+  status_ = check_limits(limits, index.params());
   if (!status_) return;
   const std::size_t bytes = workspace_bytes(index, limits);
   owned_ = ::operator new (bytes, std::align_val_t{kWorkspaceAlignment});
@@ -241,7 +255,7 @@ Detector::Detector(const ModelIndex& index, const Limits& limits)
 
 Detector::Detector(const ModelIndex& index, const Limits& limits, void* buffer, std::size_t size)
     : index_(&index), limits_(limits) {
-  status_ = check_limits(limits);
+  status_ = check_limits(limits, index.params());
   if (!status_) return;
   if (buffer == nullptr || reinterpret_cast<std::uintptr_t>(buffer) % kWorkspaceAlignment != 0) {
     status_ = {StatusCode::kInvalidArgument, "detector workspace buffer must be 64-byte aligned"};
@@ -383,6 +397,23 @@ void Detector::Impl::merge(const DetectionList& more, DetectionList& out) {
     if (!out.push_back(d)) stats.truncated_detections = true;
   }
   keep_best_of_overlapping(out);
+  // Each pass kept up to max_detections; together they may not exceed it.
+  // The least supported go first (fewer inliers, then the smaller score
+  // over chance, then the later one), in place: no allocation.
+  const auto most = static_cast<std::size_t>(limits.max_detections);
+  while (out.size() > most) {
+    std::size_t worst = 0;
+    for (std::size_t i = 1; i < out.size(); ++i) {
+      const Detection& a = out[i];
+      const Detection& w = out[worst];
+      if (a.inliers < w.inliers ||
+          (a.inliers == w.inliers && a.score - a.chance <= w.score - w.chance))
+        worst = i;
+    }
+    for (std::size_t i = worst; i + 1 < out.size(); ++i) out[i] = out[i + 1];
+    out.truncate(out.size() - 1);
+    stats.truncated_detections = true;
+  }
 }
 
 Status Detector::detect(ImageView frame, const Keypoint* keypoints, int count, DetectionList& out) {
@@ -451,6 +482,9 @@ void Detector::Impl::map_to_frame(DetectionList& out) {
     d.homography = homography_from_upsampled(d.homography);
     for (Point2f& c : d.corners) c = {from_upsampled(c.x), from_upsampled(c.y)};
     d.rms_error *= 0.5;
+    // From the mapped support (the inliers stay those of the upsampled
+    // frame's keypoints: the model was fitted on frames as they are).
+    d.confidence = detection_confidence(d);
   }
   for (Keypoint& k : scene_keypoints) {
     k.x = from_upsampled(k.x);

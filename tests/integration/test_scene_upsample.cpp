@@ -12,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "build/desktop_detect.h"
+#include "core/confidence.h"
 #include "core/index_format.h"
 #include "core/upsample.h"
 #include "opencv_scenes.h"
@@ -164,6 +165,10 @@ TEST_F(SceneUpsample, SamePoseAsWithoutWhereBothFind) {
   const ModelInfo& model = on_->index.model(0);
   EXPECT_LT(test::max_corner_error(on[0], scene.truth, model), 3.0);
   EXPECT_LT(test::max_corner_error(off[0], scene.truth, model), 3.0);
+  // The confidence is that of the support as reported, in frame pixels
+  // (its model weighs the reprojection error, which the map halves).
+  EXPECT_GT(on[0].rms_error, 0.0);
+  EXPECT_DOUBLE_EQ(on[0].confidence, detection_confidence(on[0]));
   // Sampled keypoints are reported in frame pixels too.
   Detector core(on_->index);
   ASSERT_TRUE(core.detect(test::view(scene.image), on).is_ok());
@@ -207,6 +212,37 @@ TEST_F(SceneUpsample, BothPassesKeepOneDetectionPerInstance) {
     EXPECT_LT(test::max_corner_error(found[0], scene.truth, both_->index.model(0)), 3.0)
         << "scale " << scale;
   }
+}
+
+// Both passes together keep to Limits::max_detections: two boxes side by
+// side are both found with the default limits, one with max_detections 1.
+TEST_F(SceneUpsample, BothPassesKeepToMaxDetections) {
+  const SmallScene scene = small_box_scene(*box_, 0.6);
+  ASSERT_FALSE(scene.image.empty());
+  cv::Mat two;
+  cv::hconcat(scene.image, scene.image, two);
+  DetectionList found;
+  Detector all(both_->index, Limits{}.for_frame(two.cols, two.rows));
+  ASSERT_TRUE(all.detect(test::view(two), found).is_ok());
+  EXPECT_EQ(found.size(), 2u);
+  Limits one = Limits{}.for_frame(two.cols, two.rows);
+  one.max_detections = 1;
+  Detector first(both_->index, one);
+  ASSERT_TRUE(first.detect(test::view(two), found).is_ok());
+  EXPECT_EQ(found.size(), 1u);
+  EXPECT_TRUE(first.stats().truncated_detections);
+}
+
+// The upsampled frame must fit the largest side: larger limits are refused
+// with a status, not a failed allocation.
+TEST_F(SceneUpsample, LimitsBeyondHalfTheLargestSideAreRefused) {
+  const Limits wide = Limits{}.for_frame(Limits::kMaxSide / 2 + 1, 64);
+  EXPECT_EQ(Detector::workspace_bytes(on_->index, wide), 0u);
+  Detector detector(on_->index, wide);
+  EXPECT_FALSE(detector.status());
+  EXPECT_NE(detector.status().message().find("upsampled 2x"), std::string::npos)
+      << detector.status().message();
+  EXPECT_GT(Detector::workspace_bytes(off_->index, wide), 0u) << "refused without upsampling";
 }
 
 }  // namespace
