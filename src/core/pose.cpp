@@ -284,6 +284,8 @@ PoseEstimator::PoseEstimator(std::pmr::memory_resource* memory)
       pair_inlier_(memory),
       pair_dead_(memory),
       match_active_(memory),
+      pair_votes_(memory),
+      match_quality_(memory),
       active_(memory),
       inlier_model_(memory),
       inlier_scene_(memory),
@@ -302,6 +304,8 @@ void PoseEstimator::reserve(int max_matches, int k, std::uint32_t max_model_keyp
   pair_inlier_.reserve(pairs);
   pair_dead_.reserve(pairs);
   match_active_.reserve(n);
+  pair_votes_.reserve(pairs);
+  match_quality_.reserve(n);
   active_.reserve(n);
   inlier_model_.reserve(pairs);
   inlier_scene_.reserve(pairs);
@@ -426,6 +430,19 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     }
   }
   match_active_.assign(static_cast<std::size_t>(n), 1);
+  // Each match's quality for progressive sampling: how many other matches
+  // share its keypoint correspondences. Correct circuits of one object
+  // overlap (neighbouring triangles share edges in the model and the frame
+  // alike); wrong ones rarely agree on a model keypoint for a frame one.
+  pair_votes_.assign(pair_count, 0);
+  for (std::uint32_t p : match_pairs_) ++pair_votes_[p];
+  match_quality_.resize(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    int votes = 0;
+    for (int j = 0; j < k; ++j)
+      votes += pair_votes_[match_pairs_[static_cast<std::size_t>(i) * k + j]];
+    match_quality_[static_cast<std::size_t>(i)] = votes - k;
+  }
 
   KeygraphEstimator estimator{*this,
                               k,
@@ -439,6 +456,7 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
   options.confidence = rp.confidence;
   options.max_iterations = rp.max_iterations;
   options.enumerate_small_pools = true;
+  options.progressive = true;
   // The model's appearance, when the index and the frame allow aligning it;
   // poses it confirms may have less keypoint support.
   const ModelAppearance stored = index.appearance(model_id);
@@ -454,6 +472,12 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
       if (match_active_[i]) active_.push_back(i);
     }
     if (static_cast<int>(active_.size()) < std::max(h, rp.min_inlier_keygraphs)) break;
+    // Best first (ties in selection order) for RansacOptions::progressive.
+    std::sort(active_.begin(), active_.end(), [this](int a, int b) {
+      const int qa = match_quality_[static_cast<std::size_t>(a)];
+      const int qb = match_quality_[static_cast<std::size_t>(b)];
+      return qa != qb ? qa > qb : a < b;
+    });
     Homography best{};
     const RansacStats stats = ransac(estimator, options, rng, best);
     iterations += stats.iterations;

@@ -85,7 +85,9 @@ class PoseEstimator {
   WorkVector<std::uint8_t> pair_inlier_;
   WorkVector<std::uint8_t> pair_dead_;  // explained by an instance already found
   WorkVector<std::uint8_t> match_active_;
-  WorkVector<int> active_;  // indices of matches still in play
+  WorkVector<int> pair_votes_;     // matches that imply each pair
+  WorkVector<int> match_quality_;  // per match: other matches sharing its pairs
+  WorkVector<int> active_;         // indices of matches still in play
 
   WorkVector<Point2f> inlier_model_;
   WorkVector<Point2f> inlier_scene_;

@@ -20,6 +20,15 @@
 // then follows the refit's inlier ratio, so good models stop the loop
 // sooner; stats.refinements counts the refits that improved the best.
 //
+// Progressive sampling (PROSAC, Chum & Matas 2005): when the estimator's
+// samples are ordered best first (RansacOptions::progressive), hypotheses
+// are drawn from a prefix of the pool that grows on PROSAC's schedule, so
+// that likely-inlier samples are tried first and the adaptive count is
+// reached sooner; once the prefix is the whole pool, draws are uniform. An
+// enumerated small pool is then walked in colexicographic order (every
+// combination of the best m samples before any with sample m + 1) and stops
+// by the same adaptive rule instead of trying every combination.
+//
 // The adaptive iteration count uses the fraction of *samples* that are
 // inliers (score.sample_inliers / sample_count): for keygraphs, a keygraph
 // correspondence is an inlier when all keypoint correspondences it implies
@@ -52,6 +61,14 @@ struct RansacOptions {
   // try every one of them once, in order, instead of drawing at random:
   // fewer hypotheses than the cap would draw, and none missed.
   bool enumerate_small_pools = false;
+  // Samples are ordered best first: draw and enumerate progressively
+  // (PROSAC, above). The stopping rule is unchanged: it uses the inlier
+  // fraction of the whole pool, which ordered draws only make conservative.
+  bool progressive = false;
+  // PROSAC's T_N: the number of draws over which the prefix would grow to
+  // the whole pool if sampled as often as uniform draws sample it (the
+  // paper's 200 000).
+  int progressive_horizon = 200000;
 };
 
 struct RansacStats {
@@ -114,6 +131,59 @@ inline bool next_combination(int* s, int h, int n) {
   return true;
 }
 
+// Advances `s` (h increasing indices) to the next combination in
+// colexicographic order: all combinations of {0..m-1} come before any that
+// holds m. Unbounded: the caller stops after C(n, h) combinations.
+inline void next_combination_colex(int* s, int h) {
+  int i = 0;
+  while (i + 1 < h && s[i] + 1 == s[i + 1]) ++i;
+  ++s[i];
+  for (int j = 0; j < i; ++j) s[j] = j;
+}
+
+// PROSAC's growth schedule (Chum & Matas 2005, section 2.2) for a pool of n
+// samples ordered best first, hypotheses of h samples: draw t (1-based)
+// samples from the prefix U_m, m the largest size whose start T'_m <= t,
+// always with the prefix's newest sample m - 1 and h - 1 others from U_{m-1};
+// T'_h = 1, T'_{m+1} = T'_m + ceil(T_{m+1} - T_m) with T_m the expected
+// count of draws from U_m among `horizon` uniform draws. Sizes whose T' are
+// equal are entered together. Once the prefix is the whole pool, uniform.
+class ProgressiveSampler {
+ public:
+  ProgressiveSampler(int n, int h, int horizon) : n_(n), h_(h), size_(h) {
+    double t = horizon;
+    for (int i = 0; i < h; ++i) t *= static_cast<double>(h - i) / (n - i);
+    t_size_ = t;
+    next_start_ = start_after(1);
+  }
+  int prefix() const { return size_; }
+  void draw(Rng& rng, int t, int* out) {
+    while (size_ < n_ && next_start_ <= t) {
+      const double t_next = t_size_ * (size_ + 1) / (size_ + 1 - h_);
+      const long long start = next_start_;
+      t_size_ = t_next;
+      ++size_;
+      next_start_ = size_ < n_ ? start_after(start) : start;
+    }
+    if (size_ >= n_) {
+      draw_distinct(rng, n_, h_, out);
+      return;
+    }
+    out[0] = size_ - 1;
+    if (h_ > 1) draw_distinct(rng, size_ - 1, h_ - 1, out + 1);
+  }
+
+ private:
+  // T'_{size+1} from T'_size = `start`.
+  long long start_after(long long start) const {
+    const double t_next = t_size_ * (size_ + 1) / (size_ + 1 - h_);
+    return start + static_cast<long long>(std::ceil(t_next - t_size_));
+  }
+  int n_, h_, size_;
+  double t_size_;         // T_size
+  long long next_start_;  // T'_{size+1}
+};
+
 // An estimator may draw its own samples (e.g. neighbourhood-guided) by
 // providing `void draw(Rng&, int* sample)`; otherwise samples are uniform.
 template <class E, class = void>
@@ -152,20 +222,31 @@ RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
   bool have_best = false;
   const long long all = combinations_up_to(n, h, options.max_iterations);
   const bool enumerate = options.enumerate_small_pools && all <= options.max_iterations;
+  // Progressive enumeration stops by the adaptive rule; plain enumeration
+  // tries every combination.
+  const bool enumerate_all = enumerate && !options.progressive;
   if (enumerate) {
     stats.required_iterations = static_cast<int>(all);
     for (int i = 0; i < h; ++i) next_sample[i] = i;
   }
+  ProgressiveSampler progressive(n, h, std::max(1, options.progressive_horizon));
   bool more = true;
   while (more && stats.iterations < options.max_iterations &&
-         (enumerate || stats.iterations < options.min_iterations ||
+         (enumerate_all || stats.iterations < options.min_iterations ||
           stats.iterations < stats.required_iterations)) {
     ++stats.iterations;
     if (enumerate) {
       std::copy(next_sample, next_sample + h, sample);
-      more = next_combination(next_sample, h, n);
+      if (options.progressive) {
+        next_combination_colex(next_sample, h);
+        more = stats.iterations < all;
+      } else {
+        more = next_combination(next_sample, h, n);
+      }
     } else if constexpr (has_custom_draw<Estimator>::value) {
       estimator.draw(rng, sample);
+    } else if (options.progressive) {
+      progressive.draw(rng, stats.iterations, sample);
     } else {
       draw_distinct(rng, n, h, sample);
     }
@@ -191,9 +272,12 @@ RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
     have_best = true;
     stats.best = s;
     best_model = model;
-    if (!enumerate)
-      stats.required_iterations = required_iterations(static_cast<double>(s.sample_inliers) / n, h,
-                                                      options.confidence, options.max_iterations);
+    if (!enumerate_all) {
+      const int required = required_iterations(static_cast<double>(s.sample_inliers) / n, h,
+                                               options.confidence, options.max_iterations);
+      stats.required_iterations =
+          enumerate ? static_cast<int>(std::min<long long>(all, required)) : required;
+    }
   }
   return stats;
 }

@@ -4,8 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
+#include <utility>
 #include <vector>
 
 #include "core/homography.h"
@@ -304,6 +306,134 @@ TEST(Ransac, SmallPoolsAreEnumeratedOnce) {
   EXPECT_EQ(combinations_up_to(100, 2, 100), 101);
   EXPECT_EQ(combinations_up_to(100, 2, 10000), 4950);
   EXPECT_EQ(combinations_up_to(7, 3, 1000), 35);
+}
+
+TEST(Ransac, ProgressiveSamplerFollowsThePrefixSchedule) {
+  constexpr int kN = 200;
+  constexpr int kH = 2;
+  ProgressiveSampler sampler(kN, kH, 2000);
+  Rng rng(5);
+  int sample[kH];
+  int last_prefix = 0;
+  int reached_all_at = 0;
+  for (int t = 1; t <= 4000; ++t) {
+    sampler.draw(rng, t, sample);
+    const int prefix = sampler.prefix();
+    ASSERT_GE(prefix, last_prefix) << "the prefix never shrinks";
+    last_prefix = prefix;
+    if (t == 1) {
+      // The first hypothesis is the two best samples.
+      EXPECT_EQ(std::min(sample[0], sample[1]), 0);
+      EXPECT_EQ(std::max(sample[0], sample[1]), 1);
+    }
+    EXPECT_NE(sample[0], sample[1]);
+    for (int v : sample) {
+      EXPECT_GE(v, 0);
+      EXPECT_LT(v, prefix);
+    }
+    if (prefix < kN) {
+      EXPECT_EQ(sample[0], prefix - 1) << "a new prefix's draws hold its newest sample";
+    } else if (reached_all_at == 0) {
+      reached_all_at = t;
+    }
+  }
+  // T_m = T_N m(m-1) / (N(N-1)) draws from U_m: the whole pool at about the
+  // horizon T_N, not before half of it (the ceilings round up).
+  EXPECT_GT(reached_all_at, 1000);
+  EXPECT_LE(reached_all_at, 2000 + kN);
+  // Then uniform: the last samples are drawn from the whole pool.
+  int high = 0;
+  for (int t = 4001; t <= 4200; ++t) {
+    sampler.draw(rng, t, sample);
+    high += sample[0] >= kN / 2 ? 1 : 0;
+  }
+  EXPECT_GT(high, 60);
+}
+
+TEST(Ransac, ProgressiveEnumerationIsColexicographic) {
+  FixedFractionEstimator est;
+  est.samples = 8;
+  est.size = 3;
+  est.sample_inliers = 1;  // never stops early
+  RansacOptions options;
+  options.max_iterations = 1000;
+  options.enumerate_small_pools = true;
+  options.progressive = true;
+  Rng rng(6);
+  int best = 0;
+  const RansacStats stats = ransac(est, options, rng, best);
+  EXPECT_EQ(stats.iterations, 56);  // C(8, 3)
+  ASSERT_EQ(est.drawn.size(), 56u);
+  std::set<std::vector<int>> seen;
+  int largest = 0;
+  for (std::size_t i = 0; i < est.drawn.size(); ++i) {
+    const std::vector<int>& s = est.drawn[i];
+    EXPECT_LT(s[0], s[1]);
+    EXPECT_LT(s[1], s[2]);
+    EXPECT_LT(s[2], 8);
+    // Every combination of the best m samples before any with sample m:
+    // the first C(m, 3) hold only samples below m.
+    EXPECT_GE(s[2], largest);
+    largest = s[2];
+    seen.insert(s);
+  }
+  EXPECT_EQ(seen.size(), 56u);
+  EXPECT_EQ((std::vector<int>{0, 1, 2}), est.drawn[0]);
+  EXPECT_EQ((std::vector<int>{0, 1, 3}), est.drawn[1]);
+
+  // A good pool stops by the adaptive rule instead of trying them all.
+  FixedFractionEstimator good;
+  good.samples = 8;
+  good.size = 3;
+  good.sample_inliers = 7;  // ceil(log(0.01) / log(1 - (7/8)^3)) = 5
+  const RansacStats early = ransac(good, options, rng, best);
+  EXPECT_EQ(required_iterations(7.0 / 8.0, 3, 0.99, 1000), 5);
+  EXPECT_EQ(early.required_iterations, 5);
+  EXPECT_EQ(early.iterations, 5);
+}
+
+// Samples ordered by a noisy quality (inliers score higher on average, as
+// keygraph correspondences that share keypoint pairs with others do):
+// within a budget far below what uniform draws need at 10 % inliers,
+// progressive draws find the homography on every seed.
+TEST(Ransac, ProgressiveDrawsFindPosesUniformDrawsMiss) {
+  int progressive_found = 0, uniform_found = 0;
+  constexpr int kSeeds = 10;
+  for (int seed = 0; seed < kSeeds; ++seed) {
+    const Correspondences raw = make_correspondences(30, 270, 0.5, 100 + seed);
+    // Quality: an inlier's is higher on average, with overlap.
+    Rng noise(200 + seed);
+    std::vector<std::pair<double, int>> order;
+    for (int i = 0; i < 300; ++i) {
+      const Point2f t = kg::apply(kTruth, raw.model[static_cast<std::size_t>(i)]);
+      const bool inlier = std::hypot(t.x - raw.scene[static_cast<std::size_t>(i)].x,
+                                     t.y - raw.scene[static_cast<std::size_t>(i)].y) < 3.0;
+      order.push_back({(inlier ? 1.0 : 0.0) + 0.6 * gaussian(noise), i});
+    }
+    std::sort(order.begin(), order.end(), [](const auto& a, const auto& b) { return a > b; });
+    Correspondences c;
+    for (const auto& [quality, i] : order) {
+      c.model.push_back(raw.model[static_cast<std::size_t>(i)]);
+      c.scene.push_back(raw.scene[static_cast<std::size_t>(i)]);
+    }
+    for (const bool progressive : {true, false}) {
+      PointEstimator est;
+      est.model = &c.model;
+      est.scene = &c.scene;
+      RansacOptions options;
+      options.max_iterations = 300;  // uniform draws need about 46 000 at 10 %
+      options.progressive = progressive;
+      Rng rng(300 + seed);
+      Homography best{};
+      const RansacStats stats = ransac(est, options, rng, best);
+      // At least half the 30 true correspondences (a minimal sample of
+      // noisy points, no local optimisation here, keeps 18 to 30 of them).
+      const bool found = stats.best.point_inliers >= 15;
+      (progressive ? progressive_found : uniform_found) += found ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(progressive_found, kSeeds);
+  EXPECT_LE(uniform_found, 2);
 }
 
 TEST(Ransac, RequiredIterationsEdgeCases) {
