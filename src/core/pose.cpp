@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 
 #include "core/confidence.h"
 #include "core/homography.h"
@@ -254,6 +255,14 @@ struct KeygraphEstimator {
     return true;
   }
 
+  // Whether the last scored model explains sample i (all its pairs inliers).
+  bool sample_inlier(int i) const {
+    const std::uint32_t* ids = &s.match_pairs_[static_cast<std::size_t>(s.active_[i]) * k];
+    for (int j = 0; j < k; ++j)
+      if (!s.pair_inlier_[ids[j]]) return false;
+    return true;
+  }
+
   RansacScore score(const Homography& hom) {
     RansacScore r;
     const std::size_t pairs = s.pairs_.size();
@@ -456,7 +465,12 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
   options.confidence = rp.confidence;
   options.max_iterations = rp.max_iterations;
   options.enumerate_small_pools = true;
+  // Correspondences ordered by shared pairs (above), PROSAC's schedule;
+  // a prefix holding 16 inlier correspondences of the best pose may end the
+  // search early (a floor of 4 or 8 stopped on wrong clusters of the sign
+  // benchmark's small signs; docs/RESULTS.md, "Progressive sampling").
   options.progressive = true;
+  options.prefix_min_sample_inliers = 16;
   // The model's appearance, when the index and the frame allow aligning it;
   // poses it confirms may have less keypoint support.
   const ModelAppearance stored = index.appearance(model_id);

@@ -62,9 +62,17 @@ struct RansacOptions {
   // fewer hypotheses than the cap would draw, and none missed.
   bool enumerate_small_pools = false;
   // Samples are ordered best first: draw and enumerate progressively
-  // (PROSAC, above). The stopping rule is unchanged: it uses the inlier
-  // fraction of the whole pool, which ordered draws only make conservative.
+  // (PROSAC, above). The whole pool's stopping rule still holds (ordered
+  // draws only make it conservative); prefix_min_sample_inliers adds
+  // PROSAC's rule on prefixes.
   bool progressive = false;
+  // PROSAC's maximality on prefixes: with an estimator that reports its
+  // inlier samples (`bool sample_inlier(int) const`, after score()), stop
+  // once some prefix U_m holding at least this many inlier samples of the
+  // best model has had enough draws for its own inlier fraction; 0: only
+  // the whole pool's rule. The floor stands in for PROSAC's non-randomness
+  // test: any hypothesis makes its own h samples inliers.
+  int prefix_min_sample_inliers = 0;
   // PROSAC's T_N: the number of draws over which the prefix would grow to
   // the whole pool if sampled as often as uniform draws sample it (the
   // paper's 200 000).
@@ -157,14 +165,18 @@ class ProgressiveSampler {
     next_start_ = start_after(1);
   }
   int prefix() const { return size_; }
+  // The draws that lie wholly inside the current prefix U_m (m < n) over
+  // the whole schedule: those before it grows past m, T'_{m+1} - 1.
+  long long draws_inside_prefix() const { return next_start_ - 1; }
+  // Grows the prefix by one sample, as draws do when they reach T'_{m+1}.
+  void grow() {
+    const long long start = next_start_;
+    t_size_ = t_size_ * (size_ + 1) / (size_ + 1 - h_);
+    ++size_;
+    next_start_ = size_ < n_ ? start_after(start) : start;
+  }
   void draw(Rng& rng, int t, int* out) {
-    while (size_ < n_ && next_start_ <= t) {
-      const double t_next = t_size_ * (size_ + 1) / (size_ + 1 - h_);
-      const long long start = next_start_;
-      t_size_ = t_next;
-      ++size_;
-      next_start_ = size_ < n_ ? start_after(start) : start;
-    }
+    while (size_ < n_ && next_start_ <= t) grow();
     if (size_ >= n_) {
       draw_distinct(rng, n_, h_, out);
       return;
@@ -201,11 +213,48 @@ struct has_refine<
     E, std::void_t<decltype(std::declval<E&>().refine(std::declval<typename E::Model&>()))>>
     : std::true_type {};
 
+// An estimator may say which samples the last scored model explains:
+// `bool sample_inlier(int) const` (for the prefix stopping rule).
+template <class E, class = void>
+struct has_sample_inlier : std::false_type {};
+template <class E>
+struct has_sample_inlier<
+    E, std::void_t<decltype(std::declval<const E&>().sample_inlier(std::declval<int>()))>>
+    : std::true_type {};
+
 inline constexpr int kRefineRounds = 4;
 
 inline bool better_score(const RansacScore& a, const RansacScore& b) {
   return a.point_inliers > b.point_inliers ||
          (a.point_inliers == b.point_inliers && a.cost < b.cost);
+}
+
+// The fewest draws after which some prefix U_m (m < n) of the ordered pool
+// with at least prefix_min_sample_inliers inlier samples of the last scored
+// model has been sampled enough for its own inlier fraction (confidence
+// P), counting only the draws that lie inside U_m; the cap when none has.
+template <class Estimator>
+int prefix_required(const Estimator& estimator, const RansacOptions& options, int n, int h,
+                    bool enumerate) {
+  int best = options.max_iterations;
+  int inliers = 0;
+  // The schedule's prefix walked along with m (draws inside U_m).
+  ProgressiveSampler schedule(n, h, std::max(1, options.progressive_horizon));
+  long long combinations = 1;  // C(m, h), enumeration
+  for (int m = 1; m < n; ++m) {
+    inliers += estimator.sample_inlier(m - 1) ? 1 : 0;
+    if (m < h) continue;
+    if (m > h) {
+      if (enumerate) combinations = combinations * m / (m - h);  // small: C(n, h) <= the cap
+      schedule.grow();
+    }
+    if (inliers < options.prefix_min_sample_inliers) continue;
+    const int required = required_iterations(static_cast<double>(inliers) / m, h,
+                                             options.confidence, options.max_iterations);
+    const long long inside = enumerate ? combinations : schedule.draws_inside_prefix();
+    if (required <= inside) best = std::min(best, required);
+  }
+  return best;
 }
 
 template <class Estimator>
@@ -273,8 +322,12 @@ RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
     stats.best = s;
     best_model = model;
     if (!enumerate_all) {
-      const int required = required_iterations(static_cast<double>(s.sample_inliers) / n, h,
-                                               options.confidence, options.max_iterations);
+      int required = required_iterations(static_cast<double>(s.sample_inliers) / n, h,
+                                         options.confidence, options.max_iterations);
+      if constexpr (has_sample_inlier<Estimator>::value) {
+        if (options.progressive && options.prefix_min_sample_inliers > 0)
+          required = std::min(required, prefix_required(estimator, options, n, h, enumerate));
+      }
       stats.required_iterations =
           enumerate ? static_cast<int>(std::min<long long>(all, required)) : required;
     }

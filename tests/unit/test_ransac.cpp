@@ -436,6 +436,66 @@ TEST(Ransac, ProgressiveDrawsFindPosesUniformDrawsMiss) {
   EXPECT_LE(uniform_found, 2);
 }
 
+// PointEstimator that also says which samples its last scored model
+// explains (for the prefix stopping rule).
+struct FlaggingPointEstimator : PointEstimator {
+  std::vector<char> inlier;
+  RansacScore score(const Model& h) {
+    inlier.assign(model->size(), 0);
+    for (std::size_t i = 0; i < model->size(); ++i)
+      inlier[i] = reprojection(h, (*model)[i], (*scene)[i]) < threshold ? 1 : 0;
+    return PointEstimator::score(h);
+  }
+  bool sample_inlier(int i) const { return inlier[static_cast<std::size_t>(i)] != 0; }
+};
+
+// The best 30 of 200 samples are all inliers (40 in all): the whole
+// pool's fraction (0.2) asks for about 2 900 draws, the prefix's for a few,
+// and the rule counts only draws inside that prefix.
+TEST(Ransac, PrefixRuleStopsOnceAnInlierPrefixIsSampledEnough) {
+  const Correspondences raw = make_correspondences(40, 160, 0.3, 31);
+  Correspondences c;
+  std::vector<int> rest;
+  for (int i = 0; i < 200; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    const Point2f t = kg::apply(kTruth, raw.model[u]);
+    const bool inlier = std::hypot(t.x - raw.scene[u].x, t.y - raw.scene[u].y) < 3.0;
+    if (inlier && c.model.size() < 30) {
+      c.model.push_back(raw.model[u]);
+      c.scene.push_back(raw.scene[u]);
+    } else {
+      rest.push_back(i);
+    }
+  }
+  ASSERT_EQ(c.model.size(), 30u);
+  for (int i : rest) {
+    c.model.push_back(raw.model[static_cast<std::size_t>(i)]);
+    c.scene.push_back(raw.scene[static_cast<std::size_t>(i)]);
+  }
+  RansacOptions options;
+  options.max_iterations = 5000;
+  options.progressive = true;
+  const auto run = [&](int prefix_floor) {
+    FlaggingPointEstimator est;
+    est.model = &c.model;
+    est.scene = &c.scene;
+    options.prefix_min_sample_inliers = prefix_floor;
+    Rng rng(7);
+    Homography best{};
+    return ransac(est, options, rng, best);
+  };
+  const RansacStats whole = run(0);
+  const RansacStats prefix = run(8);
+  EXPECT_GE(whole.best.point_inliers, 38);
+  EXPECT_GE(prefix.best.point_inliers, 38);
+  EXPECT_EQ(whole.required_iterations,
+            required_iterations(static_cast<double>(whole.best.sample_inliers) / 200, 4,
+                                options.confidence, options.max_iterations));
+  EXPECT_GT(whole.iterations, 2000);
+  EXPECT_LT(prefix.iterations, 100);
+  EXPECT_LE(prefix.required_iterations, prefix.iterations);  // stopped by the rule, not the cap
+}
+
 TEST(Ransac, RequiredIterationsEdgeCases) {
   EXPECT_EQ(required_iterations(0.0, 4, 0.99, 2000), 2000);
   EXPECT_EQ(required_iterations(1.0, 4, 0.99, 2000), 1);
