@@ -219,6 +219,14 @@ struct RansacParams {
   int confirmed_min_inliers = 8;
   float confirmed_min_verification_z = 2.f;
   float confirmed_min_appearance = 0.8f;
+  // Not in the paper (issue 14, lever 1): a keygraph correspondence of 3 or
+  // more vertices is dropped before RANSAC when the triangle of its first
+  // three vertices, sampled in the model's appearance and in the frame
+  // through the affine frame they define, correlates below this (zero-mean
+  // normalised, in [0, 1)); 0 is off. Correspondences that cannot be judged
+  // (no appearance, a tiny or flat triangle) are kept. Format 6.4; 0 (off)
+  // in older files.
+  float min_triangle_correlation = 0.f;
 };
 
 // Not in the paper: simulated views of each model, rendered by the builder
