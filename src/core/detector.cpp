@@ -152,9 +152,9 @@ struct Detector::Impl {
   // The Hessian's keypoints of `frame`, then run().
   Status detect_keypoints_and_run(ImageView frame, DetectionList& out);
   // With ransac.min_triangle_correlation > 0: measures each selected
-  // correspondence's triangle patch on `blurred` and drops, in place and in
+  // correspondence's triangle patch on `frame` (the blurred frame) and drops, in place and in
   // order, those that correlate below the threshold.
-  void check_triangle_patches(ImageView blurred);
+  void check_triangle_patches(ImageView frame);
   // scene_upsample 3: the upsampled pass's detections (frame pixels) added
   // to the frame's, then the best of overlapping ones kept.
   void merge(const DetectionList& more, DetectionList& out);
@@ -498,7 +498,7 @@ void Detector::Impl::map_to_frame(DetectionList& out) {
   }
 }
 
-void Detector::Impl::check_triangle_patches(ImageView blurred) {
+void Detector::Impl::check_triangle_patches(ImageView frame) {
   const float threshold = index->params().ransac.min_triangle_correlation;
   if (!(threshold > 0.f) || vertex_count(index->params().graph.structure) < 3) return;
   const Point2f* model_points = index->keypoints();
@@ -511,7 +511,7 @@ void Detector::Impl::check_triangle_patches(ImageView blurred) {
                               scene_points[static_cast<std::size_t>(m.scene_vertices[1])],
                               scene_points[static_cast<std::size_t>(m.scene_vertices[2])]};
     const TrianglePatch patch =
-        triangle_patch_correlation(index->appearance(m.model_id), blurred, model, scene);
+        triangle_patch_correlation(index->appearance(m.model_id), frame, model, scene);
     if (patch.measured) {
       m.patch_correlation = patch.correlation;
       if (patch.correlation < threshold) continue;

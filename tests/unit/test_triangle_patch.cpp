@@ -81,7 +81,8 @@ TEST_F(TrianglePatchTest, ResolutionChangeStillCorrelates) {
   // stores large models): the frame, five times finer, is averaged.
   cv::Mat small;
   cv::resize(model_, small, cv::Size(), 1.0 / 3.0, 1.0 / 3.0, cv::INTER_AREA);
-  const ModelAppearance look = look_of(small, static_cast<float>(small.cols) / model_.cols);
+  const ModelAppearance look =
+      look_of(small, static_cast<float>(small.cols) / static_cast<float>(model_.cols));
   const Point2f model[3] = {{40.f, 50.f}, {130.f, 62.f}, {85.f, 140.f}};
   const Point2f scene[3] = {warp(model[0]), warp(model[1]), warp(model[2])};
   const TrianglePatch right = check(look, model, scene);
