@@ -102,6 +102,9 @@ struct DetectStats {
   // Keygraph correspondences whose arcs all matched but a vertex pair did
   // not (vertex descriptors only).
   long long vertex_rejections = 0;
+  // Keygraph correspondences dropped by the triangle patch check
+  // (RansacParams::min_triangle_correlation); correspondences counts them.
+  int patch_rejections = 0;
   int ransac_iterations = 0;  // summed over models and instances
   bool truncated_keypoints = false;
   bool truncated_arc_matches = false;
@@ -168,6 +171,10 @@ struct KeygraphMatch {
   int model_id = -1;
   std::uint32_t model_vertices[4] = {0, 0, 0, 0};
   std::int32_t scene_vertices[4] = {0, 0, 0, 0};  // indices into the frame's keypoints
+  // The triangle patch correlation of the first three vertices
+  // (RansacParams::min_triangle_correlation), in [-1, 1]; 0, neutral, when
+  // the check is off or could not judge the correspondence.
+  float patch_correlation = 0.f;
 };
 
 class Detector {

@@ -19,6 +19,7 @@
 #include "core/sampling.h"
 #include "core/selection.h"
 #include "core/strongest.h"
+#include "core/triangle_patch.h"
 #include "core/upsample.h"
 #include "core/vertex_descriptor.h"
 #include "core/workspace.h"
@@ -150,6 +151,10 @@ struct Detector::Impl {
   void map_to_frame(DetectionList& out);
   // The Hessian's keypoints of `frame`, then run().
   Status detect_keypoints_and_run(ImageView frame, DetectionList& out);
+  // With ransac.min_triangle_correlation > 0: measures each selected
+  // correspondence's triangle patch on `frame` (the blurred frame) and drops, in place and in
+  // order, those that correlate below the threshold.
+  void check_triangle_patches(ImageView frame);
   // scene_upsample 3: the upsampled pass's detections (frame pixels) added
   // to the frame's, then the best of overlapping ones kept.
   void merge(const DetectionList& more, DetectionList& out);
@@ -493,6 +498,30 @@ void Detector::Impl::map_to_frame(DetectionList& out) {
   }
 }
 
+void Detector::Impl::check_triangle_patches(ImageView frame) {
+  const float threshold = index->params().ransac.min_triangle_correlation;
+  if (!(threshold > 0.f) || vertex_count(index->params().graph.structure) < 3) return;
+  const Point2f* model_points = index->keypoints();
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < matches.size(); ++i) {
+    KeygraphMatch& m = matches[i];
+    const Point2f model[3] = {model_points[m.model_vertices[0]], model_points[m.model_vertices[1]],
+                              model_points[m.model_vertices[2]]};
+    const Point2f scene[3] = {scene_points[static_cast<std::size_t>(m.scene_vertices[0])],
+                              scene_points[static_cast<std::size_t>(m.scene_vertices[1])],
+                              scene_points[static_cast<std::size_t>(m.scene_vertices[2])]};
+    const TrianglePatch patch =
+        triangle_patch_correlation(index->appearance(m.model_id), frame, model, scene);
+    if (patch.measured) {
+      m.patch_correlation = patch.correlation;
+      if (patch.correlation < threshold) continue;
+    }
+    matches[kept++] = m;
+  }
+  stats.patch_rejections = static_cast<int>(matches.size() - kept);
+  matches.resize(kept);
+}
+
 void Detector::Impl::keep_strongest(const Keypoint* keypoints, int count,
                                     const std::uint8_t* descriptors) {
   // A heap of indices (its front the weakest kept), then strongest first.
@@ -582,6 +611,7 @@ Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count
     in.scene_inverse_norms = scene_inverse_norms.data();
   }
   selector.select(in, limits, matches, stats);
+  check_triangle_patches(view_of(blurred));
   stats.ms_select = ms_since(t);
 
   // Pose per model, over that model's correspondences.

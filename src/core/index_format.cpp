@@ -117,6 +117,9 @@ Status validate_params(const Params& p) {
     return bad("max_relative_length", "must be >= 0");
   if (p.descriptor.max_search_leaves < 0)
     return bad("descriptor.max_search_leaves", "must be >= 0");
+  if (!(std::isfinite(p.ransac.min_triangle_correlation) &&
+        p.ransac.min_triangle_correlation >= 0.f && p.ransac.min_triangle_correlation < 1.f))
+    return bad("ransac.min_triangle_correlation", "must be in [0, 1) (0: off)");
   if (p.descriptor.search_reference_models < 0)
     return bad("descriptor.search_reference_models", "must be >= 0 (0: a fixed search budget)");
   if (!(std::isfinite(p.keypoints.hessian_threshold) && p.keypoints.hessian_threshold >= 0.f))

@@ -30,7 +30,9 @@ inline constexpr std::uint8_t kMagic[8] = {0x89, 'K', 'G', 'I', '\r', '\n', 0x1A
 // 6.3: descriptor.search_reference_models (the search budget grows with
 // the index's models); older files read it as 0, a fixed budget, as they were searched.
 inline constexpr std::uint16_t kVersionMajor = 6;
-inline constexpr std::uint16_t kVersionMinor = 3;
+// 6.4: ransac.min_triangle_correlation (the triangle patch check of each
+// correspondence); older files read it as 0, off, as they were matched.
+inline constexpr std::uint16_t kVersionMinor = 4;
 inline constexpr std::size_t kAlignment = 64;
 
 inline constexpr std::size_t kHeaderSize = 64;
@@ -226,6 +228,7 @@ void visit_params(P& p, F&& f) {
   f("ransac.confirmed_min_appearance", p.ransac.confirmed_min_appearance);          // 6.2
   f("descriptor.search_reference_models", p.descriptor.search_reference_models);    // 6.3
   f("keypoints.scene_upsample", p.keypoints.scene_upsample);  // 6.3; 0 in older files: read as 1
+  f("ransac.min_triangle_correlation", p.ransac.min_triangle_correlation);  // 6.4; 0: off
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }

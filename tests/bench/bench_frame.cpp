@@ -12,7 +12,8 @@
 // the paper's one-object setting, an index of box.png alone; and the 10
 // models without their appearances (detect_no_appearance/) and searched in
 // each frame and in the frame upsampled 2x (keypoints.scene_upsample 3,
-// detect_upsampled/). Frames:
+// detect_upsampled/), and with the triangle patch check on
+// (detect_triangle_check/). Frames:
 // box_in_scene.png (holds box), graf3.png (holds the graf crop), aero1.jpg,
 // leuvenA.jpg, messi5.jpg and fruits.jpg, resized to 640x480 (INTER_AREA).
 //
@@ -101,6 +102,9 @@ struct Data {
   // The 10 models searched in the frame and in the frame upsampled 2x
   // (keypoints.scene_upsample 3; the model side is the same).
   EvalIndex upsampled;
+  // The 10 models with the triangle patch check on (ransac.
+  // min_triangle_correlation 0.6; detect_triangle_check/), for its cost.
+  EvalIndex triangle_check;
   std::vector<Frame> frames;
 };
 
@@ -132,6 +136,9 @@ Status load_models(Data& d) {
   Params upsampled = d.params;
   upsampled.keypoints.scene_upsample = 3;
   if (Status s = d.upsampled.build(built, upsampled); !s) return s;
+  Params checked = d.params;
+  checked.ransac.min_triangle_correlation = 0.6f;
+  if (Status s = d.triangle_check.build(built, checked); !s) return s;
   return d.index.build(built, d.params);
 }
 
@@ -219,6 +226,10 @@ void detect_frame(benchmark::State& state, const Frame* f) {
 
 void detect_no_appearance(benchmark::State& state, const Frame* f) {
   detect_with(state, f, data().no_appearance.index());
+}
+
+void detect_triangle_check(benchmark::State& state, const Frame* f) {
+  detect_with(state, f, data().triangle_check.index());
 }
 
 void detect_upsampled(benchmark::State& state, const Frame* f) {
@@ -489,6 +500,7 @@ void register_benchmarks() {
                                               {"detect_box_only/", detect_box_only},
                                               {"detect_no_appearance/", detect_no_appearance},
                                               {"detect_upsampled/", detect_upsampled},
+                                              {"detect_triangle_check/", detect_triangle_check},
                                               {"orb_pipeline/", orb_pipeline},
                                               {"hessian/", hessian_stage},
                                               {"blur/", blur_stage},

@@ -1104,6 +1104,9 @@ TEST(Golden, EveryGoldenLoadsAndDetects) {
     // The search budget grows from 6.3 on; older files keep it fixed.
     EXPECT_EQ(index.params().descriptor.search_reference_models,
               index.version_minor() >= 3 ? 10 : 0);
+    // The triangle patch check (6.4) is off in every file: older ones read
+    // their zero, and the default is off.
+    EXPECT_EQ(index.params().ransac.min_triangle_correlation, 0.f);
     if (index.version_minor() >= 2) {
       ASSERT_TRUE(index.has_appearance());
       const ModelAppearance look = index.appearance(0);
@@ -1632,6 +1635,13 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
   b = bytes();
   put_params(b, p);
   EXPECT_TRUE(rejected(b, "parameter descriptor.max_search_leaves must be >= 0"));
+  for (const float correlation : {-0.5f, 1.f, std::numeric_limits<float>::quiet_NaN()}) {
+    p = paper_params();
+    p.ransac.min_triangle_correlation = correlation;
+    b = bytes();
+    put_params(b, p);
+    EXPECT_TRUE(rejected(b, "parameter ransac.min_triangle_correlation must be in [0, 1)"));
+  }
   p = paper_params();
   p.descriptor.search_reference_models = -1;
   b = bytes();

@@ -1,0 +1,130 @@
+// The triangle patch check (core/triangle_patch.h) on a synthetic texture
+// and its affine warp: a right triangle correspondence correlates high,
+// also across a resolution change, a wrong one low, and triangles that
+// cannot be judged (degenerate, tiny, flat, no appearance) are not measured.
+#include "core/triangle_patch.h"
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include "alloc_counter.h"
+
+namespace kg {
+namespace {
+
+// Smoothed uniform noise: texture at every scale the tests use.
+cv::Mat texture(int size, unsigned seed) {
+  cv::Mat noise(size, size, CV_8U);
+  cv::RNG rng(seed);
+  rng.fill(noise, cv::RNG::UNIFORM, 0, 256);
+  cv::Mat smooth;
+  cv::GaussianBlur(noise, smooth, cv::Size(), 2.0);
+  cv::normalize(smooth, smooth, 0, 255, cv::NORM_MINMAX);
+  return smooth;
+}
+
+ModelAppearance look_of(const cv::Mat& m, float scale) {
+  ModelAppearance a;
+  a.pixels = m.data;
+  a.width = m.cols;
+  a.height = m.rows;
+  a.scale = scale;
+  return a;
+}
+
+// Model pixels -> frame pixels: rotation by 25 degrees, scale 1.6, shear.
+const cv::Matx23d kAffine(1.35, -0.80, 120.0, 0.62, 1.52, 40.0);
+
+Point2f warp(const Point2f& p) {
+  return {static_cast<float>(kAffine(0, 0) * p.x + kAffine(0, 1) * p.y + kAffine(0, 2)),
+          static_cast<float>(kAffine(1, 0) * p.x + kAffine(1, 1) * p.y + kAffine(1, 2))};
+}
+
+class TrianglePatchTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    model_ = texture(200, 7);
+    cv::warpAffine(model_, frame_, cv::Mat(kAffine), cv::Size(520, 520), cv::INTER_LINEAR);
+    cv::GaussianBlur(frame_, frame_, cv::Size(), 0.8);
+  }
+  ImageView frame() const { return ImageView(frame_.data, frame_.cols, frame_.rows, frame_.step); }
+  TrianglePatch check(const ModelAppearance& look, const Point2f* model,
+                      const Point2f* scene) const {
+    return triangle_patch_correlation(look, frame(), model, scene);
+  }
+  cv::Mat model_, frame_;
+};
+
+TEST_F(TrianglePatchTest, RightCorrespondenceCorrelatesHighWrongOneLow) {
+  const ModelAppearance look = look_of(model_, 1.f);
+  const Point2f model[3] = {{60.f, 60.f}, {110.f, 72.f}, {82.f, 120.f}};
+  const Point2f scene[3] = {warp(model[0]), warp(model[1]), warp(model[2])};
+  const TrianglePatch right = check(look, model, scene);
+  ASSERT_TRUE(right.measured);
+  EXPECT_GT(right.correlation, 0.9f);
+  // The same model triangle paired with the frame triangle of another place.
+  const Point2f elsewhere[3] = {{130.f, 140.f}, {180.f, 152.f}, {152.f, 190.f}};
+  const Point2f wrong[3] = {warp(elsewhere[0]), warp(elsewhere[1]), warp(elsewhere[2])};
+  const TrianglePatch other = check(look, model, wrong);
+  ASSERT_TRUE(other.measured);
+  EXPECT_LT(other.correlation, 0.5f);
+  // Vertices paired in another order (the arcs' mirror image).
+  const Point2f swapped[3] = {scene[1], scene[0], scene[2]};
+  const TrianglePatch mirrored = check(look, model, swapped);
+  ASSERT_TRUE(mirrored.measured);
+  EXPECT_LT(mirrored.correlation, 0.5f);
+}
+
+TEST_F(TrianglePatchTest, ResolutionChangeStillCorrelates) {
+  // The appearance stored at a third of the model's size (as the index
+  // stores large models): the frame, five times finer, is averaged.
+  cv::Mat small;
+  cv::resize(model_, small, cv::Size(), 1.0 / 3.0, 1.0 / 3.0, cv::INTER_AREA);
+  const ModelAppearance look =
+      look_of(small, static_cast<float>(small.cols) / static_cast<float>(model_.cols));
+  const Point2f model[3] = {{40.f, 50.f}, {130.f, 62.f}, {85.f, 140.f}};
+  const Point2f scene[3] = {warp(model[0]), warp(model[1]), warp(model[2])};
+  const TrianglePatch right = check(look, model, scene);
+  ASSERT_TRUE(right.measured);
+  EXPECT_GT(right.correlation, 0.85f);
+  const Point2f swapped[3] = {scene[2], scene[1], scene[0]};
+  const TrianglePatch wrong = check(look, model, swapped);
+  ASSERT_TRUE(wrong.measured);
+  EXPECT_LT(wrong.correlation, 0.5f);
+}
+
+TEST_F(TrianglePatchTest, UnjudgeableTrianglesAreNotMeasured) {
+  const ModelAppearance look = look_of(model_, 1.f);
+  // Collinear vertices.
+  const Point2f line[3] = {{40.f, 40.f}, {80.f, 80.f}, {120.f, 120.f}};
+  const Point2f line_scene[3] = {warp(line[0]), warp(line[1]), warp(line[2])};
+  EXPECT_FALSE(check(look, line, line_scene).measured);
+  // A triangle of a few pixels.
+  const Point2f tiny[3] = {{50.f, 50.f}, {52.f, 50.f}, {50.f, 52.f}};
+  const Point2f tiny_scene[3] = {warp(tiny[0]), warp(tiny[1]), warp(tiny[2])};
+  EXPECT_FALSE(check(look, tiny, tiny_scene).measured);
+  // Mostly outside the appearance.
+  const Point2f outside[3] = {{190.f, 190.f}, {260.f, 200.f}, {220.f, 260.f}};
+  const Point2f outside_scene[3] = {warp(outside[0]), warp(outside[1]), warp(outside[2])};
+  EXPECT_FALSE(check(look, outside, outside_scene).measured);
+  // No appearance stored, or a flat one.
+  const Point2f model[3] = {{60.f, 60.f}, {110.f, 72.f}, {82.f, 120.f}};
+  const Point2f scene[3] = {warp(model[0]), warp(model[1]), warp(model[2])};
+  EXPECT_FALSE(check(ModelAppearance{}, model, scene).measured);
+  const cv::Mat flat(200, 200, CV_8U, cv::Scalar(128));
+  EXPECT_FALSE(check(look_of(flat, 1.f), model, scene).measured);
+}
+
+TEST_F(TrianglePatchTest, AllocatesNothing) {
+  const ModelAppearance look = look_of(model_, 1.f);
+  const Point2f model[3] = {{60.f, 60.f}, {110.f, 72.f}, {82.f, 120.f}};
+  const Point2f scene[3] = {warp(model[0]), warp(model[1]), warp(model[2])};
+  test::AllocationCounter counter;
+  const TrianglePatch right = check(look, model, scene);
+  EXPECT_EQ(counter.count(), 0);
+  EXPECT_TRUE(right.measured);
+}
+
+}  // namespace
+}  // namespace kg
