@@ -31,7 +31,8 @@ inline constexpr std::uint8_t kMagic[8] = {0x89, 'K', 'G', 'I', '\r', '\n', 0x1A
 // the index's models); older files read it as 0, a fixed budget, as they were searched.
 inline constexpr std::uint16_t kVersionMajor = 6;
 // 6.4: ransac.min_triangle_correlation (the triangle patch check of each
-// correspondence); older files read it as 0, off, as they were matched.
+// correspondence) and ransac.progressive_sampling (PROSAC); older files read
+// them as 0, off, as they were matched and sampled.
 inline constexpr std::uint16_t kVersionMinor = 4;
 inline constexpr std::size_t kAlignment = 64;
 
@@ -229,6 +230,7 @@ void visit_params(P& p, F&& f) {
   f("descriptor.search_reference_models", p.descriptor.search_reference_models);    // 6.3
   f("keypoints.scene_upsample", p.keypoints.scene_upsample);  // 6.3; 0 in older files: read as 1
   f("ransac.min_triangle_correlation", p.ransac.min_triangle_correlation);  // 6.4; 0: off
+  f("ransac.progressive_sampling", p.ransac.progressive_sampling);          // 6.4; 0: off
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }

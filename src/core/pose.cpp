@@ -439,18 +439,22 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     }
   }
   match_active_.assign(static_cast<std::size_t>(n), 1);
-  // Each match's quality for progressive sampling: how many other matches
-  // share its keypoint correspondences. Correct circuits of one object
-  // overlap (neighbouring triangles share edges in the model and the frame
-  // alike); wrong ones rarely agree on a model keypoint for a frame one.
-  pair_votes_.assign(pair_count, 0);
-  for (std::uint32_t p : match_pairs_) ++pair_votes_[p];
-  match_quality_.resize(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) {
-    int votes = 0;
-    for (int j = 0; j < k; ++j)
-      votes += pair_votes_[match_pairs_[static_cast<std::size_t>(i) * k + j]];
-    match_quality_[static_cast<std::size_t>(i)] = votes - k;
+  // ransac.progressive_sampling (format 6.4; off: uniform draws, as before).
+  const bool progressive = rp.progressive_sampling != 0;
+  if (progressive) {
+    // Each match's quality for progressive sampling: how many other matches
+    // share its keypoint correspondences. Correct circuits of one object
+    // overlap (neighbouring triangles share edges in the model and the frame
+    // alike); wrong ones rarely agree on a model keypoint for a frame one.
+    pair_votes_.assign(pair_count, 0);
+    for (std::uint32_t p : match_pairs_) ++pair_votes_[p];
+    match_quality_.resize(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) {
+      int votes = 0;
+      for (int j = 0; j < k; ++j)
+        votes += pair_votes_[match_pairs_[static_cast<std::size_t>(i) * k + j]];
+      match_quality_[static_cast<std::size_t>(i)] = votes - k;
+    }
   }
 
   KeygraphEstimator estimator{*this,
@@ -469,8 +473,8 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
   // a prefix holding 16 inlier correspondences of the best pose may end the
   // search early (a floor of 4 or 8 stopped on wrong clusters of the sign
   // benchmark's small signs; docs/RESULTS.md, "Progressive sampling").
-  options.progressive = true;
-  options.prefix_min_sample_inliers = 16;
+  options.progressive = progressive;
+  options.prefix_min_sample_inliers = progressive ? 16 : 0;
   // The model's appearance, when the index and the frame allow aligning it;
   // poses it confirms may have less keypoint support.
   const ModelAppearance stored = index.appearance(model_id);
@@ -486,12 +490,14 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
       if (match_active_[i]) active_.push_back(i);
     }
     if (static_cast<int>(active_.size()) < std::max(h, rp.min_inlier_keygraphs)) break;
-    // Best first (ties in selection order) for RansacOptions::progressive.
-    std::sort(active_.begin(), active_.end(), [this](int a, int b) {
-      const int qa = match_quality_[static_cast<std::size_t>(a)];
-      const int qb = match_quality_[static_cast<std::size_t>(b)];
-      return qa != qb ? qa > qb : a < b;
-    });
+    if (progressive) {
+      // Best first (ties in selection order) for RansacOptions::progressive.
+      std::sort(active_.begin(), active_.end(), [this](int a, int b) {
+        const int qa = match_quality_[static_cast<std::size_t>(a)];
+        const int qb = match_quality_[static_cast<std::size_t>(b)];
+        return qa != qb ? qa > qb : a < b;
+      });
+    }
     Homography best{};
     const RansacStats stats = ransac(estimator, options, rng, best);
     iterations += stats.iterations;

@@ -108,10 +108,11 @@ expect_failure "build: unknown option" "$KG" build --bogus "$DATA/box.png" -o "$
 next_case
 expect_failure "build: bad --encoding" "$KG" build --encoding int4 "$DATA/box.png" -o "$CASE/o.kgi"
 # The appearance parameters (format 6.2) are range-checked, naming the field.
-# So is the search budget (6.3), and the triangle patch check (6.4).
+# So is the search budget (6.3), and the triangle patch check and
+# progressive sampling (6.4).
 for assignment in views.appearance_size=9999 views.appearance_size=-1 ransac.min_appearance=1.5 \
   ransac.min_appearance=nan descriptor.search_reference_models=-5 \
-  ransac.min_triangle_correlation=1.5; do
+  ransac.min_triangle_correlation=1.5 ransac.progressive_sampling=2; do
   next_case
   expect_failure "build: --set $assignment" \
     "$KG" build --set "$assignment" "$DATA/box.png" -o "$CASE/o.kgi"

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
 
@@ -55,12 +56,16 @@ struct Scenario {
 
 // `inliers` correct 3-circuit correspondences (scene points = truth(model)
 // + Gaussian noise of `noise` px) and `outliers` random ones, shuffled.
-void make(Scenario& s, int inliers, int outliers, double noise, unsigned seed) {
+// progressive: ransac.progressive_sampling (PROSAC over correspondences
+// ordered by shared keypoint pairs).
+void make(Scenario& s, int inliers, int outliers, double noise, unsigned seed,
+          int progressive = 0) {
   std::mt19937 random(seed);
   const BuiltModel model = grid_model(random);
   Params params;
   params.views.min_size = 0.f;
   params.views.appearance_size = 0;  // a model without an image has no appearance
+  params.ransac.progressive_sampling = progressive;
   ASSERT_TRUE(s.index.build({model}, params));
   // A perspective view: scale 1.4, rotation 20 degrees, some tilt.
   const double a = 20.0 * 3.14159265358979 / 180.0;
@@ -167,6 +172,30 @@ TEST(PoseEstimator, FindsThePoseAtIncreasingOutlierRates) {
     EXPECT_LT(max_corner_error(s.truth, r.out[0]), 2.0);
     EXPECT_GE(r.out[0].inliers, 40);
     EXPECT_GT(r.iterations, 0);
+  }
+}
+
+// Progressive sampling finds the same poses, with fewer iterations where
+// the correct circuits share keypoint pairs (neighbouring grid triangles)
+// and the outliers do not.
+TEST(PoseEstimator, ProgressiveSamplingFindsThePoseSooner) {
+  const int cases[][2] = {{60, 0}, {60, 240}, {40, 360}};
+  for (const auto& c : cases) {
+    SCOPED_TRACE(std::to_string(c[1]) + " outliers of " + std::to_string(c[0] + c[1]));
+    Scenario uniform, progressive;
+    make(uniform, c[0], c[1], 0.5, 11, 0);
+    make(progressive, c[0], c[1], 0.5, 11, 1);
+    const Result u = estimate(uniform);
+    const Result p = estimate(progressive);
+    ASSERT_EQ(p.out.size(), 1u);
+    EXPECT_LT(max_corner_error(progressive.truth, p.out[0]), 2.0);
+    EXPECT_GE(p.out[0].inliers, 40);
+    ASSERT_EQ(u.out.size(), 1u);
+    std::printf("%d outliers: %d iterations uniform, %d progressive\n", c[1], u.iterations,
+                p.iterations);
+    if (c[1] > 0) {
+      EXPECT_LT(p.iterations, u.iterations);
+    }
   }
 }
 

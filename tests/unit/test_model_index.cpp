@@ -1107,6 +1107,7 @@ TEST(Golden, EveryGoldenLoadsAndDetects) {
     // The triangle patch check (6.4) is off in every file: older ones read
     // their zero, and the default is off.
     EXPECT_EQ(index.params().ransac.min_triangle_correlation, 0.f);
+    EXPECT_EQ(index.params().ransac.progressive_sampling, 0);  // likewise (6.4)
     if (index.version_minor() >= 2) {
       ASSERT_TRUE(index.has_appearance());
       const ModelAppearance look = index.appearance(0);
@@ -1641,6 +1642,13 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
     b = bytes();
     put_params(b, p);
     EXPECT_TRUE(rejected(b, "parameter ransac.min_triangle_correlation must be in [0, 1)"));
+  }
+  for (const int progressive : {-1, 2}) {
+    p = paper_params();
+    p.ransac.progressive_sampling = progressive;
+    b = bytes();
+    put_params(b, p);
+    EXPECT_TRUE(rejected(b, "parameter ransac.progressive_sampling must be 0"));
   }
   p = paper_params();
   p.descriptor.search_reference_models = -1;
