@@ -231,12 +231,13 @@ struct RansacParams {
   // (docs/RESULTS.md, "Triangle patch check").
   float min_triangle_correlation = 0.f;
   // Not in the paper (issue 14, lever 2): 1 orders each model's keygraph
-  // correspondences by how many others share their keypoint pairs and
+  // correspondences by how many keypoint pairs they share with others and
   // samples them progressively (PROSAC), with PROSAC's stopping rule on
   // prefixes holding 16 inlier correspondences; 0 draws uniformly. On:
-  // Oxford 68.5 -> 73.2 % within 3 px and median iterations to a found
-  // pose 833 -> 5, but the sign benchmark loses 1.6 to 2.9 points at 10
-  // and 50 signs, so it is off by default (docs/RESULTS.md, "Progressive
+  // Oxford 68.5 -> 73.2 % within 3 px, median iterations to a found pose
+  // 833 -> 5, real planar pairs 3 -> 4 within 2 px; but the sign benchmark
+  // loses 0.8 to 2.1 points at 50 signs and has more false detections at 1
+  // and 10, so it is off by default (docs/RESULTS.md, "Progressive
   // sampling"). Format 6.4; 0 (off) in older files.
   int progressive_sampling = 0;
 };

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdlib>
 
 #include "core/confidence.h"
 #include "core/homography.h"
@@ -442,8 +441,8 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
   // ransac.progressive_sampling (format 6.4; off: uniform draws, as before).
   const bool progressive = rp.progressive_sampling != 0;
   if (progressive) {
-    // Each match's quality for progressive sampling: how many other matches
-    // share its keypoint correspondences. Correct circuits of one object
+    // Each match's quality for progressive sampling: how often its keypoint
+    // correspondences occur in other matches (once per shared pair). Correct circuits of one object
     // overlap (neighbouring triangles share edges in the model and the frame
     // alike); wrong ones rarely agree on a model keypoint for a frame one.
     pair_votes_.assign(pair_count, 0);

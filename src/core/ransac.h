@@ -37,6 +37,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -62,9 +63,8 @@ struct RansacOptions {
   // fewer hypotheses than the cap would draw, and none missed.
   bool enumerate_small_pools = false;
   // Samples are ordered best first: draw and enumerate progressively
-  // (PROSAC, above). The whole pool's stopping rule still holds (ordered
-  // draws only make it conservative); prefix_min_sample_inliers adds
-  // PROSAC's rule on prefixes.
+  // (PROSAC, above). The whole pool's stopping rule is kept;
+  // prefix_min_sample_inliers adds PROSAC's rule on prefixes.
   bool progressive = false;
   // PROSAC's maximality on prefixes: with an estimator that reports its
   // inlier samples (`bool sample_inlier(int) const`, after score()), stop
@@ -153,12 +153,17 @@ inline void next_combination_colex(int* s, int h) {
 // samples ordered best first, hypotheses of h samples: draw t (1-based)
 // samples from the prefix U_m, m the largest size whose start T'_m <= t,
 // always with the prefix's newest sample m - 1 and h - 1 others from U_{m-1};
-// T'_h = 1, T'_{m+1} = T'_m + ceil(T_{m+1} - T_m) with T_m the expected
-// count of draws from U_m among `horizon` uniform draws. Sizes whose T' are
-// equal are entered together. Once the prefix is the whole pool, uniform.
+// T'_h = 1, T'_{m+1} = T'_m + min(ceil(T_{m+1} - T_m), C(m - 1, h - 1)) with
+// T_m the expected count of draws from U_m among `horizon` uniform draws.
+// The cap is the number of distinct samples U_m adds: a prefix is not drawn
+// from more often than it has new combinations, so the prefix keeps
+// growing when the horizon is far beyond the iteration cap instead of
+// redrawing the same hypotheses (PROSAC's paper assumes T_N draws are run).
+// Once the prefix is the whole pool, uniform.
 class ProgressiveSampler {
  public:
   ProgressiveSampler(int n, int h, int horizon) : n_(n), h_(h), size_(h) {
+    assert(h > 0 && h <= n);
     double t = horizon;
     for (int i = 0; i < h; ++i) t *= static_cast<double>(h - i) / (n - i);
     t_size_ = t;
@@ -189,7 +194,11 @@ class ProgressiveSampler {
   // T'_{size+1} from T'_size = `start`.
   long long start_after(long long start) const {
     const double t_next = t_size_ * (size_ + 1) / (size_ + 1 - h_);
-    return start + static_cast<long long>(std::ceil(t_next - t_size_));
+    const auto expected = static_cast<long long>(std::ceil(t_next - t_size_));
+    // Distinct draws while the prefix is U_size: its newest sample and h - 1
+    // of the size - 1 before it.
+    const long long distinct = combinations_up_to(size_ - 1, h_ - 1, expected);
+    return start + std::max(1LL, std::min(expected, distinct));
   }
   int n_, h_, size_;
   double t_size_;         // T_size
@@ -324,7 +333,9 @@ RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
     if (!enumerate_all) {
       int required = required_iterations(static_cast<double>(s.sample_inliers) / n, h,
                                          options.confidence, options.max_iterations);
-      if constexpr (has_sample_inlier<Estimator>::value) {
+      // The prefix rule counts the progressive schedule's draws: not with an
+      // estimator that draws its own samples.
+      if constexpr (has_sample_inlier<Estimator>::value && !has_custom_draw<Estimator>::value) {
         if (options.progressive && options.prefix_min_sample_inliers > 0)
           required = std::min(required, prefix_required(estimator, options, n, h, enumerate));
       }

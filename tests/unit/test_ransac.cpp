@@ -350,6 +350,29 @@ TEST(Ransac, ProgressiveSamplerFollowsThePrefixSchedule) {
   EXPECT_GT(high, 60);
 }
 
+// A horizon far beyond the draws run: each prefix is drawn from at most as
+// often as it has new combinations (its newest sample with one of the
+// others), so the prefix still reaches the whole pool, by C(n, 2) draws.
+TEST(Ransac, ProgressiveSamplerNeverOutdrawsAPrefix) {
+  constexpr int kN = 60;
+  ProgressiveSampler sampler(kN, 2, 200000);
+  Rng rng(8);
+  int sample[2];
+  std::vector<int> draws_at(kN + 1, 0);
+  int reached_all_at = 0;
+  for (int t = 1; t <= 2000 && reached_all_at == 0; ++t) {
+    sampler.draw(rng, t, sample);
+    if (sampler.prefix() == kN) {
+      reached_all_at = t;
+    } else {
+      ++draws_at[static_cast<std::size_t>(sampler.prefix())];
+    }
+  }
+  for (int m = 2; m < kN; ++m) EXPECT_LE(draws_at[static_cast<std::size_t>(m)], m - 1) << m;
+  EXPECT_GT(reached_all_at, 0);
+  EXPECT_LE(reached_all_at, kN * (kN - 1) / 2 + 1);
+}
+
 TEST(Ransac, ProgressiveEnumerationIsColexicographic) {
   FixedFractionEstimator est;
   est.samples = 8;
