@@ -86,7 +86,11 @@ class SearchRecall : public ::testing::Test {
     // The detector's search uses the grown budget (20 leaves up to 10 models).
     EXPECT_EQ(ArcSearch(index.index).max_leaves(),
               ArcSearch::leaves_for(Params{}.descriptor, models.size()));
-    if (models.size() == 2 + kMostOthers) {
+    // 20 x sqrt(models / 10): 46 leaves at 52 models, 90 at 202.
+    if (models.size() == 52) {
+      EXPECT_EQ(ArcSearch(index.index).max_leaves(), 46);
+    }
+    if (models.size() == 202) {
       EXPECT_EQ(ArcSearch(index.index).max_leaves(), 90);
     }
     DesktopDetector detector(index.index);
