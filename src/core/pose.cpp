@@ -232,26 +232,25 @@ struct KeygraphEstimator {
     return is_plausible_pose(out, model_w, model_h, params, min_area);
   }
 
-  // Local optimisation: the least-squares homography through every inlier
-  // keypoint correspondence of the last score() (ransac.h).
-  bool refine(Homography& hom) {
-    std::size_t n = 0;
+  // Local optimisation (ransac.h): the least-squares homography through the
+  // keypoint correspondences within `factor` times the inlier threshold of
+  // `from` (those of instances already found excluded).
+  bool fit_within(const Homography& from, double factor, Homography& out) {
+    const double limit2 = threshold2 * factor * factor;
     s.inlier_model_.clear();
     s.inlier_scene_.clear();
     for (std::size_t i = 0; i < s.pairs_.size(); ++i) {
-      if (!s.pair_inlier_[i]) continue;
+      if (s.pair_dead_[i]) continue;
+      const Point2f p = kg::apply(from, s.pair_model_[i]);
+      const double dx = p.x - s.pair_scene_[i].x, dy = p.y - s.pair_scene_[i].y;
+      if (dx * dx + dy * dy >= limit2) continue;
       s.inlier_model_.push_back(s.pair_model_[i]);
       s.inlier_scene_.push_back(s.pair_scene_[i]);
-      ++n;
     }
-    if (n < 6) return false;
-    Homography fit;
-    if (!fit_homography_hypothesis(s.inlier_model_.data(), s.inlier_scene_.data(),
-                                   static_cast<int>(n), fit))
-      return false;
-    if (!is_plausible_pose(fit, model_w, model_h, params, min_area)) return false;
-    hom = fit;
-    return true;
+    const int n = static_cast<int>(s.inlier_model_.size());
+    return n >= 6 &&
+           fit_homography_hypothesis(s.inlier_model_.data(), s.inlier_scene_.data(), n, out) &&
+           is_plausible_pose(out, model_w, model_h, params, min_area);
   }
 
   // Whether the last scored model explains sample i (all its pairs inliers).

@@ -9,16 +9,26 @@
 //     int sample_size() const;                       // h in log(1-P)/log(1-p^h)
 //     bool hypothesis(const int* samples, Model& out);  // false: degenerate
 //     RansacScore score(const Model& m);             // see below
-//     bool refine(Model& m);  // optional: local optimisation (below)
+//     // optional, one of (local optimisation, below):
+//     bool fit_within(const Model& from, double factor, Model& out);
+//     bool refine(Model& m);
 //   };
 //
 // Local optimisation (LO-RANSAC, Chum et al. 2003), as PoseLib's loop:
-// when a hypothesis beats the best so far, an estimator with `refine`
-// re-fits it on the inliers that its score() just marked; the refit is
-// scored and kept when it is better still, up to kRefineRounds times while
-// it gains. The adaptive iteration count
-// then follows the refit's inlier ratio, so good models stop the loop
-// sooner; stats.refinements counts the refits that improved the best.
+// when a hypothesis beats the best so far it is refitted, the refit scored
+// and kept when it is better still, up to kRefineRounds times while it
+// gains. An estimator with `fit_within` (a least-squares fit to the data
+// within `factor` times its inlier threshold of `from`) gets LO-RANSAC's
+// iterated least squares (Lebeda, Matas and Chum, BMVC 2012): fits with a
+// threshold shrinking from kLocalWidest times the inlier threshold to 1x,
+// each scored, beside the plain refit on the inliers; the best of them is
+// the refit. A hypothesis from samples in one part of the data fits that
+// part; the wider threshold reaches the rest (a sign under perspective),
+// which a refit on the hypothesis's own inliers reaches slowly or never.
+// An estimator with only `refine` re-fits on the inliers its score() just
+// marked. The adaptive iteration count then follows the refit's inlier
+// ratio, so good models stop the loop sooner; stats.refinements counts the
+// refits that improved the best.
 //
 // Progressive sampling (PROSAC, Chum & Matas 2005): when the estimator's
 // samples are ordered best first (RansacOptions::progressive), hypotheses
@@ -222,6 +232,15 @@ struct has_refine<
     E, std::void_t<decltype(std::declval<E&>().refine(std::declval<typename E::Model&>()))>>
     : std::true_type {};
 
+// An estimator may fit a model to the data near another one:
+// `bool fit_within(const Model& from, double factor, Model& out)`.
+template <class E, class = void>
+struct has_fit_within : std::false_type {};
+template <class E>
+struct has_fit_within<E, std::void_t<decltype(std::declval<E&>().fit_within(
+                             std::declval<const typename E::Model&>(), std::declval<double>(),
+                             std::declval<typename E::Model&>()))>> : std::true_type {};
+
 // An estimator may say which samples the last scored model explains:
 // `bool sample_inlier(int) const` (for the prefix stopping rule).
 template <class E, class = void>
@@ -232,6 +251,10 @@ struct has_sample_inlier<
     : std::true_type {};
 
 inline constexpr int kRefineRounds = 4;
+// LO-RANSAC's iterated least squares: kLocalSteps fits, the first with
+// kLocalWidest times the inlier threshold (the paper's values).
+inline constexpr double kLocalWidest = 3.0;
+inline constexpr int kLocalSteps = 4;
 
 inline bool better_score(const RansacScore& a, const RansacScore& b) {
   return a.point_inliers > b.point_inliers ||
@@ -264,6 +287,39 @@ int prefix_required(const Estimator& estimator, const RansacOptions& options, in
     if (required <= inside) best = std::min(best, required);
   }
   return best;
+}
+
+// One local optimisation of `model` (scored `s`; the estimator's flags are
+// its): the best of the plain refit (factor 1) and each step of the
+// iterated least squares. True, with `model`, `s` and the flags those of
+// the refit, when it is better; otherwise all are left as they were.
+template <class Estimator>
+bool local_optimisation(Estimator& estimator, typename Estimator::Model& model, RansacScore& s) {
+  typename Estimator::Model best = model, fit = model;
+  RansacScore best_score = s;
+  bool improved = false;
+  const auto consider = [&]() {
+    const RansacScore r = estimator.score(fit);
+    if (better_score(r, best_score)) {
+      best = fit;
+      best_score = r;
+      improved = true;
+    }
+  };
+  if (estimator.fit_within(model, 1.0, fit)) consider();
+  typename Estimator::Model current = model;
+  for (int step = 0; step < kLocalSteps; ++step) {
+    const double factor = kLocalWidest - (kLocalWidest - 1.0) * step / (kLocalSteps - 1);
+    if (!estimator.fit_within(current, factor, fit)) break;
+    consider();
+    current = fit;
+  }
+  // The flags of the model returned (the last one scored may be another).
+  estimator.score(best);
+  if (!improved) return false;
+  model = best;
+  s = best_score;
+  return true;
 }
 
 template <class Estimator>
@@ -312,7 +368,12 @@ RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
     ++stats.valid_hypotheses;
     RansacScore s = estimator.score(model);
     if (have_best && !better_score(s, stats.best)) continue;
-    if constexpr (has_refine<Estimator>::value) {
+    if constexpr (has_fit_within<Estimator>::value) {
+      for (int round = 0; round < kRefineRounds; ++round) {
+        if (!local_optimisation(estimator, model, s)) break;
+        ++stats.refinements;
+      }
+    } else if constexpr (has_refine<Estimator>::value) {
       // Refit on the inliers while that gains (a few rounds at most).
       for (int round = 0; round < kRefineRounds; ++round) {
         typename Estimator::Model refined = model;
