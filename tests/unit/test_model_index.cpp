@@ -1107,7 +1107,8 @@ TEST(Golden, EveryGoldenLoadsAndDetects) {
     // The triangle patch check (6.4) is off in every file: older ones read
     // their zero, and the default is off.
     EXPECT_EQ(index.params().ransac.min_triangle_correlation, 0.f);
-    EXPECT_EQ(index.params().ransac.progressive_sampling, 0);  // likewise (6.4)
+    // Progressive sampling (6.4) is on by default; older files draw uniformly.
+    EXPECT_EQ(index.params().ransac.progressive_sampling, index.version_minor() >= 4 ? 1 : 0);
     if (index.version_minor() >= 2) {
       ASSERT_TRUE(index.has_appearance());
       const ModelAppearance look = index.appearance(0);
