@@ -243,7 +243,7 @@ struct KeygraphEstimator {
       if (s.pair_dead_[i]) continue;
       const Point2f p = kg::apply(from, s.pair_model_[i]);
       const double dx = p.x - s.pair_scene_[i].x, dy = p.y - s.pair_scene_[i].y;
-      if (dx * dx + dy * dy >= limit2) continue;
+      if (!(dx * dx + dy * dy < limit2)) continue;  // NaN too, as score() counts it
       s.inlier_model_.push_back(s.pair_model_[i]);
       s.inlier_scene_.push_back(s.pair_scene_[i]);
     }
@@ -282,6 +282,10 @@ struct KeygraphEstimator {
     return r;
   }
 };
+
+// The RANSAC loop's local optimisation needs fit_within (ransac.h); without
+// it the loop would silently skip it.
+static_assert(has_fit_within<KeygraphEstimator>::value);
 
 PoseEstimator::PoseEstimator(std::pmr::memory_resource* memory)
     : pairs_(memory),
@@ -437,7 +441,7 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     }
   }
   match_active_.assign(static_cast<std::size_t>(n), 1);
-  // ransac.progressive_sampling (format 6.4; off: uniform draws, as before).
+  // ransac.progressive_sampling (format 6.4; 0, as in older files: uniform draws).
   const bool progressive = rp.progressive_sampling != 0;
   if (progressive) {
     // Each match's quality for progressive sampling: how often its keypoint

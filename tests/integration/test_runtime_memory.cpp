@@ -264,21 +264,21 @@ TEST(RuntimeMemory, TinyLimitsDegradeAndSayWhat) {
   for (const Keypoint& k : detector.last_keypoints()) EXPECT_GE(k.response, 5000.f - 60.f);
 }
 
-// The opt-in matching options of format 6.4 allocate nothing either:
-// ransac.min_triangle_correlation > 0 (the triangle patch check samples on
-// the stack and compacts the correspondences in place) and
-// ransac.progressive_sampling (its counts are reserved with the pose
-// estimator).
+// The matching options of format 6.4 away from their defaults allocate
+// nothing either: ransac.min_triangle_correlation > 0 (the triangle patch
+// check samples on the stack and compacts the correspondences in place)
+// and ransac.progressive_sampling = 0 (uniform draws; the default,
+// progressive, is what the other tests run).
 TEST(RuntimeMemory, OptInMatchingChecksAllocateNothing) {
   const Fixture& f = fixture();
   expect_ready(f);
   for (const bool triangle_check : {true, false}) {
-    SCOPED_TRACE(triangle_check ? "triangle patch check" : "progressive sampling");
+    SCOPED_TRACE(triangle_check ? "triangle patch check" : "uniform draws");
     Params params;
     if (triangle_check) {
       params.ransac.min_triangle_correlation = 0.6f;
     } else {
-      params.ransac.progressive_sampling = 1;
+      params.ransac.progressive_sampling = 0;
     }
     BoxIndex box;
     ASSERT_NO_FATAL_FAILURE(view_box_index(params, box));
