@@ -9,9 +9,8 @@
 //     int sample_size() const;                       // h in log(1-P)/log(1-p^h)
 //     bool hypothesis(const int* samples, Model& out);  // false: degenerate
 //     RansacScore score(const Model& m);             // see below
-//     // optional, one of (local optimisation, below):
+//     // optional: local optimisation (below)
 //     bool fit_within(const Model& from, double factor, Model& out);
-//     bool refine(Model& m);
 //   };
 //
 // Local optimisation (LO-RANSAC, Chum et al. 2003), as PoseLib's loop:
@@ -25,10 +24,8 @@
 // the refit. A hypothesis from samples in one part of the data fits that
 // part; the wider threshold reaches the rest (a sign under perspective),
 // which a refit on the hypothesis's own inliers reaches slowly or never.
-// An estimator with only `refine` re-fits on the inliers its score() just
-// marked. The adaptive iteration count then follows the refit's inlier
-// ratio, so good models stop the loop sooner; stats.refinements counts the
-// refits that improved the best.
+// The adaptive iteration count then follows the refit's inlier ratio, so good models stop the loop
+// sooner; stats.refinements counts the refits that improved the best.
 //
 // Progressive sampling (PROSAC, Chum & Matas 2005): when the estimator's
 // samples are ordered best first (RansacOptions::progressive), hypotheses
@@ -224,14 +221,6 @@ struct has_custom_draw<
     E, std::void_t<decltype(std::declval<E&>().draw(std::declval<Rng&>(), std::declval<int*>()))>>
     : std::true_type {};
 
-// An estimator may refine a hypothesis on its inliers: `bool refine(Model&)`.
-template <class E, class = void>
-struct has_refine : std::false_type {};
-template <class E>
-struct has_refine<
-    E, std::void_t<decltype(std::declval<E&>().refine(std::declval<typename E::Model&>()))>>
-    : std::true_type {};
-
 // An estimator may fit a model to the data near another one:
 // `bool fit_within(const Model& from, double factor, Model& out)`.
 template <class E, class = void>
@@ -298,9 +287,11 @@ bool local_optimisation(Estimator& estimator, typename Estimator::Model& model, 
   typename Estimator::Model best = model, fit = model;
   RansacScore best_score = s;
   bool improved = false;
+  bool flags_of_best = true;  // the estimator's flags are best's
   const auto consider = [&]() {
     const RansacScore r = estimator.score(fit);
-    if (better_score(r, best_score)) {
+    flags_of_best = better_score(r, best_score);
+    if (flags_of_best) {
       best = fit;
       best_score = r;
       improved = true;
@@ -315,7 +306,7 @@ bool local_optimisation(Estimator& estimator, typename Estimator::Model& model, 
     current = fit;
   }
   // The flags of the model returned (the last one scored may be another).
-  estimator.score(best);
+  if (!flags_of_best) estimator.score(best);
   if (!improved) return false;
   model = best;
   s = best_score;
@@ -371,20 +362,6 @@ RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
     if constexpr (has_fit_within<Estimator>::value) {
       for (int round = 0; round < kRefineRounds; ++round) {
         if (!local_optimisation(estimator, model, s)) break;
-        ++stats.refinements;
-      }
-    } else if constexpr (has_refine<Estimator>::value) {
-      // Refit on the inliers while that gains (a few rounds at most).
-      for (int round = 0; round < kRefineRounds; ++round) {
-        typename Estimator::Model refined = model;
-        if (!estimator.refine(refined)) break;
-        const RansacScore r = estimator.score(refined);
-        if (!better_score(r, s)) {
-          estimator.score(model);  // the flags of the kept model
-          break;
-        }
-        s = r;
-        model = refined;
         ++stats.refinements;
       }
     }

@@ -224,12 +224,12 @@ TEST(PoseEstimator, ExactCorrespondencesGiveTheExactPose) {
   EXPECT_LT(max_corner_error(s.truth, r.out[0]), 0.05);
 }
 
-// Local optimisation: a mock estimator whose refine() moves a 1-D model to
-// the inliers' mean; RANSAC reports the refinements and keeps the refit.
+// Local optimisation: a mock estimator whose fit_within() moves a 1-D model
+// to the mean of the values near it; RANSAC reports the refinements and
+// keeps the refit.
 struct LineEstimator {
   using Model = double;
   std::vector<double> values;
-  std::vector<std::uint8_t> inlier;
   int refined = 0;
   int sample_count() const { return static_cast<int>(values.size()); }
   int sample_size() const { return 1; }
@@ -239,11 +239,9 @@ struct LineEstimator {
   }
   RansacScore score(double m) {
     RansacScore r;
-    inlier.assign(values.size(), 0);
     for (std::size_t i = 0; i < values.size(); ++i) {
       const double e = std::fabs(values[i] - m);
       if (e < 1.0) {
-        inlier[i] = 1;
         ++r.point_inliers;
         ++r.sample_inliers;
         r.cost += e * e;
@@ -253,15 +251,15 @@ struct LineEstimator {
     }
     return r;
   }
-  bool refine(double& m) {
+  bool fit_within(double from, double factor, double& out) {
     double sum = 0;
     int n = 0;
-    for (std::size_t i = 0; i < values.size(); ++i) {
-      if (inlier[i]) sum += values[i], ++n;
+    for (double v : values) {
+      if (std::fabs(v - from) < factor) sum += v, ++n;
     }
     if (n == 0) return false;
     ++refined;
-    m = sum / n;
+    out = sum / n;
     return true;
   }
 };
