@@ -18,6 +18,10 @@ namespace kg {
 
 namespace {
 
+// Arcs of a model searched for near-identical arcs of other models (see
+// shared_arcs()).
+constexpr std::uint32_t kSharedSample = 8192;
+
 std::uint32_t saturate_u32(std::uint64_t v) {
   return static_cast<std::uint32_t>(std::min<std::uint64_t>(v, 0xFFFFFFFFu));
 }
@@ -43,8 +47,11 @@ float smallest_size(const BuiltModel& model, const Params& params) {
 
 // Per model, how many of its arcs have a near-identical arc (descriptor
 // within kNearIdenticalDistance, attributes within the search box) in
-// another model: one exact radius search per arc
-// in a float tree over every arc of the index.
+// another model: exact radius searches in a float tree over every arc of
+// the index, from at most kSharedSample evenly spaced arcs of each model,
+// the count scaled to all its arcs. Searching from every arc took minutes
+// once tilted views made 100 k+ arcs a model; the estimate's standard
+// error is under 1 % of the model's arcs.
 std::vector<std::uint32_t> shared_arcs(const std::vector<BuiltModel>& models,
                                        const Params& params) {
   std::vector<ArcSearchPoint> source;
@@ -75,22 +82,34 @@ std::vector<std::uint32_t> shared_arcs(const std::vector<BuiltModel>& models,
   const ArcTreeView tree(points.data(), ids.data(), n, nodes.data(), kdtree_depth(n),
                          bounds.data());
   std::vector<std::uint32_t> found(256);
-  for (std::uint32_t i = 0; i < n; ++i) {
-    std::uint32_t count = 0;
-    for (;;) {
-      count = box > 0.f ? tree.radius_search(source[i], radius * radius, box, found.data(),
-                                             static_cast<std::uint32_t>(found.size()))
-                        : tree.radius_search(source[i], radius * radius, found.data(),
-                                             static_cast<std::uint32_t>(found.size()));
-      if (count <= found.size()) break;
-      found.resize(count);
-    }
-    for (std::uint32_t k = 0; k < count; ++k) {
-      if (owner[found[k]] != owner[i]) {
-        ++shared[owner[i]];
-        break;
+  std::uint32_t begin = 0;  // the model's first arc in `source`
+  for (std::size_t m = 0; m < models.size(); ++m) {
+    const auto arcs = static_cast<std::uint32_t>(models[m].arcs.size());
+    const std::uint32_t stride =
+        std::max<std::uint32_t>(1, (arcs + kSharedSample - 1) / kSharedSample);
+    std::uint32_t searched = 0, near_identical = 0;
+    for (std::uint32_t i = begin; i < begin + arcs; i += stride) {
+      ++searched;
+      std::uint32_t count = 0;
+      for (;;) {
+        count = box > 0.f ? tree.radius_search(source[i], radius * radius, box, found.data(),
+                                               static_cast<std::uint32_t>(found.size()))
+                          : tree.radius_search(source[i], radius * radius, found.data(),
+                                               static_cast<std::uint32_t>(found.size()));
+        if (count <= found.size()) break;
+        found.resize(count);
+      }
+      for (std::uint32_t k = 0; k < count; ++k) {
+        if (owner[found[k]] != owner[i]) {
+          ++near_identical;
+          break;
+        }
       }
     }
+    if (searched > 0)
+      shared[m] = static_cast<std::uint32_t>(
+          std::llround(static_cast<double>(near_identical) * arcs / searched));
+    begin += arcs;
   }
   return shared;
 }

@@ -154,6 +154,34 @@ TEST(ModelQuality, WithoutViewsTheSmallestSizeIsNotMeasured) {
   EXPECT_EQ(r.stars, 5);
 }
 
+// Shared arcs of models with tilted views (100 k+ arcs each) are estimated
+// from evenly spaced arcs: a copy of a model still shares every arc, and an
+// unrelated model shares well under the half that warns of low
+// distinctiveness (a graf crop against box: measured 4 %).
+TEST(ModelQuality, SharedArcsOfLargeModelsAreEstimated) {
+  const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+  const cv::Mat graf = test::load_gray(test::opencv_data("graf1.png"));
+  ASSERT_FALSE(box.empty()) << "box.png missing (install opencv-doc)";
+  ASSERT_FALSE(graf.empty()) << "graf1.png missing (install opencv-doc)";
+  Params params;
+  params.views.max_tilt = 60.f;
+  params.views.tilt_levels = 1;
+  const std::vector<cv::Mat> grays = {box, box.clone(), graf(cv::Rect(200, 150, 300, 300)).clone()};
+  std::vector<BuiltModel> models(grays.size());
+  for (std::size_t i = 0; i < grays.size(); ++i)
+    ASSERT_TRUE(build_model(grays[i], "m" + std::to_string(i), params, models[i]));
+  ASSERT_GT(models[0].arcs.size(), 4u * 8192u) << "the sampled path needs more arcs than searched";
+  QualityOptions options;
+  options.look_alikes = false;
+  QualityReport quality;
+  ASSERT_TRUE(measure_quality(models, grays, params, options, quality));
+  ASSERT_EQ(quality.models.size(), 3u);
+  EXPECT_EQ(quality.models[0].shared_arcs, models[0].arcs.size()) << "a copy shares every arc";
+  EXPECT_EQ(quality.models[1].shared_arcs, models[1].arcs.size());
+  EXPECT_GT(quality.models[2].shared_arcs, 0u);
+  EXPECT_LT(2 * quality.models[2].shared_arcs, models[2].arcs.size());
+}
+
 // Signs that differ only by the arrow's direction, and a distinct sign:
 // the report lists a pair exactly when the detector, run again here, finds
 // one model in the other's scene; the distinct pair is never listed. What
