@@ -18,10 +18,6 @@ namespace kg {
 
 namespace {
 
-// Arcs of a model searched for near-identical arcs of other models (see
-// shared_arcs()).
-constexpr std::uint32_t kSharedSample = 8192;
-
 std::uint32_t saturate_u32(std::uint64_t v) {
   return static_cast<std::uint32_t>(std::min<std::uint64_t>(v, 0xFFFFFFFFu));
 }
@@ -86,7 +82,7 @@ std::vector<std::uint32_t> shared_arcs(const std::vector<BuiltModel>& models,
   for (std::size_t m = 0; m < models.size(); ++m) {
     const auto arcs = static_cast<std::uint32_t>(models[m].arcs.size());
     const std::uint32_t stride =
-        std::max<std::uint32_t>(1, (arcs + kSharedSample - 1) / kSharedSample);
+        std::max<std::uint32_t>(1, arcs / kSharedSample + (arcs % kSharedSample != 0 ? 1 : 0));
     std::uint32_t searched = 0, near_identical = 0;
     for (std::uint32_t i = begin; i < begin + arcs; i += stride) {
       ++searched;

@@ -6,6 +6,7 @@
 // detector finds when the model is shown alone in a scene (look-alikes).
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -31,6 +32,10 @@ inline constexpr int kViewKeygraphFactor = 5;
 // 0.15, was measured too loose: about 90 % of every sign's arcs of the sign
 // benchmark had such a neighbour; docs/QUALITY.md.)
 inline constexpr float kNearIdenticalDistance = 0.05f;
+// Arcs of a model searched for near-identical arcs of other models: at most
+// this many, evenly spaced (exact for smaller models), the count scaled to
+// all its arcs.
+inline constexpr std::uint32_t kSharedSample = 8192;
 
 struct QualityOptions {
   // Render each model as a scene and detect with the whole index (the
