@@ -155,9 +155,9 @@ TEST(ModelQuality, WithoutViewsTheSmallestSizeIsNotMeasured) {
 }
 
 // Shared arcs of models with tilted views (here 277 k and 460 k arcs) are
-// estimated from kSharedSample evenly spaced arcs: a copy of a model still shares every arc, and an
-// unrelated model shares well under the half that warns of low
-// distinctiveness (a graf crop against box: measured 4 %).
+// estimated from kSharedSample evenly spaced arcs: a copy of a model still
+// shares every arc, and an unrelated model shares well under the half that
+// warns of low distinctiveness (a graf crop against box: measured 4 %).
 TEST(ModelQuality, SharedArcsOfLargeModelsAreEstimated) {
   const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
   const cv::Mat graf = test::load_gray(test::opencv_data("graf1.png"));
