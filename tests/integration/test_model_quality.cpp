@@ -168,8 +168,9 @@ TEST(ModelQuality, SharedArcsOfLargeModelsAreEstimated) {
   params.views.tilt_levels = 1;
   const std::vector<cv::Mat> grays = {box, box.clone(), graf(cv::Rect(200, 150, 300, 300)).clone()};
   std::vector<BuiltModel> models(grays.size());
+  const char* const names[] = {"box", "box copy", "graf crop"};
   for (std::size_t i = 0; i < grays.size(); ++i)
-    ASSERT_TRUE(build_model(grays[i], "m" + std::to_string(i), params, models[i]));
+    ASSERT_TRUE(build_model(grays[i], names[i], params, models[i]));
   ASSERT_GT(models[0].arcs.size(), 4u * kSharedSample)
       << "the sampled path needs more arcs than searched";
   QualityOptions options;
