@@ -21,23 +21,34 @@ int kdtree_depth(std::uint32_t n) {
 
 namespace {
 
+// A point with its index in the source: the build permutes these in place,
+// so its scans and partitions read memory in order (an index array into
+// the points made every comparison a cache miss on large indexes).
 template <class T, std::size_t D>
-void build_node(const std::vector<KdPoint<T, D>>& points,
-                std::vector<typename KdTraits<T>::Node>& nodes, std::vector<std::uint32_t>& order,
+struct BuildPoint {
+  KdPoint<T, D> p;
+  std::uint32_t id;
+};
+
+template <class T, std::size_t D>
+void build_node(BuildPoint<T, D>* points, std::vector<typename KdTraits<T>::Node>& nodes,
                 std::uint32_t node, std::uint32_t begin, std::uint32_t end, int level, int depth,
                 double attribute_weight) {
   if (level == depth) return;
   // Split on the dimension of largest (weighted) spread.
+  KdPoint<T, D> lo{}, hi{};
+  if (end > begin) lo = hi = points[begin].p;
+  for (std::uint32_t i = begin + 1; i < end; ++i) {
+    const KdPoint<T, D>& v = points[i].p;
+    for (std::size_t d = 0; d < D; ++d) {
+      lo[d] = std::min(lo[d], v[d]);
+      hi[d] = std::max(hi[d], v[d]);
+    }
+  }
   std::uint32_t best_dim = 0;
   double best_spread = -1;
   for (std::uint32_t d = 0; d < D; ++d) {
-    T lo = 0, hi = 0;
-    for (std::uint32_t i = begin; i < end; ++i) {
-      const T v = points[order[i]][d];
-      if (i == begin || v < lo) lo = v;
-      if (i == begin || v > hi) hi = v;
-    }
-    double spread = static_cast<double>(hi) - static_cast<double>(lo);
+    double spread = static_cast<double>(hi[d]) - static_cast<double>(lo[d]);
     if (d >= static_cast<std::uint32_t>(kDescriptorSize)) spread *= attribute_weight;
     if (spread > best_spread) {
       best_spread = spread;
@@ -46,18 +57,19 @@ void build_node(const std::vector<KdPoint<T, D>>& points,
   }
   const std::uint32_t mid = begin + (end - begin) / 2;
   if (end > begin) {
-    std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end,
-                     [&](std::uint32_t a, std::uint32_t b) {
-                       const T va = points[a][best_dim], vb = points[b][best_dim];
-                       return va < vb || (va == vb && a < b);
+    // Ties broken by source index: the tree does not depend on the order
+    // the points came in, and the same comparisons as ever keep indexes
+    // byte-identical.
+    std::nth_element(points + begin, points + mid, points + end,
+                     [best_dim](const BuildPoint<T, D>& a, const BuildPoint<T, D>& b) {
+                       const T va = a.p[best_dim], vb = b.p[best_dim];
+                       return va < vb || (va == vb && a.id < b.id);
                      });
   }
   nodes[node].dim = static_cast<decltype(nodes[node].dim)>(best_dim);
-  nodes[node].split = mid < end ? points[order[mid]][best_dim] : T{0};
-  build_node<T, D>(points, nodes, order, 2 * node + 1, begin, mid, level + 1, depth,
-                   attribute_weight);
-  build_node<T, D>(points, nodes, order, 2 * node + 2, mid, end, level + 1, depth,
-                   attribute_weight);
+  nodes[node].split = mid < end ? points[mid].p[best_dim] : T{0};
+  build_node<T, D>(points, nodes, 2 * node + 1, begin, mid, level + 1, depth, attribute_weight);
+  build_node<T, D>(points, nodes, 2 * node + 2, mid, end, level + 1, depth, attribute_weight);
 }
 
 }  // namespace
@@ -68,15 +80,14 @@ void build_kdtree(const KdPoint<T, D>* source, std::uint32_t n, std::vector<KdPo
                   double attribute_weight) {
   const int depth = kdtree_depth(n);
   nodes.assign((static_cast<std::size_t>(1) << depth) - 1, typename KdTraits<T>::Node{});
-  const std::vector<KdPoint<T, D>> copy(source, source + n);
-  std::vector<std::uint32_t> order(n);
-  for (std::uint32_t i = 0; i < n; ++i) order[i] = i;
-  build_node<T, D>(copy, nodes, order, 0, 0, n, 0, depth, attribute_weight);
+  std::vector<BuildPoint<T, D>> work(n);
+  for (std::uint32_t i = 0; i < n; ++i) work[i] = {source[i], i};
+  build_node<T, D>(work.data(), nodes, 0, 0, n, 0, depth, attribute_weight);
   points.resize(n);
   ids.resize(n);
   for (std::uint32_t i = 0; i < n; ++i) {
-    points[i] = copy[order[i]];
-    ids[i] = order[i];
+    points[i] = work[i].p;
+    ids[i] = work[i].id;
   }
 }
 
