@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <utility>
 
 namespace kg::cli {
 
@@ -69,8 +70,22 @@ std::string detection_json(const std::string& scene, int width, int height, doub
   s += "], \"stats\": {\"keypoints\": " + std::to_string(stats.keypoints) +
        ", \"sampled_keypoints\": " + std::to_string(stats.sampled_keypoints) +
        ", \"keygraphs\": " + std::to_string(stats.keygraphs) +
+       ", \"arc_matches\": " + std::to_string(stats.arc_matches) +
        ", \"correspondences\": " + std::to_string(stats.correspondences) +
-       ", \"ransac_iterations\": " + std::to_string(stats.ransac_iterations) + "}}";
+       ", \"patch_rejections\": " + std::to_string(stats.patch_rejections) +
+       ", \"ransac_iterations\": " + std::to_string(stats.ransac_iterations) + ", \"truncated\": [";
+  // Which per-frame capacity (Limits) was reached: detection degraded there.
+  const std::pair<bool, const char*> cuts[] = {{stats.truncated_keypoints, "keypoints"},
+                                               {stats.truncated_arc_matches, "arc_matches"},
+                                               {stats.truncated_correspondences, "correspondences"},
+                                               {stats.truncated_detections, "detections"}};
+  bool first = true;
+  for (const auto& [cut, name] : cuts) {
+    if (!cut) continue;
+    s += (first ? "" : ", ") + json_string(name);
+    first = false;
+  }
+  s += "]}}";
   return s;
 }
 
