@@ -297,6 +297,11 @@ h = d["homography"]
 assert len(h) == 9 and all(isinstance(v, numbers.Real) and not isinstance(v, bool) for v in h), h
 # box.png in box_in_scene.png: about 50 inliers, a confident detection.
 assert isinstance(d["confidence"], numbers.Real) and 0.9 < d["confidence"] <= 1.0, d["confidence"]
+# The frame's stage counts, and no per-frame limit reached on a small index.
+st = doc["stats"]
+assert st["arc_matches"] > 0 and st["correspondences"] > 0, st
+assert 0 <= st["patch_rejections"] <= st["correspondences"], st
+assert st["truncated"] == [], st
 EOF
 else
   bad "detect --json failed (exit $?): $(cat "$LOG/stderr")"
