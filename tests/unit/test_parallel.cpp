@@ -1,0 +1,89 @@
+// build/parallel.h: every index runs exactly once on any thread count, a
+// failure stops the handing out with every lower index run, and an
+// exception reaches the caller after the threads have finished.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstddef>
+#include <mutex>
+#include <set>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "build/parallel.h"
+
+namespace kg {
+namespace {
+
+TEST(Parallel, WorkerCountIsBoundedByItemsAndAtLeastOne) {
+  EXPECT_EQ(worker_count(4, 10), 4);
+  EXPECT_EQ(worker_count(4, 3), 3);
+  EXPECT_EQ(worker_count(1, 100), 1);
+  EXPECT_EQ(worker_count(3, 0), 1);
+  const int all = worker_count(0, 1000);
+  EXPECT_GE(all, 1);
+  EXPECT_EQ(all, static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+}
+
+TEST(Parallel, EveryIndexRunsOnceOnAnyThreadCount) {
+  constexpr std::size_t kCount = 1000;
+  for (int threads : {1, 2, 3, 8}) {
+    std::vector<std::atomic<int>> runs(kCount);
+    std::mutex mutex;
+    std::set<std::thread::id> workers;
+    parallel_for(kCount, threads, [&](std::size_t i) {
+      runs[i].fetch_add(1);
+      const std::lock_guard<std::mutex> lock(mutex);
+      workers.insert(std::this_thread::get_id());
+      return true;
+    });
+    for (std::size_t i = 0; i < kCount; ++i) ASSERT_EQ(runs[i].load(), 1) << i << ", " << threads;
+    EXPECT_LE(workers.size(), static_cast<std::size_t>(threads));
+    EXPECT_TRUE(workers.count(std::this_thread::get_id()) == 1 || threads > 1)
+        << "one thread: the caller's";
+  }
+}
+
+TEST(Parallel, NothingToDoCallsNothing) {
+  bool called = false;
+  parallel_for(0, 4, [&](std::size_t) {
+    called = true;
+    return true;
+  });
+  EXPECT_FALSE(called);
+}
+
+TEST(Parallel, FailureStopsTheHandingOutAfterEveryLowerIndexRan) {
+  constexpr std::size_t kCount = 10000, kFailing = 37;
+  for (int threads : {1, 2, 4}) {
+    std::vector<std::atomic<int>> runs(kCount);
+    parallel_for(kCount, threads, [&](std::size_t i) {
+      runs[i].fetch_add(1);
+      return i != kFailing;
+    });
+    for (std::size_t i = 0; i <= kFailing; ++i) ASSERT_EQ(runs[i].load(), 1) << i;
+    std::size_t ran = 0;
+    for (std::size_t i = 0; i < kCount; ++i) ran += static_cast<std::size_t>(runs[i].load());
+    // Indices already handed out finish; the rest never start.
+    EXPECT_LT(ran, kCount) << threads << " threads";
+  }
+}
+
+TEST(Parallel, AnExceptionIsRethrownAfterEveryLowerIndexRan) {
+  std::vector<std::atomic<int>> runs(100);
+  try {
+    parallel_for(runs.size(), 3, [&](std::size_t i) {
+      runs[i].fetch_add(1);
+      if (i == 5) throw std::runtime_error("model 5");
+      return true;
+    });
+    ADD_FAILURE() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "model 5");
+  }
+  for (std::size_t i = 0; i <= 5; ++i) EXPECT_EQ(runs[i].load(), 1) << i;
+}
+
+}  // namespace
+}  // namespace kg
