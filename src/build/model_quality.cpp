@@ -11,6 +11,7 @@
 
 #include "build/desktop_detect.h"
 #include "build/eval_index.h"
+#include "build/parallel.h"
 #include "core/arc_attributes.h"
 #include "core/kdtree.h"
 
@@ -48,8 +49,8 @@ float smallest_size(const BuiltModel& model, const Params& params) {
 // the count scaled to all its arcs. Searching from every arc took minutes
 // once tilted views gave a sign 78 k to 166 k arcs; the estimate's
 // standard error is under 1 % of the model's arcs.
-std::vector<std::uint32_t> shared_arcs(const std::vector<BuiltModel>& models,
-                                       const Params& params) {
+std::vector<std::uint32_t> shared_arcs(const std::vector<BuiltModel>& models, const Params& params,
+                                       int threads) {
   std::vector<ArcSearchPoint> source;
   std::vector<std::uint32_t> owner;
   for (std::size_t m = 0; m < models.size(); ++m) {
@@ -77,9 +78,13 @@ std::vector<std::uint32_t> shared_arcs(const std::vector<BuiltModel>& models,
   kdtree_leaf_bounds<float, kSearchDims>(points.data(), n, bounds);
   const ArcTreeView tree(points.data(), ids.data(), n, nodes.data(), kdtree_depth(n),
                          bounds.data());
-  std::vector<std::uint32_t> found(256);
-  std::uint32_t begin = 0;  // the model's first arc in `source`
-  for (std::size_t m = 0; m < models.size(); ++m) {
+  std::vector<std::uint32_t> first_arc(models.size(), 0);  // the model's first arc in `source`
+  for (std::size_t m = 1; m < models.size(); ++m)
+    first_arc[m] = first_arc[m - 1] + static_cast<std::uint32_t>(models[m - 1].arcs.size());
+  // The models' searches are independent reads of one tree.
+  parallel_for(models.size(), threads, [&](std::size_t m) {
+    std::vector<std::uint32_t> found(256);
+    const std::uint32_t begin = first_arc[m];
     const auto arcs = static_cast<std::uint32_t>(models[m].arcs.size());
     const std::uint32_t stride =
         std::max<std::uint32_t>(1, arcs / kSharedSample + (arcs % kSharedSample != 0 ? 1 : 0));
@@ -105,8 +110,8 @@ std::vector<std::uint32_t> shared_arcs(const std::vector<BuiltModel>& models,
     if (searched > 0)
       shared[m] = static_cast<std::uint32_t>(
           std::llround(static_cast<double>(near_identical) * arcs / searched));
-    begin += arcs;
-  }
+    return true;
+  });
   return shared;
 }
 
@@ -148,7 +153,7 @@ Status measure_quality(const std::vector<BuiltModel>& models, const std::vector<
   if (grays.size() != models.size())
     return {StatusCode::kInvalidArgument, "quality: one model image per model expected"};
   out = QualityReport{};
-  const std::vector<std::uint32_t> shared = shared_arcs(models, params);
+  const std::vector<std::uint32_t> shared = shared_arcs(models, params, options.threads);
   for (std::size_t m = 0; m < models.size(); ++m) {
     const BuiltModel& model = models[m];
     ModelQuality q;
@@ -172,7 +177,11 @@ Status measure_quality(const std::vector<BuiltModel>& models, const std::vector<
 
   EvalIndex index;
   if (Status s = index.build(models, params); !s) return s;
-  for (std::size_t m = 0; m < models.size(); ++m) {
+  // Each model's scene on its own detector (the index is only read); the
+  // results are gathered in model order.
+  std::vector<Status> results(models.size());
+  std::vector<std::vector<std::uint32_t>> others(models.size());
+  parallel_for(models.size(), options.threads, [&](std::size_t m) {
     cv::Point2f outline[4];
     const cv::Mat scene = render_quality_scene(grays[m], options.scene_long_edge, outline);
     Limits limits;
@@ -180,21 +189,27 @@ Status measure_quality(const std::vector<BuiltModel>& models, const std::vector<
     limits.max_height = std::max(limits.max_height, scene.rows);
     DesktopDetector detector(index.index(), limits);
     DetectionList found;
-    if (Status s = detector.detect(scene, found); !s)
-      return {s.code(), models[m].name + ": look-alike check: " + s.message()};
+    if (Status s = detector.detect(scene, found); !s) {
+      results[m] = {s.code(), models[m].name + ": look-alike check: " + s.message()};
+      return false;
+    }
     out.models[m].scene_size = std::max(outline[1].x - outline[0].x, outline[3].y - outline[0].y);
-    std::vector<std::uint32_t> others;
     for (const Detection& d : found) {
       if (d.model_id < 0) continue;
       const auto id = static_cast<std::uint32_t>(d.model_id);
       if (id == m) {
         out.models[m].found_in_scene = true;
-      } else if (std::find(others.begin(), others.end(), id) == others.end()) {
-        others.push_back(id);
+      } else if (std::find(others[m].begin(), others[m].end(), id) == others[m].end()) {
+        others[m].push_back(id);
       }
     }
-    std::sort(others.begin(), others.end());
-    for (std::uint32_t id : others) out.look_alikes.push_back({static_cast<std::uint32_t>(m), id});
+    std::sort(others[m].begin(), others[m].end());
+    return true;
+  });
+  for (std::size_t m = 0; m < models.size(); ++m) {
+    if (!results[m]) return results[m];
+    for (std::uint32_t id : others[m])
+      out.look_alikes.push_back({static_cast<std::uint32_t>(m), id});
   }
   return Status::ok();
 }

@@ -5,10 +5,13 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <set>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
+
+#include "build/parallel.h"
 
 namespace kg {
 
@@ -93,21 +96,43 @@ Status build_model_set(const std::vector<ModelSource>& sources, const ModelBuild
   grays.clear();
   models.clear();
   std::set<std::string> seen;
+  // Names and images first, on this thread (a loader may redirect the
+  // process's stderr while it decodes): a bad input fails before any build.
   for (const ModelSource& source : sources) {
     if (source.name.empty())
       return {StatusCode::kInvalidArgument, "empty model name for " + source.path};
     if (!seen.insert(source.name).second)
       return {StatusCode::kInvalidArgument, "duplicate model name '" + source.name + "'"};
     cv::Mat gray;
-    Status s = load_model_image(source, load, gray);
-    if (!s) return s;
-    BuiltModel model;
-    if (s = build_model(gray, source.name, options.params, model); !s) return s;
+    if (Status s = load_model_image(source, load, gray); !s) {
+      grays.clear();
+      return s;
+    }
     grays.push_back(gray);
-    models.push_back(std::move(model));
-    if (progress)
-      progress(static_cast<int>(models.size()), static_cast<int>(sources.size()), source.name);
   }
+  // Each model is built alone from its own image, so the threads only
+  // share the progress line; the models come out in source order.
+  std::vector<BuiltModel> built(sources.size());
+  std::vector<Status> results(sources.size());
+  std::mutex progress_mutex;
+  int done = 0;
+  parallel_for(sources.size(), options.threads, [&](std::size_t i) {
+    results[i] = build_model(grays[i], sources[i].name, options.params, built[i]);
+    if (!results[i]) return false;
+    if (progress) {
+      const std::lock_guard<std::mutex> lock(progress_mutex);
+      progress(++done, static_cast<int>(sources.size()), sources[i].name);
+    }
+    return true;
+  });
+  // The first failure in source order (every model before it was built).
+  for (Status& s : results) {
+    if (!s) {
+      grays.clear();
+      return s;
+    }
+  }
+  models = std::move(built);
   return Status::ok();
 }
 

@@ -25,6 +25,9 @@ struct ModelSource {
 
 struct ModelBuildOptions {
   Params params;
+  // Models built at once, each on its own thread (0: one per hardware
+  // thread). The index is the same for any count.
+  int threads = 0;
 };
 
 // Loads an image file as 8-bit gray (the CLI passes its own, quieter one).
@@ -36,7 +39,9 @@ Status load_model_image(const ModelSource& source, ImageLoader load, cv::Mat& gr
 // Loads every source (its ROI cut out) and builds its model. Names must be
 // non-empty and distinct; an ROI must lie inside its image. `grays` gets
 // the model images (after the ROI), `models` the built models, in order.
-// `progress` (may be empty) is called after each model, with its name.
+// `progress` (may be empty) is called after each model, with its name, in
+// the order they finish (one call at a time). On failure `grays` and
+// `models` are empty and the status is the first failing source's.
 Status build_model_set(const std::vector<ModelSource>& sources, const ModelBuildOptions& options,
                        ImageLoader load, std::vector<cv::Mat>& grays,
                        std::vector<BuiltModel>& models, const ProgressFn& progress = {});

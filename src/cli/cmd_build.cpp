@@ -22,6 +22,7 @@
 #include "build/model_builder.h"
 #include "build/model_quality.h"
 #include "build/model_set.h"
+#include "build/parallel.h"
 #include "build/param_overrides.h"
 #include "build/progress.h"
 #include "cli/commands.h"
@@ -97,6 +98,7 @@ int cmd_build(const Args& args) {
   bool look_alikes = true;
   Params params;
   bool quiet = false;
+  int jobs = 0;
   // A value of `params` (the defaults of the options below) as text.
   auto param_text = [&params](const char* name) {
     std::string text;
@@ -201,6 +203,9 @@ int cmd_build(const Args& args) {
             "skip the look-alike check of the quality report (each model rendered as\n"
             "a scene and detected with the whole index)",
             [&look_alikes] { look_alikes = false; })
+      .integer("-j, --jobs", "N", jobs, 0, 1024,
+               "models built at once; 0: one per hardware thread (the index is the\n"
+               "same for any N)")
       .flag("-q, --quiet", quiet,
             "no progress on stderr (by default one line rewritten in place on a\n"
             "terminal, otherwise a line per model)")
@@ -229,6 +234,7 @@ int cmd_build(const Args& args) {
   for (std::size_t i = 0; i < paths.size(); ++i) sources.push_back({names[i], paths[i], rois[i]});
   ModelBuildOptions options;
   options.params = params;
+  options.threads = jobs;
   std::vector<cv::Mat> grays;
   std::vector<BuiltModel> models;
   ProgressReporter progress({"build", "model", is_terminal(stderr), true},
@@ -236,18 +242,26 @@ int cmd_build(const Args& args) {
   Status built = build_model_set(sources, options, load_image, grays, models, progress.callback());
   progress.finish();
   if (!built) return fail("build: " + built.message());
-  for (const BuiltModel& model : models) {
-    // Its size alone: what this model adds to an index.
+  // Each model's size alone: what it adds to an index.
+  std::vector<std::size_t> alone(models.size(), 0);
+  std::vector<Status> sized(models.size());
+  parallel_for(models.size(), jobs, [&](std::size_t m) {
     std::vector<std::uint8_t> bytes;
-    if (Status s = serialize_index({model}, options.params, bytes); !s)
-      return fail("build: " + s.message());
+    sized[m] = serialize_index({models[m]}, options.params, bytes);
+    alone[m] = bytes.size();
+    return sized[m].is_ok();
+  });
+  for (std::size_t m = 0; m < models.size(); ++m) {
+    if (!sized[m]) return fail("build: " + sized[m].message());
+    const BuiltModel& model = models[m];
     std::printf("%s: %zu views, %zu keypoints, %zu arcs, %llu keygraphs, %.1f KB alone\n",
                 model.name.c_str(), model.views.size(), model.keypoints.size(), model.arcs.size(),
                 static_cast<unsigned long long>(model.keygraphs),
-                static_cast<double>(bytes.size()) / 1024.0);
+                static_cast<double>(alone[m]) / 1024.0);
   }
   QualityOptions quality_options;
   quality_options.look_alikes = look_alikes;
+  quality_options.threads = jobs;
   QualityReport quality;
   if (Status s = measure_quality(models, grays, options.params, quality_options, quality); !s)
     return fail("build: " + s.message());

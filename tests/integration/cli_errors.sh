@@ -145,12 +145,14 @@ else
 fi
 [ -s "$INDEX" ] || die "no index to continue with ($failures failure(s) so far)"
 # Progress: a line per model, with the model's name and the time left;
-# none with --quiet.
+# none with --quiet. Models build on several threads, so the names come in
+# the order the models finish: each once.
 checks=$((checks + 1))
 if "$KG" build --name first "$DATA/box.png" --name second "$DATA/box.png" -o "$WORK/two.kgi" \
   >"$LOG/stdout" 2>"$LOG/stderr"; then
-  grep -Eqx 'build: model 1/2 first \(50 %\), [0-9]+:[0-9]{2} left' "$LOG/stderr" &&
-    grep -Eqx 'build: model 2/2 second \(100 %\), took [0-9]+:[0-9]{2}' "$LOG/stderr" &&
+  sed -n 1p "$LOG/stderr" | grep -Eqx 'build: model 1/2 (first|second) \(50 %\), [0-9]+:[0-9]{2} left' &&
+    sed -n 2p "$LOG/stderr" | grep -Eqx 'build: model 2/2 (first|second) \(100 %\), took [0-9]+:[0-9]{2}' &&
+    [ "$(grep -c ' first ' "$LOG/stderr")" -eq 1 ] && [ "$(grep -c ' second ' "$LOG/stderr")" -eq 1 ] &&
     [ "$(wc -l <"$LOG/stderr")" -eq 2 ] ||
     bad "build of two models: expected two progress lines, got: $(cat "$LOG/stderr")"
 else

@@ -80,6 +80,24 @@ EOF
   bad "--no-look-alikes failed: $(cat "$WORK/n.txt")"
 grep -q 'look-alike check not run' "$WORK/n.txt" || bad "--no-look-alikes not reported"
 
+# Models built on several threads (-j) give the same index, byte for byte,
+# quality report and all, and the same lines on stdout.
+set -- "$DATA/box.png" "$DATA/box_in_scene.png" "$DATA/graf1.png" "$DATA/graf3.png"
+"$KG" build -j 1 "$@" -o "$WORK/j1.kgi" >"$WORK/j1.txt" 2>&1 || bad "build -j 1 failed: $(cat "$WORK/j1.txt")"
+"$KG" build -j 3 "$@" -o "$WORK/j3.kgi" >"$WORK/j3.txt" 2>&1 || bad "build -j 3 failed: $(cat "$WORK/j3.txt")"
+cmp -s "$WORK/j1.kgi" "$WORK/j3.kgi" || bad "build -j 3 wrote another index than -j 1"
+grep -v -e '^build: ' -e '^wrote ' "$WORK/j1.txt" >"$WORK/j1.out"
+grep -v -e '^build: ' -e '^wrote ' "$WORK/j3.txt" >"$WORK/j3.out"
+cmp -s "$WORK/j1.out" "$WORK/j3.out" || bad "build -j 3 printed: $(diff "$WORK/j1.out" "$WORK/j3.out")"
+# A model image that cannot be read fails the build before any model is
+# built, on one line, with no index left behind, whatever -j.
+: >"$WORK/empty.png"
+"$KG" build -j 2 "$DATA/box.png" "$WORK/empty.png" "$DATA/graf1.png" -o "$WORK/bad.kgi" \
+  >"$WORK/bad.txt" 2>"$WORK/bad.err" && bad "build -j 2 with an empty image succeeded"
+[ "$(wc -l <"$WORK/bad.err")" -eq 1 ] || bad "build -j 2, empty image: $(cat "$WORK/bad.err")"
+grep -q 'empty.png' "$WORK/bad.err" || bad "build -j 2, empty image: not named: $(cat "$WORK/bad.err")"
+[ -e "$WORK/bad.kgi" ] && bad "build -j 2 with an empty image left an index behind"
+
 if [ "$failures" -ne 0 ]; then
   echo "$failures failure(s)" >&2
   exit 1

@@ -235,6 +235,36 @@ TEST(ModelQuality, ArrowDirectionLookAlikes) {
   }
 }
 
+// The report is measured on several threads (QualityOptions::threads): any
+// count gives the same report, look-alike pairs in the same order, so the
+// index is the same file.
+TEST(ModelQuality, SameReportOnAnyThreadCount) {
+  Params params;
+  params.views.appearance_size = 0;  // keypoints alone: the small arrows are look-alikes
+  const std::vector<cv::Mat> grays = {arrow_sign(true, 35), arrow_sign(false, 35),
+                                      gray_of(render_sign(33, 1).image)};
+  std::vector<BuiltModel> models(grays.size());
+  const char* const names[] = {"right", "left", "room"};
+  for (std::size_t i = 0; i < grays.size(); ++i)
+    ASSERT_TRUE(build_model(grays[i], names[i], params, models[i]));
+  std::vector<std::uint8_t> first;
+  for (const int threads : {1, 2, 4}) {
+    SCOPED_TRACE(std::to_string(threads) + " threads");
+    QualityOptions options;
+    options.threads = threads;
+    QualityReport quality;
+    ASSERT_TRUE(measure_quality(models, grays, params, options, quality));
+    EXPECT_FALSE(quality.look_alikes.empty()) << "the case needs a look-alike pair";
+    std::vector<std::uint8_t> bytes;
+    ASSERT_TRUE(serialize_index(models, params, bytes, &quality));
+    if (first.empty()) {
+      first = bytes;
+    } else {
+      EXPECT_TRUE(bytes == first) << "the index differs from the one-thread build";
+    }
+  }
+}
+
 // The catalogue's exit-right and exit-left (arrow direction and layout
 // mirrored) in the style of the sign benchmark's seed 1.
 TEST(ModelQuality, CatalogueExitSignsAsTheDetectorSeesThem) {
