@@ -5,6 +5,7 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -21,6 +22,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "build/model_builder.h"
+#include "build/parallel.h"
 #include "keygraph/detector.h"
 #include "keygraph/model_index.h"
 #include "test_data.h"
@@ -159,11 +161,25 @@ inline std::vector<std::pair<std::string, cv::Mat>> distractor_tiles(std::size_t
 // few without keypoints, e.g. chessboard squares), built with `params`;
 // fewer when the photos run out.
 inline std::vector<BuiltModel> distractor_models(std::size_t count, const Params& params = {}) {
+  // Built on every hardware thread: the first `count` tiles that build, in
+  // tile order, whatever the thread count. The threads stop handing out
+  // tiles once `count` have built (every tile before the last handed out
+  // has run); any tile still needed is built after them.
+  const std::vector<std::pair<std::string, cv::Mat>> tiles = distractor_tiles(count + 40);
+  std::vector<BuiltModel> built(tiles.size());
+  std::vector<char> ran(tiles.size(), 0), ok(tiles.size(), 0);
+  std::atomic<std::size_t> successes{0};
+  auto build = [&](std::size_t i) {
+    ok[i] = build_model(tiles[i].second, tiles[i].first, params, built[i]).is_ok() ? 1 : 0;
+    ran[i] = 1;
+    return ok[i] != 0;
+  };
+  parallel_for(tiles.size(), 0,
+               [&](std::size_t i) { return !build(i) || successes.fetch_add(1) + 1 < count; });
   std::vector<BuiltModel> out;
-  for (const auto& [name, image] : distractor_tiles(count + 40)) {
-    if (out.size() >= count) break;
-    BuiltModel model;
-    if (build_model(image, name, params, model).is_ok()) out.push_back(std::move(model));
+  for (std::size_t i = 0; i < tiles.size() && out.size() < count; ++i) {
+    if (!ran[i]) build(i);
+    if (ok[i]) out.push_back(std::move(built[i]));
   }
   return out;
 }
