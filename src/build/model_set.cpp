@@ -116,15 +116,20 @@ Status build_model_set(const std::vector<ModelSource>& sources, const ModelBuild
   std::vector<Status> results(sources.size());
   std::mutex progress_mutex;
   int done = 0;
-  parallel_for(sources.size(), options.threads, [&](std::size_t i) {
-    results[i] = build_model(grays[i], sources[i].name, options.params, built[i]);
-    if (!results[i]) return false;
-    if (progress) {
-      const std::lock_guard<std::mutex> lock(progress_mutex);
-      progress(++done, static_cast<int>(sources.size()), sources[i].name);
-    }
-    return true;
-  });
+  try {
+    parallel_for(sources.size(), options.threads, [&](std::size_t i) {
+      results[i] = build_model(grays[i], sources[i].name, options.params, built[i]);
+      if (!results[i]) return false;
+      if (progress) {
+        const std::lock_guard<std::mutex> lock(progress_mutex);
+        progress(++done, static_cast<int>(sources.size()), sources[i].name);
+      }
+      return true;
+    });
+  } catch (...) {
+    grays.clear();
+    throw;
+  }
   // The first failure in source order (every model before it was built).
   for (Status& s : results) {
     if (!s) {

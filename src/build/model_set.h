@@ -40,8 +40,10 @@ Status load_model_image(const ModelSource& source, ImageLoader load, cv::Mat& gr
 // non-empty and distinct; an ROI must lie inside its image. `grays` gets
 // the model images (after the ROI), `models` the built models, in order.
 // `progress` (may be empty) is called after each model, with its name, in
-// the order they finish (one call at a time). On failure `grays` and
-// `models` are empty and the status is the first failing source's.
+// the order they finish (one call at a time). Every name and image is
+// checked before any model is built: on failure `grays` and `models` are
+// empty and the status is the first bad name or image's, else the first
+// source's (in order) whose model failed to build.
 Status build_model_set(const std::vector<ModelSource>& sources, const ModelBuildOptions& options,
                        ImageLoader load, std::vector<cv::Mat>& grays,
                        std::vector<BuiltModel>& models, const ProgressFn& progress = {});

@@ -9,15 +9,17 @@
 namespace kg {
 
 // Threads to use for `count` items when `requested` are asked for: 0 means
-// one per hardware thread; never more than the items, never fewer than 1.
+// one per CPU the process may run on (its affinity mask: taskset, a
+// container's cpuset); never more than the items, never fewer than 1.
 int worker_count(int requested, std::size_t count);
 
 // Calls work(i) for every i in [0, count), on up to worker_count(threads,
 // count) threads (the caller's among them). Indices are handed out in
-// increasing order; once a call returns false no further index is handed
-// out (those already started finish), so every index below a failed one
-// has run. An exception thrown by `work` stops the handing out as well and
-// is rethrown here (the first one) after every thread has finished.
+// increasing order; once a call returns false the threads stop taking
+// indices (one taken just before may still run), and every index below a
+// failed one has run. An exception thrown by `work` stops it the same way; after every
+// thread has finished, the exception of the lowest index that threw is
+// rethrown here.
 void parallel_for(std::size_t count, int threads, const std::function<bool(std::size_t)>& work);
 
 }  // namespace kg

@@ -4,12 +4,18 @@
 #pragma once
 
 #if defined(KG_CORE_LOG)
+#include <stdio.h>  // flockfile (POSIX)
+
 #include <cstdio>
+// The stream stays locked for the whole line: detectors on several threads
+// (the builder's quality report) never interleave their lines.
 #define KG_LOG(...)                     \
   do {                                  \
+    flockfile(stderr);                  \
     std::fprintf(stderr, "keygraph: "); \
     std::fprintf(stderr, __VA_ARGS__);  \
     std::fputc('\n', stderr);           \
+    funlockfile(stderr);                \
   } while (false)
 #else
 #define KG_LOG(...) \

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstring>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -237,14 +238,15 @@ TEST(ModelQuality, ArrowDirectionLookAlikes) {
 
 // The report is measured on several threads (QualityOptions::threads): any
 // count gives the same report, look-alike pairs in the same order, so the
-// index is the same file.
+// index is the same file. Copies make look-alikes of several models.
 TEST(ModelQuality, SameReportOnAnyThreadCount) {
   Params params;
   params.views.appearance_size = 0;  // keypoints alone: the small arrows are look-alikes
-  const std::vector<cv::Mat> grays = {arrow_sign(true, 35), arrow_sign(false, 35),
-                                      gray_of(render_sign(33, 1).image)};
+  const cv::Mat right = arrow_sign(true, 35), room = gray_of(render_sign(33, 1).image);
+  const std::vector<cv::Mat> grays = {right, arrow_sign(false, 35), room, right.clone(),
+                                      room.clone()};
   std::vector<BuiltModel> models(grays.size());
-  const char* const names[] = {"right", "left", "room"};
+  const char* const names[] = {"right", "left", "room", "right copy", "room copy"};
   for (std::size_t i = 0; i < grays.size(); ++i)
     ASSERT_TRUE(build_model(grays[i], names[i], params, models[i]));
   std::vector<std::uint8_t> first;
@@ -254,7 +256,15 @@ TEST(ModelQuality, SameReportOnAnyThreadCount) {
     options.threads = threads;
     QualityReport quality;
     ASSERT_TRUE(measure_quality(models, grays, params, options, quality));
-    EXPECT_FALSE(quality.look_alikes.empty()) << "the case needs a look-alike pair";
+    std::set<std::uint32_t> shown;
+    for (const LookAlike& pair : quality.look_alikes) shown.insert(pair.shown);
+    EXPECT_GE(shown.size(), 3u) << "the case needs look-alikes in several models' scenes";
+    EXPECT_TRUE(std::is_sorted(quality.look_alikes.begin(), quality.look_alikes.end(),
+                               [](const LookAlike& a, const LookAlike& b) {
+                                 return a.shown != b.shown ? a.shown < b.shown
+                                                           : a.detected < b.detected;
+                               }))
+        << "pairs in model order";
     std::vector<std::uint8_t> bytes;
     ASSERT_TRUE(serialize_index(models, params, bytes, &quality));
     if (first.empty()) {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstddef>
 #include <mutex>
 #include <set>
@@ -55,34 +56,45 @@ TEST(Parallel, NothingToDoCallsNothing) {
 }
 
 TEST(Parallel, FailureStopsTheHandingOutAfterEveryLowerIndexRan) {
-  constexpr std::size_t kCount = 10000, kFailing = 37;
+  // The failure lies late and lands while lower indices are still running
+  // (every seventh sleeps): a split into fixed ranges per thread would
+  // leave the first ranges unfinished.
+  constexpr std::size_t kCount = 400, kFailing = 300;
   for (int threads : {1, 2, 4}) {
     std::vector<std::atomic<int>> runs(kCount);
     parallel_for(kCount, threads, [&](std::size_t i) {
+      if (i % 7 == 0) std::this_thread::sleep_for(std::chrono::microseconds(300));
       runs[i].fetch_add(1);
       return i != kFailing;
     });
     for (std::size_t i = 0; i <= kFailing; ++i) ASSERT_EQ(runs[i].load(), 1) << i;
     std::size_t ran = 0;
     for (std::size_t i = 0; i < kCount; ++i) ran += static_cast<std::size_t>(runs[i].load());
-    // Indices already handed out finish; the rest never start.
-    EXPECT_LT(ran, kCount) << threads << " threads";
+    // At most one index per other thread starts after the failure.
+    EXPECT_LE(ran, kFailing + static_cast<std::size_t>(threads)) << threads << " threads";
   }
 }
 
-TEST(Parallel, AnExceptionIsRethrownAfterEveryLowerIndexRan) {
-  std::vector<std::atomic<int>> runs(100);
-  try {
-    parallel_for(runs.size(), 3, [&](std::size_t i) {
-      runs[i].fetch_add(1);
-      if (i == 5) throw std::runtime_error("model 5");
-      return true;
-    });
-    ADD_FAILURE() << "no exception";
-  } catch (const std::runtime_error& e) {
-    EXPECT_STREQ(e.what(), "model 5");
+TEST(Parallel, TheLowestThrowingIndexIsRethrownAfterEveryLowerIndexRan) {
+  for (int threads : {1, 2, 4}) {
+    std::vector<std::atomic<int>> runs(100);
+    try {
+      parallel_for(runs.size(), threads, [&](std::size_t i) {
+        runs[i].fetch_add(1);
+        // Index 11 throws late, after 12 (on another thread) has thrown.
+        if (i == 11) {
+          std::this_thread::sleep_for(std::chrono::milliseconds(20));
+          throw std::runtime_error("model 11");
+        }
+        if (i == 12) throw std::runtime_error("model 12");
+        return true;
+      });
+      ADD_FAILURE() << "no exception";
+    } catch (const std::runtime_error& e) {
+      EXPECT_STREQ(e.what(), "model 11") << threads << " threads";
+    }
+    for (std::size_t i = 0; i <= 11; ++i) EXPECT_EQ(runs[i].load(), 1) << i;
   }
-  for (std::size_t i = 0; i <= 5; ++i) EXPECT_EQ(runs[i].load(), 1) << i;
 }
 
 }  // namespace
