@@ -204,8 +204,8 @@ int cmd_build(const Args& args) {
             "a scene and detected with the whole index)",
             [&look_alikes] { look_alikes = false; })
       .integer("-j, --jobs", "N", jobs, 0, 1024,
-               "models built at once; 0: one per hardware thread (the index is the\n"
-               "same for any N)")
+               "models built at once; 0: one per CPU this process may use (the index\n"
+               "is the same for any N)")
       .flag("-q, --quiet", quiet,
             "no progress on stderr (by default one line rewritten in place on a\n"
             "terminal, otherwise a line per model)")
