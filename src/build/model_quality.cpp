@@ -179,9 +179,8 @@ Status measure_quality(const std::vector<BuiltModel>& models, const std::vector<
   if (Status s = index.build(models, params); !s) return s;
   // Each model's scene on its own detector (the index is only read); the
   // results are gathered in model order.
-  std::vector<Status> results(models.size());
   std::vector<std::vector<std::uint32_t>> others(models.size());
-  parallel_for(models.size(), options.threads, [&](std::size_t m) {
+  const Status checked = parallel_for_status(models.size(), options.threads, [&](std::size_t m) {
     cv::Point2f outline[4];
     const cv::Mat scene = render_quality_scene(grays[m], options.scene_long_edge, outline);
     Limits limits;
@@ -189,10 +188,8 @@ Status measure_quality(const std::vector<BuiltModel>& models, const std::vector<
     limits.max_height = std::max(limits.max_height, scene.rows);
     DesktopDetector detector(index.index(), limits);
     DetectionList found;
-    if (Status s = detector.detect(scene, found); !s) {
-      results[m] = {s.code(), models[m].name + ": look-alike check: " + s.message()};
-      return false;
-    }
+    if (Status s = detector.detect(scene, found); !s)
+      return Status{s.code(), models[m].name + ": look-alike check: " + s.message()};
     out.models[m].scene_size = std::max(outline[1].x - outline[0].x, outline[3].y - outline[0].y);
     for (const Detection& d : found) {
       if (d.model_id < 0) continue;
@@ -204,10 +201,10 @@ Status measure_quality(const std::vector<BuiltModel>& models, const std::vector<
       }
     }
     std::sort(others[m].begin(), others[m].end());
-    return true;
+    return Status::ok();
   });
+  if (!checked) return checked;
   for (std::size_t m = 0; m < models.size(); ++m) {
-    if (!results[m]) return results[m];
     for (std::uint32_t id : others[m])
       out.look_alikes.push_back({static_cast<std::uint32_t>(m), id});
   }

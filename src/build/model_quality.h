@@ -44,8 +44,8 @@ struct QualityOptions {
   // Long edge of the model in its scene, pixels (smaller models keep their
   // size), on a mid-grey background with a mild perspective.
   int scene_long_edge = 200;
-  // Models measured at once (0: one per hardware thread); the report is the
-  // same for any count.
+  // Models measured at once (0: one per CPU the process may use); the
+  // report is the same for any count.
   int threads = 0;
 };
 

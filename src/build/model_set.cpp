@@ -113,29 +113,25 @@ Status build_model_set(const std::vector<ModelSource>& sources, const ModelBuild
   // Each model is built alone from its own image, so the threads only
   // share the progress line; the models come out in source order.
   std::vector<BuiltModel> built(sources.size());
-  std::vector<Status> results(sources.size());
   std::mutex progress_mutex;
   int done = 0;
+  Status s;
   try {
-    parallel_for(sources.size(), options.threads, [&](std::size_t i) {
-      results[i] = build_model(grays[i], sources[i].name, options.params, built[i]);
-      if (!results[i]) return false;
-      if (progress) {
+    s = parallel_for_status(sources.size(), options.threads, [&](std::size_t i) {
+      Status b = build_model(grays[i], sources[i].name, options.params, built[i]);
+      if (b && progress) {
         const std::lock_guard<std::mutex> lock(progress_mutex);
         progress(++done, static_cast<int>(sources.size()), sources[i].name);
       }
-      return true;
+      return b;
     });
   } catch (...) {
     grays.clear();
     throw;
   }
-  // The first failure in source order (every model before it was built).
-  for (Status& s : results) {
-    if (!s) {
-      grays.clear();
-      return s;
-    }
+  if (!s) {
+    grays.clear();
+    return s;
   }
   models = std::move(built);
   return Status::ok();

@@ -25,8 +25,8 @@ struct ModelSource {
 
 struct ModelBuildOptions {
   Params params;
-  // Models built at once, each on its own thread (0: one per hardware
-  // thread). The index is the same for any count.
+  // Models built at once, each on its own thread (0: one per CPU the
+  // process may use). The index is the same for any count.
   int threads = 0;
 };
 

@@ -8,6 +8,7 @@
 #include <limits>
 #include <mutex>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace kg {
@@ -71,6 +72,18 @@ void parallel_for(std::size_t count, int threads, const std::function<bool(std::
   run();
   for (std::thread& t : pool) t.join();
   if (error) std::rethrow_exception(error);
+}
+
+Status parallel_for_status(std::size_t count, int threads,
+                           const std::function<Status(std::size_t)>& work) {
+  std::vector<Status> results(count);
+  parallel_for(count, threads, [&](std::size_t i) {
+    results[i] = work(i);
+    return results[i].is_ok();
+  });
+  for (Status& s : results)
+    if (!s) return std::move(s);
+  return Status::ok();
 }
 
 }  // namespace kg

@@ -6,6 +6,8 @@
 #include <cstddef>
 #include <functional>
 
+#include "keygraph/status.h"
+
 namespace kg {
 
 // Threads to use for `count` items when `requested` are asked for: 0 means
@@ -21,5 +23,11 @@ int worker_count(int requested, std::size_t count);
 // thread has finished, the exception of the lowest index that threw is
 // rethrown here.
 void parallel_for(std::size_t count, int threads, const std::function<bool(std::size_t)>& work);
+
+// parallel_for() over work that can fail: a failed Status stops it as
+// `false` does, and the first failure in index order is returned (every
+// index below it has run), the same one for any thread count.
+Status parallel_for_status(std::size_t count, int threads,
+                           const std::function<Status(std::size_t)>& work);
 
 }  // namespace kg

@@ -244,15 +244,14 @@ int cmd_build(const Args& args) {
   if (!built) return fail("build: " + built.message());
   // Each model's size alone: what it adds to an index.
   std::vector<std::size_t> alone(models.size(), 0);
-  std::vector<Status> sized(models.size());
-  parallel_for(models.size(), jobs, [&](std::size_t m) {
+  const Status sized = parallel_for_status(models.size(), jobs, [&](std::size_t m) {
     std::vector<std::uint8_t> bytes;
-    sized[m] = serialize_index({models[m]}, options.params, bytes);
+    const Status s = serialize_index({models[m]}, options.params, bytes);
     alone[m] = bytes.size();
-    return sized[m].is_ok();
+    return s;
   });
+  if (!sized) return fail("build: " + sized.message());
   for (std::size_t m = 0; m < models.size(); ++m) {
-    if (!sized[m]) return fail("build: " + sized[m].message());
     const BuiltModel& model = models[m];
     std::printf("%s: %zu views, %zu keypoints, %zu arcs, %llu keygraphs, %.1f KB alone\n",
                 model.name.c_str(), model.views.size(), model.keypoints.size(), model.arcs.size(),

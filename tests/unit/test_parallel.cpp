@@ -97,5 +97,25 @@ TEST(Parallel, TheLowestThrowingIndexIsRethrownAfterEveryLowerIndexRan) {
   }
 }
 
+TEST(Parallel, StatusWorkReturnsTheFirstFailureInIndexOrder) {
+  for (int threads : {1, 2, 4}) {
+    std::vector<std::atomic<int>> runs(200);
+    // Index 41 fails late, after 42 (on another thread) has failed.
+    const Status s = parallel_for_status(runs.size(), threads, [&](std::size_t i) {
+      runs[i].fetch_add(1);
+      if (i == 41) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        return Status{StatusCode::kInvalidArgument, "model 41"};
+      }
+      if (i == 42) return Status{StatusCode::kIoError, "model 42"};
+      return Status::ok();
+    });
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << threads << " threads";
+    EXPECT_EQ(s.message(), "model 41") << threads << " threads";
+    for (std::size_t i = 0; i <= 41; ++i) EXPECT_EQ(runs[i].load(), 1) << i;
+  }
+  EXPECT_TRUE(parallel_for_status(50, 3, [](std::size_t) { return Status::ok(); }));
+}
+
 }  // namespace
 }  // namespace kg
