@@ -97,6 +97,11 @@ struct Stronger {
   }
 };
 
+// graph.complete_circuits applies to 3-circuits.
+bool completes_circuits(const Params& params) {
+  return params.graph.complete_circuits != 0 && params.graph.structure == Structure::kCircuit3;
+}
+
 }  // namespace
 
 struct Detector::Impl {
@@ -131,6 +136,7 @@ struct Detector::Impl {
   Delaunay triangulation;
   WorkVector<SceneKeygraph> keygraphs;
   Selector selector;
+  ArcAdjacency adjacency;             // filled with graph.complete_circuits only
   WorkVector<KeygraphMatch> matches;  // in selection order
   WorkVector<KeygraphMatch> grouped;  // the same grouped by model (stable)
   WorkVector<std::uint32_t> model_begin;
@@ -186,6 +192,7 @@ Detector::Impl::Impl(const ModelIndex& idx, const Limits& user, std::pmr::memory
       triangulation(memory),
       keygraphs(memory),
       selector(memory),
+      adjacency(memory),
       matches(memory),
       grouped(memory),
       model_begin(memory),
@@ -209,7 +216,8 @@ Detector::Impl::Impl(const ModelIndex& idx, const Limits& user, std::pmr::memory
   scene_scales.reserve(scene);
   triangulation.reserve(l.max_scene_keypoints);
   keygraphs.reserve(3 * scene);  // edges, faces (2n) or internal edges (3n)
-  selector.reserve(l, idx.keypoint_count());
+  selector.reserve(l, idx.keypoint_count(), completes_circuits(params));
+  if (completes_circuits(params)) adjacency.build(idx, fill);
   matches.reserve(correspondences);
   grouped.reserve(correspondences);
   model_begin.reserve(static_cast<std::size_t>(idx.model_count()) + 1);
@@ -610,6 +618,7 @@ Status Detector::Impl::run(ImageView frame, const Keypoint* keypoints, int count
     in.scene_descriptors = scene_descriptors.data();
     in.scene_inverse_norms = scene_inverse_norms.data();
   }
+  if (completes_circuits(params)) in.adjacency = &adjacency;
   selector.select(in, limits, matches, stats);
   check_triangle_patches(view_of(blurred));
   stats.ms_select = ms_since(t);

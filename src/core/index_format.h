@@ -33,7 +33,9 @@ inline constexpr std::uint16_t kVersionMajor = 6;
 // 6.4: ransac.min_triangle_correlation (the triangle patch check of each
 // correspondence) and ransac.progressive_sampling (PROSAC); older files read
 // them as 0, off, as they were matched and sampled.
-inline constexpr std::uint16_t kVersionMinor = 4;
+// 6.5: graph.complete_circuits (3-circuits from two searched arcs and a
+// direct check of the third); older files read it as 0, off.
+inline constexpr std::uint16_t kVersionMinor = 5;
 inline constexpr std::size_t kAlignment = 64;
 
 inline constexpr std::size_t kHeaderSize = 64;
@@ -231,6 +233,7 @@ void visit_params(P& p, F&& f) {
   f("keypoints.scene_upsample", p.keypoints.scene_upsample);  // 6.3; 0 in older files: read as 1
   f("ransac.min_triangle_correlation", p.ransac.min_triangle_correlation);  // 6.4; 0: off
   f("ransac.progressive_sampling", p.ransac.progressive_sampling);          // 6.4; 0: off
+  f("graph.complete_circuits", p.graph.complete_circuits);                  // 6.5; 0: off
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }

@@ -82,10 +82,12 @@ ArcSearch::ArcSearch(const ModelIndex& index, int max_leaves) {
   const int depth = index.tree_depth();
   switch (encoding_) {
     case DescriptorEncoding::kFloat32:
+      points_f32_ = index.tree_points_f32();
       f32_ = ArcTreeView(index.tree_points_f32(), nullptr, n, index.tree_nodes_f32(), depth,
                          index.leaf_bounds_f32());
       break;
     case DescriptorEncoding::kInt16:
+      points_i16_ = index.tree_points_i16();
       i16_ = ArcTreeView16(index.tree_points_i16(), nullptr, n, index.tree_nodes_int(), depth,
                            index.leaf_bounds_i16());
       if (!scaled_radius2(radius, encoding_, std::numeric_limits<ArcTreeView16::Dist>::max(),
@@ -93,6 +95,7 @@ ArcSearch::ArcSearch(const ModelIndex& index, int max_leaves) {
         radius2_scaled_ = 0;  // unreachable: validate_params checked the scaled radius
       break;
     case DescriptorEncoding::kInt8:
+      points_i8_ = index.tree_points_i8();
       i8_ = ArcTreeView8(index.tree_points_i8(), nullptr, n, index.tree_nodes_int(), depth,
                          index.leaf_bounds_i8());
       if (!scaled_radius2(radius, encoding_, std::numeric_limits<ArcTreeView8::Dist>::max(),
@@ -104,45 +107,98 @@ ArcSearch::ArcSearch(const ModelIndex& index, int max_leaves) {
 
 std::uint32_t ArcSearch::radius_search(const ArcDescriptor& q, const float* attributes,
                                        std::uint32_t* out, std::uint32_t capacity) const {
-  const float none[kArcAttributes] = {0.f, 0.f};
-  const ArcSearchPoint p = search_point(q, attributes != nullptr ? attributes : none);
-  const bool box = box_ > 0 && attributes != nullptr;
-  switch (encoding_) {
-    case DescriptorEncoding::kFloat32: {
-      const float b = box ? static_cast<float>(box_) : std::numeric_limits<float>::max();
-      return max_leaves_ > 0
-                 ? f32_.radius_search_approximate(p, radius2_, b, max_leaves_, out, capacity)
-                 : f32_.radius_search(p, radius2_, b, out, capacity);
-    }
-    case DescriptorEncoding::kInt16:
-      return search_encoded(encode_point<std::int16_t>(p), box, out, capacity);
-    case DescriptorEncoding::kInt8:
-      return search_encoded(encode_point<std::int8_t>(p), box, out, capacity);
-  }
-  return 0;
+  return search(query(q, attributes), out, capacity);
 }
 
 std::uint32_t ArcSearch::radius_search_quantised(const std::int32_t* q, const float* attributes,
                                                  std::uint32_t* out, std::uint32_t capacity) const {
+  if (encoding_ == DescriptorEncoding::kFloat32) return 0;  // searched with float descriptors
+  return search(query_quantised(q, attributes), out, capacity);
+}
+
+ArcSearch::Query ArcSearch::query(const ArcDescriptor& q, const float* attributes) const {
   const float none[kArcAttributes] = {0.f, 0.f};
-  const float* a = attributes != nullptr ? attributes : none;
-  const bool box = box_ > 0 && attributes != nullptr;
-  auto point = [&](auto type_tag) {
-    using T = decltype(type_tag);
-    std::array<T, kSearchDims> p{};
-    for (int i = 0; i < kDescriptorSize; ++i) p[i] = static_cast<T>(q[i]);
-    for (int i = 0; i < kArcAttributes; ++i) p[kDescriptorSize + i] = static_cast<T>(a[i]);
-    return p;
+  Query out;
+  out.box = box_ > 0 && attributes != nullptr;
+  const ArcSearchPoint p = search_point(q, attributes != nullptr ? attributes : none);
+  auto widen = [&out](const auto& encoded_point) {
+    for (int i = 0; i < kSearchDims; ++i) out.point[i] = static_cast<float>(encoded_point[i]);
   };
   switch (encoding_) {
     case DescriptorEncoding::kFloat32:
-      return 0;  // float32 indexes are searched with float descriptors
+      out.point = p;
+      break;
     case DescriptorEncoding::kInt16:
-      return search_encoded(point(std::int16_t{}), box, out, capacity);
+      widen(encode_point<std::int16_t>(p));
+      break;
     case DescriptorEncoding::kInt8:
-      return search_encoded(point(std::int8_t{}), box, out, capacity);
+      widen(encode_point<std::int8_t>(p));
+      break;
+  }
+  return out;
+}
+
+ArcSearch::Query ArcSearch::query_quantised(const std::int32_t* q, const float* attributes) const {
+  Query out;
+  out.box = box_ > 0 && attributes != nullptr;
+  for (int i = 0; i < kDescriptorSize; ++i) out.point[i] = static_cast<float>(q[i]);
+  for (int i = 0; i < kArcAttributes; ++i)
+    out.point[kDescriptorSize + i] = attributes != nullptr ? attributes[i] : 0.f;
+  return out;
+}
+
+template <class T>
+std::array<T, kSearchDims> ArcSearch::encoded(const Query& q) const {
+  std::array<T, kSearchDims> p{};
+  for (int i = 0; i < kSearchDims; ++i) p[i] = static_cast<T>(q.point[i]);
+  return p;
+}
+
+std::uint32_t ArcSearch::search(const Query& q, std::uint32_t* out, std::uint32_t capacity) const {
+  switch (encoding_) {
+    case DescriptorEncoding::kFloat32: {
+      const float b = q.box ? static_cast<float>(box_) : std::numeric_limits<float>::max();
+      return max_leaves_ > 0
+                 ? f32_.radius_search_approximate(q.point, radius2_, b, max_leaves_, out, capacity)
+                 : f32_.radius_search(q.point, radius2_, b, out, capacity);
+    }
+    case DescriptorEncoding::kInt16:
+      return search_encoded(encoded<std::int16_t>(q), q.box, out, capacity);
+    case DescriptorEncoding::kInt8:
+      return search_encoded(encoded<std::int8_t>(q), q.box, out, capacity);
   }
   return 0;
+}
+
+namespace {
+
+// What the tree's leaf scan tests, for one point.
+template <class T, class Dist>
+bool within(const std::array<T, kSearchDims>& p, const std::array<T, kSearchDims>& q, Dist radius2,
+            bool box, Dist half_width) {
+  if (!(kd_distance2(p, q) < radius2)) return false;
+  if (!box) return true;
+  for (int d = kDescriptorSize; d < kSearchDims; ++d) {
+    const Dist diff = static_cast<Dist>(p[d]) - static_cast<Dist>(q[d]);
+    if ((diff < 0 ? -diff : diff) > half_width) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool ArcSearch::matches(const Query& q, std::uint32_t slot) const {
+  switch (encoding_) {
+    case DescriptorEncoding::kFloat32:
+      return within(points_f32_[slot], q.point, radius2_, q.box, static_cast<float>(box_));
+    case DescriptorEncoding::kInt16:
+      return within(points_i16_[slot], encoded<std::int16_t>(q), radius2_scaled_, q.box,
+                    static_cast<std::int64_t>(box_));
+    case DescriptorEncoding::kInt8:
+      return within(points_i8_[slot], encoded<std::int8_t>(q),
+                    static_cast<ArcTreeView8::Dist>(radius2_scaled_), q.box, box_);
+  }
+  return false;
 }
 
 std::uint32_t ArcSearch::search_encoded(const ArcSearchPointI16& p, bool box, std::uint32_t* out,
@@ -201,10 +257,14 @@ Selector::ArcList Selector::lookup(const SelectionInput& in, int e, const Limits
   const bool scaled = in.scene_scales != nullptr &&
                       arc_attributes(a, b, in.scene_scales[tri[e]],
                                      in.scene_scales[tri[Delaunay::next(e)]], attributes);
-  const std::uint32_t total =
-      fixed
-          ? in.search->radius_search_quantised(q, scaled ? attributes : nullptr, found_.data(), cap)
-          : in.search->radius_search(d, scaled ? attributes : nullptr, found_.data(), cap);
+  const ArcSearch::Query query = fixed
+                                     ? in.search->query_quantised(q, scaled ? attributes : nullptr)
+                                     : in.search->query(d, scaled ? attributes : nullptr);
+  if (in.adjacency != nullptr) {
+    described_[e] = 1;
+    queries_[e] = query;
+  }
+  const std::uint32_t total = in.search->search(query, found_.data(), cap);
   stats.arc_matches += total;
   std::uint32_t n = std::min(total, cap);
   const std::size_t room = pool_limit_ - std::min(pool_limit_, pool_used_);
@@ -325,7 +385,93 @@ bool Selector::candidate_lists(const ArcList* lists, int k) {
   return true;
 }
 
-void Selector::reserve(const Limits& limits, std::uint32_t model_keypoints) {
+template <class Plausible>
+bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g,
+                                const ArcList* lists, std::uint32_t capacity,
+                                Plausible&& plausible) {
+  // Each pair of consecutive lists (a -> b, b -> c) is joined on b by a
+  // semi-join (flag bit 0: sources of the second list, bit 1: targets kept
+  // of the first), as candidate_lists() does for all three; the closing arc
+  // c -> a is then looked up in the model and compared with the scene arc.
+  std::uint8_t* const flags = flags_.data();
+  const Point2f* model_points = in.index->keypoints();
+  const int* opposite = in.triangulation->halfedges().data();
+  auto arc = [](std::uint64_t key, int s) { return (key >> s) | (key << ((64 - s) & 63)); };
+  triple_count_ = 0;
+  bool room = true;
+  for (int p = 0; p < 3 && room; ++p) {
+    const ArcList& first = lists[p];
+    const ArcList& second = lists[(p + 1) % 3];
+    if (first.count == 0 || second.count == 0) continue;
+    // The closing scene arc's query: its own, or its opposite's, which
+    // matches the model arcs of the other direction.
+    int closing = g.edges[(p + 2) % 3];
+    bool flip = false;
+    if (described_[closing] == 0) {
+      closing = opposite[closing];
+      if (closing < 0 || described_[closing] == 0) continue;
+      flip = true;
+    }
+    const ArcSearch::Query& query = queries_[closing];
+    const std::uint64_t* a_keys = pool_.data() + first.begin;
+    const std::uint64_t* b_keys = pool_.data() + second.begin;
+    const int sa = first.reversed ? 32 : 0, sb = second.reversed ? 32 : 0;
+    for (std::uint32_t x = 0; x < second.count; ++x) flags[key_from(arc(b_keys[x], sb))] |= 1;
+    std::uint64_t* const ka = kept_[0].data();
+    std::uint32_t na = 0;
+    for (std::uint32_t x = 0; x < first.count; ++x) {
+      const std::uint64_t a = arc(a_keys[x], sa);
+      ka[na] = a;
+      na += static_cast<std::uint32_t>((flags[key_to(a)] & 1) != 0);
+    }
+    for (std::uint32_t x = 0; x < second.count; ++x) flags[key_from(arc(b_keys[x], sb))] = 0;
+    if (na == 0) continue;
+    for (std::uint32_t x = 0; x < na; ++x) flags[key_to(ka[x])] |= 2;
+    std::uint64_t* const kb = kept_[1].data();
+    std::uint32_t nb = 0;
+    for (std::uint32_t x = 0; x < second.count; ++x) {
+      const std::uint64_t b = arc(b_keys[x], sb);
+      kb[nb] = b;
+      nb += static_cast<std::uint32_t>((flags[key_from(b)] & 2) != 0);
+    }
+    for (std::uint32_t x = 0; x < na; ++x) flags[key_to(ka[x])] = 0;
+    sort_arc_keys(ka, sort_scratch_.data(), na, id_bits_);
+    na = static_cast<std::uint32_t>(std::unique(ka, ka + na) - ka);
+    sort_arc_keys(kb, sort_scratch_.data(), nb, id_bits_);
+    nb = static_cast<std::uint32_t>(std::unique(kb, kb + nb) - kb);
+    for (std::uint32_t x = 0; x < na && room; ++x) {
+      const std::uint32_t u = key_from(ka[x]), w = key_to(ka[x]);
+      const std::uint64_t *lo, *hi;
+      keys_from(kb, nb, w, lo, hi);
+      for (const std::uint64_t* b = lo; b != hi; ++b) {
+        const std::uint32_t t = key_to(*b);
+        if (t == u) continue;
+        std::array<std::uint32_t, 3> v;
+        v[p] = u;
+        v[(p + 1) % 3] = w;
+        v[(p + 2) % 3] = t;
+        if (!(orient(model_points[v[0]], model_points[v[1]], model_points[v[2]]) > 0.f)) continue;
+        if (!plausible(v.data())) continue;
+        // Scene arc c -> a against model arcs t -> u (flipped: a -> c, u -> t).
+        const auto similar = [&](std::uint32_t slot) { return in.search->matches(query, slot); };
+        if (!(flip ? in.adjacency->any_arc(u, t, similar) : in.adjacency->any_arc(t, u, similar)))
+          continue;
+        if (triple_count_ == capacity) {
+          room = false;
+          break;
+        }
+        triples_[triple_count_++] = v;
+      }
+    }
+  }
+  // A circuit all three lists hold is found by every pass.
+  std::sort(triples_.begin(), triples_.begin() + triple_count_);
+  triple_count_ = static_cast<std::uint32_t>(
+      std::unique(triples_.begin(), triples_.begin() + triple_count_) - triples_.begin());
+  return room;
+}
+
+void Selector::reserve(const Limits& limits, std::uint32_t model_keypoints, bool completion) {
   const auto half_edges = 6 * static_cast<std::size_t>(std::max(0, limits.max_scene_keypoints));
   state_.reserve(half_edges);
   begin_.reserve(half_edges);
@@ -340,6 +486,11 @@ void Selector::reserve(const Limits& limits, std::uint32_t model_keypoints) {
   // A profile has at most the frame's longer side plus one samples.
   profile_.reserve(static_cast<std::size_t>(std::max(limits.max_width, limits.max_height)) + 1);
   sums_.reserve(profile_.capacity() + 30);
+  if (completion) {
+    described_.reserve(half_edges);
+    queries_.reserve(half_edges);
+    triples_.reserve(per_query);
+  }
 }
 
 void Selector::select(const SelectionInput& in, const Limits& limits,
@@ -359,6 +510,13 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     if (kept.size() < per_query) kept.resize(per_query);
   // All clear between keygraphs (candidate_lists() clears what it flags).
   flags_.assign(in.index->keypoint_count(), 0);
+  const bool completion =
+      in.adjacency != nullptr && in.index->params().graph.structure == Structure::kCircuit3;
+  if (in.adjacency != nullptr) {
+    described_.assign(edges, 0);
+    queries_.resize(edges);
+    if (triples_.size() < per_query) triples_.resize(per_query);
+  }
   flags_left_ = false;
   semi_join_in_ = 0;
   semi_join_kept_ = 0;
@@ -392,14 +550,20 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     const ModelInfo info = in.index->model(model_id);
     return static_cast<float>(0.5 * smallest_area_scale(params, info.width, info.height));
   };
-  auto emit = [&](const std::uint32_t* model, const SceneKeygraph& g) {
+  auto plausible = [&](const std::uint32_t* model, const SceneKeygraph& g) {
     Point2f mp[kMaxVertices], sp[kMaxVertices];
     for (int i = 0; i < k; ++i) {
       mp[i] = model_points[model[i]];
       sp[i] = in.scene_points[tri[g.edges[i]]];
     }
+    return plausible_local_map(mp, sp, k, params,
+                               min_area_of(in.index->model_of_keypoint(model[0])));
+  };
+  // Appends a plausible correspondence (`checked`: already known to be);
+  // false when the output is full.
+  auto emit = [&](const std::uint32_t* model, const SceneKeygraph& g, bool checked = false) {
+    if (!checked && !plausible(model, g)) return true;
     const int model_id = in.index->model_of_keypoint(model[0]);
-    if (!plausible_local_map(mp, sp, k, params, min_area_of(model_id))) return true;
     if (check_vertices && !similar_vertices(model, g)) {
       ++stats.vertex_rejections;
       return true;
@@ -420,13 +584,32 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
 
   for (const SceneKeygraph& g : *in.keygraphs) {
     ArcList lists[kMaxVertices];
+    bool room = true;
+    if (completion) {
+      // Every arc is looked up (the closing arc needs its query); two lists
+      // can make a circuit.
+      int found = 0;
+      for (int i = 0; i < 3; ++i) {
+        lists[i] = lookup(in, g.edges[i], limits, stats);
+        found += lists[i].count > 0 ? 1 : 0;
+      }
+      if (found < 2) continue;
+      const bool all =
+          complete_circuit(in, g, lists, static_cast<std::uint32_t>(per_query),
+                           [&](const std::uint32_t* model) { return plausible(model, g); });
+      if (checking_ && !all_flags_clear()) flags_left_ = true;
+      if (!all) stats.truncated_correspondences = true;
+      for (std::uint32_t x = 0; x < triple_count_ && room; ++x)
+        room = emit(triples_[x].data(), g, true);
+      if (!room) break;
+      continue;
+    }
     bool empty = false;
     for (int i = 0; i < looked_up_arcs && !empty; ++i) {
       lists[i] = lookup(in, g.edges[i], limits, stats);
       empty = lists[i].count == 0;
     }
     if (empty) continue;
-    bool room = true;
     if (k == 2) {
       // Each keypoint pair once (views may store it several times).
       std::uint64_t* keys = kept_[0].data();

@@ -15,9 +15,11 @@
 // be similar too.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
+#include "core/arc_adjacency.h"
 #include "core/delaunay.h"
 #include "core/kdtree.h"
 #include "core/keygraph.h"
@@ -60,13 +62,32 @@ class ArcSearch {
   std::uint32_t radius_search_quantised(const std::int32_t* q, const float* attributes,
                                         std::uint32_t* out, std::uint32_t capacity) const;
 
+  // A scene arc's search point in the tree's domain (integer encodings: the
+  // integers, held exactly in floats) and whether its attributes are boxed:
+  // kept so the arc can be compared again with single model arcs.
+  struct Query {
+    ArcSearchPoint point{};
+    bool box = false;
+  };
+  Query query(const ArcDescriptor& q, const float* attributes) const;
+  Query query_quantised(const std::int32_t* q, const float* attributes) const;
+  std::uint32_t search(const Query& q, std::uint32_t* out, std::uint32_t capacity) const;
+  // Whether the model arc in tree slot `slot` is within the similarity
+  // radius and scale box of q: what search() tests, for one arc.
+  bool matches(const Query& q, std::uint32_t slot) const;
+
  private:
+  template <class T>
+  std::array<T, kSearchDims> encoded(const Query& q) const;
   std::uint32_t search_encoded(const ArcSearchPointI16& p, bool box, std::uint32_t* out,
                                std::uint32_t capacity) const;
   std::uint32_t search_encoded(const ArcSearchPointI8& p, bool box, std::uint32_t* out,
                                std::uint32_t capacity) const;
 
   DescriptorEncoding encoding_ = DescriptorEncoding::kFloat32;
+  const ArcSearchPoint* points_f32_ = nullptr;  // tree points, by slot
+  const ArcSearchPointI16* points_i16_ = nullptr;
+  const ArcSearchPointI8* points_i8_ = nullptr;
   ArcTreeView f32_;
   ArcTreeView16 i16_;
   ArcTreeView8 i8_;
@@ -95,6 +116,10 @@ struct SelectionInput {
   const float* model_inverse_norms = nullptr;
   const std::uint8_t* scene_descriptors = nullptr;
   const float* scene_inverse_norms = nullptr;
+  // Set (graph.complete_circuits, 3-circuits): a circuit is also selected
+  // from two joined arc lists when the model arc closing it matches the
+  // third scene arc, looked up here and compared directly.
+  const ArcAdjacency* adjacency = nullptr;
 };
 
 class Selector {
@@ -109,6 +134,9 @@ class Selector {
         kept_{WorkVector<std::uint64_t>(memory), WorkVector<std::uint64_t>(memory),
               WorkVector<std::uint64_t>(memory), WorkVector<std::uint64_t>(memory)},
         flags_(memory),
+        described_(memory),
+        queries_(memory),
+        triples_(memory),
         profile_(memory),
         sums_(memory) {}
 
@@ -116,7 +144,9 @@ class Selector {
   // and per frame, frame size for the profiles) and an index of
   // `model_keypoints` keypoints: select() then allocates nothing, and stops
   // looking up model arcs once limits.max_arc_pool are kept in a frame.
-  void reserve(const Limits& limits, std::uint32_t model_keypoints);
+  // With `completion` (graph.complete_circuits), also the per-half-edge
+  // queries and the completed circuits.
+  void reserve(const Limits& limits, std::uint32_t model_keypoints, bool completion = false);
 
   // Clears and fills `matches` (at most limits.max_correspondences); updates
   // stats.arcs_described, correspondences and the truncation flags.
@@ -146,6 +176,15 @@ class Selector {
   // descriptor).
   ArcList lookup(const SelectionInput& in, int e, const Limits& limits, DetectStats& stats);
 
+  // With in.adjacency: fills triples_ with the model triples (in the scene
+  // keygraph's vertex order, sorted, each once) that two of the three lists
+  // join into a clockwise circuit passing `plausible`, closed by a model arc
+  // that matches the third scene arc. False when more than `capacity` were
+  // found (the rest are dropped).
+  template <class Plausible>
+  bool complete_circuit(const SelectionInput& in, const SceneKeygraph& g, const ArcList* lists,
+                        std::uint32_t capacity, Plausible&& plausible);
+
   // Fills kept_[0..k) with the arcs of lists[0..k) (a k-circuit's, in
   // order) that can close a circuit, each sorted; false when one is empty.
   bool candidate_lists(const ArcList* lists, int k);
@@ -172,6 +211,11 @@ class Selector {
   std::uint32_t kept_count_[kMaxVertices] = {0, 0, 0, 0};
   WorkVector<std::uint8_t> flags_;  // per model keypoint: bit i leaves, 4 + i enters list i
   int id_bits_ = 32;                // bits of the index's keypoint ids
+  // Per half-edge, with in.adjacency: whether it was described, and its query.
+  WorkVector<std::uint8_t> described_;
+  WorkVector<ArcSearch::Query> queries_;
+  WorkVector<std::array<std::uint32_t, 3>> triples_;
+  std::uint32_t triple_count_ = 0;
   WorkVector<float> profile_;
   WorkVector<std::int32_t> sums_;  // fixed-point profiles
   std::size_t pool_limit_ = static_cast<std::size_t>(-1);

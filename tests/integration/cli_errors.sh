@@ -109,10 +109,10 @@ next_case
 expect_failure "build: bad --encoding" "$KG" build --encoding int4 "$DATA/box.png" -o "$CASE/o.kgi"
 # The appearance parameters (format 6.2) are range-checked, naming the field.
 # So is the search budget (6.3), and the triangle patch check and
-# progressive sampling (6.4).
+# progressive sampling (6.4), and circuit completion (6.5).
 for assignment in views.appearance_size=9999 views.appearance_size=-1 ransac.min_appearance=1.5 \
   ransac.min_appearance=nan descriptor.search_reference_models=-5 \
-  ransac.min_triangle_correlation=1.5 ransac.progressive_sampling=2; do
+  ransac.min_triangle_correlation=1.5 ransac.progressive_sampling=2 graph.complete_circuits=2; do
   next_case
   expect_failure "build: --set $assignment" \
     "$KG" build --set "$assignment" "$DATA/box.png" -o "$CASE/o.kgi"

@@ -269,17 +269,21 @@ TEST(RuntimeMemory, TinyLimitsDegradeAndSayWhat) {
 // check samples on the stack and compacts the correspondences in place)
 // and ransac.progressive_sampling = 0 (uniform draws; the default,
 // progressive, is what the other tests run).
+// Nor does graph.complete_circuits (format 6.5), whose model arc table
+// comes from the workspace.
 TEST(RuntimeMemory, OptInMatchingChecksAllocateNothing) {
   const Fixture& f = fixture();
   expect_ready(f);
-  for (const bool triangle_check : {true, false}) {
-    SCOPED_TRACE(triangle_check ? "triangle patch check" : "uniform draws");
+  enum Option { kTriangleCheck, kUniformDraws, kCompletion };
+  for (const Option option : {kTriangleCheck, kUniformDraws, kCompletion}) {
+    const bool triangle_check = option == kTriangleCheck;
+    SCOPED_TRACE(triangle_check            ? "triangle patch check"
+                 : option == kUniformDraws ? "uniform draws"
+                                           : "circuit completion");
     Params params;
-    if (triangle_check) {
-      params.ransac.min_triangle_correlation = 0.6f;
-    } else {
-      params.ransac.progressive_sampling = 0;
-    }
+    if (triangle_check) params.ransac.min_triangle_correlation = 0.6f;
+    if (option == kUniformDraws) params.ransac.progressive_sampling = 0;
+    if (option == kCompletion) params.graph.complete_circuits = 1;
     BoxIndex box;
     ASSERT_NO_FATAL_FAILURE(view_box_index(params, box));
     Detector detector(box.index);
@@ -299,6 +303,21 @@ TEST(RuntimeMemory, OptInMatchingChecksAllocateNothing) {
     EXPECT_EQ(box_found, 10) << "the box is found in box_in_scene every time";
     if (triangle_check) {
       EXPECT_GT(rejected, 0) << "the check ran";
+    }
+    if (option == kCompletion) {
+      // The arc table (8 bytes per model arc) is in the workspace.
+      Params plain = params;
+      plain.graph.complete_circuits = 0;
+      BoxIndex without;
+      ASSERT_NO_FATAL_FAILURE(view_box_index(plain, without));
+      const Limits limits;
+      const std::size_t growth = Detector::workspace_bytes(box.index, limits) -
+                                 Detector::workspace_bytes(without.index, limits);
+      std::printf("circuit completion: workspace +%zu bytes for %u model arcs\n", growth,
+                  box.index.arc_count());
+      EXPECT_GE(growth, 8u * box.index.arc_count());
+      EXPECT_LE(growth, 8u * box.index.arc_count() + 4u * box.index.keypoint_count() + 1'000'000u)
+          << "the table and the per-half-edge queries, nothing more";
     }
   }
 }

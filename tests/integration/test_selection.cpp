@@ -22,6 +22,7 @@
 
 #include "build/eval_index.h"
 #include "build/model_builder.h"
+#include "core/arc_adjacency.h"
 #include "core/arc_attributes.h"
 #include "core/arc_descriptor.h"
 #include "core/blur.h"
@@ -176,12 +177,16 @@ const Case& the_case(Structure structure = Structure::kCircuit3) {
 // The selector's correspondences as a set (each must be new). Checks the
 // candidate flags after every keygraph; `kept_share`: the share of the
 // model arcs its semi-join received that it kept.
+// `leaves`: the search's leaf budget (-1: the index's); `adjacency`: set,
+// circuits are completed from two lists (graph.complete_circuits).
 std::set<Match> select_all(const Case& c, const Limits& limits, DetectStats& stats,
-                           double* kept_share = nullptr) {
-  const ArcSearch search(c.built.index());
+                           double* kept_share = nullptr, int leaves = -1,
+                           const ArcAdjacency* adjacency = nullptr) {
+  const ArcSearch search =
+      leaves < 0 ? ArcSearch(c.built.index()) : ArcSearch(c.built.index(), leaves);
   Selector selector;
   selector.set_checking(true);
-  selector.reserve(limits, c.built.index().keypoint_count());
+  selector.reserve(limits, c.built.index().keypoint_count(), adjacency != nullptr);
   SelectionInput in;
   in.index = &c.built.index();
   in.search = &search;
@@ -190,6 +195,7 @@ std::set<Match> select_all(const Case& c, const Limits& limits, DetectStats& sta
   in.scene_scales = c.scene.scales.data();
   in.triangulation = &c.scene.triangulation;
   in.keygraphs = &c.scene.keygraphs;
+  in.adjacency = adjacency;
   WorkVector<KeygraphMatch> matches;
   matches.reserve(static_cast<std::size_t>(limits.max_correspondences));
   selector.select(in, limits, matches, stats);
@@ -235,6 +241,71 @@ TEST(Selection, EqualsBruteForceJoinOnRealImages) {
   // With model views a keypoint has arcs from several views, so more of
   // them survive (measured 11.1 %; 2.7 % with the single model image).
   EXPECT_LT(kept, 0.20);
+}
+
+// Circuit completion (graph.complete_circuits): a circuit is also selected
+// from two searched arcs when the model arc closing it is within the radius
+// and box of the third scene arc, compared directly. With the exact search
+// the third arc is among the searched ones whenever it matches, so the
+// output is the brute-force set again, each circuit once although every
+// pass of the three finds it.
+TEST(Selection, CompletedCircuitsWithExactSearchEqualBruteForceJoin) {
+  const Case& c = the_case();
+  ArcAdjacency adjacency(std::pmr::get_default_resource());
+  adjacency.build(c.built.index(), true);
+  DetectStats stats;
+  const std::set<Match> selected = select_all(c, Limits{}, stats, nullptr, 0, &adjacency);
+  ASSERT_FALSE(stats.truncated_arc_matches);
+  ASSERT_FALSE(stats.truncated_correspondences);
+  EXPECT_EQ(selected, c.expected);
+}
+
+// With an approximate search of one leaf per query most arcs go unfound.
+// Completion then selects every circuit the uncompleted join does, more
+// besides, and only true ones: each completed circuit's three arcs are all
+// similar by the exact search's reading (the brute-force set).
+TEST(Selection, CompletedCircuitsRecoverArcsTheSearchBudgetMissed) {
+  const Case& c = the_case();
+  ArcAdjacency adjacency(std::pmr::get_default_resource());
+  adjacency.build(c.built.index(), true);
+  DetectStats plain_stats, completed_stats;
+  const std::set<Match> plain = select_all(c, Limits{}, plain_stats, nullptr, 1);
+  const std::set<Match> completed =
+      select_all(c, Limits{}, completed_stats, nullptr, 1, &adjacency);
+  ASSERT_FALSE(completed_stats.truncated_correspondences);
+  EXPECT_TRUE(std::includes(completed.begin(), completed.end(), plain.begin(), plain.end()))
+      << "completion lost a circuit the three lists join";
+  EXPECT_TRUE(
+      std::includes(c.expected.begin(), c.expected.end(), completed.begin(), completed.end()))
+      << "a completed circuit has an arc that is not similar";
+  std::printf("one leaf: %zu circuits joined, %zu completed, %zu exact\n", plain.size(),
+              completed.size(), c.expected.size());
+  EXPECT_GT(completed.size(), plain.size() + plain.size() / 4)
+      << "completion should recover a sizeable share of the circuits one leaf misses";
+}
+
+// The arc table: every model arc once, in the row of its source, rows
+// sorted by target.
+TEST(ArcAdjacency, HoldsEveryModelArcInItsSourcesRow) {
+  const Case& c = the_case();
+  const ModelIndex& index = c.built.index();
+  ArcAdjacency adjacency(std::pmr::get_default_resource());
+  adjacency.build(index, true);
+  ASSERT_GT(index.arc_count(), 1000u);
+  for (std::uint32_t slot = 0; slot < index.arc_count(); ++slot) {
+    const ModelArc arc = index.arc(slot);
+    int visits = 0;
+    const bool found = adjacency.any_arc(arc.from, arc.to, [&](std::uint32_t s) {
+      ++visits;
+      EXPECT_EQ(index.arc(s).from, arc.from);
+      EXPECT_EQ(index.arc(s).to, arc.to);
+      return s == slot;
+    });
+    ASSERT_TRUE(found) << "arc in slot " << slot << " not in its row";
+    ASSERT_GE(visits, 1);
+  }
+  // A pair with no arc: a keypoint and itself.
+  EXPECT_FALSE(adjacency.any_arc(0, 0, [](std::uint32_t) { return true; }));
 }
 
 // The same for 4-circuits, whose middle lists are cut against both

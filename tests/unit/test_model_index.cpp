@@ -1109,6 +1109,8 @@ TEST(Golden, EveryGoldenLoadsAndDetects) {
     EXPECT_EQ(index.params().ransac.min_triangle_correlation, 0.f);
     // Progressive sampling (6.4) is on by default; older files draw uniformly.
     EXPECT_EQ(index.params().ransac.progressive_sampling, index.version_minor() >= 4 ? 1 : 0);
+    // Circuit completion (6.5) is off by default and in older files.
+    EXPECT_EQ(index.params().graph.complete_circuits, 0);
     if (index.version_minor() >= 2) {
       ASSERT_TRUE(index.has_appearance());
       const ModelAppearance look = index.appearance(0);
@@ -1650,6 +1652,13 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
     b = bytes();
     put_params(b, p);
     EXPECT_TRUE(rejected(b, "parameter ransac.progressive_sampling must be 0"));
+  }
+  for (const int complete : {-1, 2}) {
+    p = paper_params();
+    p.graph.complete_circuits = complete;
+    b = bytes();
+    put_params(b, p);
+    EXPECT_TRUE(rejected(b, "parameter graph.complete_circuits must be 0"));
   }
   p = paper_params();
   p.descriptor.search_reference_models = -1;

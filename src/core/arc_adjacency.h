@@ -1,0 +1,45 @@
+// The model arcs leaving each model keypoint, for direct look-ups of one
+// arc between two given keypoints (graph.complete_circuits): per keypoint,
+// its out-arcs' (to, tree slot) sorted by `to`, in compressed rows. Derived
+// from the index when a Detector is built (8 bytes per model arc, 4 per
+// keypoint, from the Detector's workspace); a frame only reads it.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+
+#include "core/workspace.h"
+#include "keygraph/model_index.h"
+
+namespace kg {
+
+class ArcAdjacency {
+ public:
+  explicit ArcAdjacency(std::pmr::memory_resource* memory) : row_begin_(memory), entries_(memory) {}
+
+  // Reserves the rows for `index` and, when `fill`, fills them (false: the
+  // Detector's measuring pass, which only reserves).
+  void build(const ModelIndex& index, bool fill);
+  bool empty() const { return row_begin_.empty(); }
+
+  // Calls f(slot) for each stored arc from -> to (views may store one
+  // keypoint pair several times) until f returns true; returns whether one did.
+  template <class F>
+  bool any_arc(std::uint32_t from, std::uint32_t to, F&& f) const {
+    const std::uint64_t* lo = entries_.data() + row_begin_[from];
+    const std::uint64_t* hi = entries_.data() + row_begin_[from + 1];
+    const std::uint64_t first = static_cast<std::uint64_t>(to) << 32;
+    // Rows hold a keypoint's neighbours within max_distance in every view
+    // (hundreds with tilted views): a binary search.
+    lo = std::lower_bound(lo, hi, first);
+    for (; lo != hi && (*lo >> 32) == to; ++lo)
+      if (f(static_cast<std::uint32_t>(*lo))) return true;
+    return false;
+  }
+
+ private:
+  WorkVector<std::uint32_t> row_begin_;  // keypoint_count + 1 offsets into entries_
+  WorkVector<std::uint64_t> entries_;    // to << 32 | slot, each row sorted
+};
+
+}  // namespace kg
