@@ -129,10 +129,11 @@ struct GraphParams {
   // The search's budget is per query, so with many models in the index a
   // sign's arcs are crowded out of the leaves visited; two out of three
   // suffice then. Costs a per-keypoint arc table in the workspace (8 bytes
-  // per model arc) and about 2.5x the selection time. 1: on, 0: off (and in
-  // files before format 6.5). Sign benchmark with tilted views, held-out
-  // seed: 77.9 / 68.8 / 65.8 % -> 80.0 / 77.1 / 77.5 % within 10 px at 1 / 10
-  // / 50 signs (docs/RESULTS.md, "Circuit completion").
+  // per model arc, 4 per keypoint) and about 3x the selection time. 1: on
+  // (3-circuits only; no effect on other structures), 0: off (and in files
+  // before format 6.5). Sign benchmark with tilted views and 10 leaves,
+  // held-out seed: 77.9 / 68.8 / 65.8 % -> 80.0 / 77.1 / 77.5 % within 10 px
+  // at 1 / 10 / 50 signs (docs/RESULTS.md, "Circuit completion").
   int complete_circuits = 0;
 };
 

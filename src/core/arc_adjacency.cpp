@@ -27,4 +27,45 @@ void ArcAdjacency::build(const ModelIndex& index, bool fill) {
     std::sort(entries_.begin() + row_begin_[k], entries_.begin() + row_begin_[k + 1]);
 }
 
+void ArcAdjacency::find(const std::uint32_t* from, const std::uint32_t* to, int n,
+                        const std::uint64_t** begin, const std::uint64_t** end) const {
+  const std::uint64_t* base[kBatch];
+  std::uint32_t length[kBatch];
+  std::uint64_t key[kBatch];
+  std::uint32_t longest = 0;
+  for (int i = 0; i < n; ++i) {
+    base[i] = entries_.data() + row_begin_[from[i]];
+    length[i] = row_begin_[from[i] + 1] - row_begin_[from[i]];
+    end[i] = base[i] + length[i];
+    key[i] = static_cast<std::uint64_t>(to[i]) << 32;
+    longest = std::max(longest, length[i]);
+#if defined(__GNUC__)
+    __builtin_prefetch(base[i] + length[i] / 2);
+#endif
+  }
+  // Branch-free lower bounds: each step halves every range still longer
+  // than one entry.
+  while (longest > 1) {
+    longest = 0;
+    for (int i = 0; i < n; ++i) {
+      const std::uint32_t len = length[i];
+      if (len <= 1) continue;
+      const std::uint32_t half = len / 2;
+      base[i] = base[i][half] < key[i] ? base[i] + half : base[i];
+      length[i] = len - half;
+#if defined(__GNUC__)
+      __builtin_prefetch(base[i] + length[i] / 2);  // the next step's probe
+#endif
+      longest = std::max(longest, length[i]);
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    const std::uint64_t* p = base[i];
+    if (length[i] == 1 && *p < key[i]) ++p;
+    begin[i] = p;
+    while (p != end[i] && (*p >> 32) == to[i]) ++p;
+    end[i] = p;
+  }
+}
+
 }  // namespace kg

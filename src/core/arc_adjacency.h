@@ -22,6 +22,14 @@ class ArcAdjacency {
   void build(const ModelIndex& index, bool fill);
   bool empty() const { return row_begin_.empty(); }
 
+  // The entries (to << 32 | slot) of the stored arcs from[i] -> to[i], for
+  // i < n (at most kBatch): [begin[i], end[i]). The n binary searches run in
+  // lock step, each step's next probe prefetched, so their cache
+  // misses overlap instead of queueing one behind another.
+  static constexpr int kBatch = 32;
+  void find(const std::uint32_t* from, const std::uint32_t* to, int n, const std::uint64_t** begin,
+            const std::uint64_t** end) const;
+
   // Calls f(slot) for each stored arc from -> to (views may store one
   // keypoint pair several times) until f returns true; returns whether one did.
   template <class F>

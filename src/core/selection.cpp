@@ -187,6 +187,24 @@ bool within(const std::array<T, kSearchDims>& p, const std::array<T, kSearchDims
 
 }  // namespace
 
+void ArcSearch::prefetch(std::uint32_t slot) const {
+#if defined(__GNUC__)
+  switch (encoding_) {
+    case DescriptorEncoding::kFloat32:
+      __builtin_prefetch(points_f32_ + slot);
+      break;
+    case DescriptorEncoding::kInt16:
+      __builtin_prefetch(points_i16_ + slot);
+      break;
+    case DescriptorEncoding::kInt8:
+      __builtin_prefetch(points_i8_ + slot);
+      break;
+  }
+#else
+  (void)slot;
+#endif
+}
+
 bool ArcSearch::matches(const Query& q, std::uint32_t slot) const {
   switch (encoding_) {
     case DescriptorEncoding::kFloat32:
@@ -435,34 +453,71 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
       nb += static_cast<std::uint32_t>((flags[key_from(b)] & 2) != 0);
     }
     for (std::uint32_t x = 0; x < na; ++x) flags[key_to(ka[x])] = 0;
+    // The closing arc is looked up in the row of t (c_m), or of u (a_m)
+    // when flipped: the outer loop runs over the arcs that fix that row, so
+    // its look-ups after the first hit the cache. kb is sorted by (from,
+    // to); ka by (from, to) when flipped, else by (to, from).
+    if (!flip)
+      for (std::uint32_t x = 0; x < na; ++x) ka[x] = arc(ka[x], 32);
     sort_arc_keys(ka, sort_scratch_.data(), na, id_bits_);
     na = static_cast<std::uint32_t>(std::unique(ka, ka + na) - ka);
     sort_arc_keys(kb, sort_scratch_.data(), nb, id_bits_);
     nb = static_cast<std::uint32_t>(std::unique(kb, kb + nb) - kb);
-    for (std::uint32_t x = 0; x < na && room; ++x) {
-      const std::uint32_t u = key_from(ka[x]), w = key_to(ka[x]);
-      const std::uint64_t *lo, *hi;
-      keys_from(kb, nb, w, lo, hi);
-      for (const std::uint64_t* b = lo; b != hi; ++b) {
-        const std::uint32_t t = key_to(*b);
-        if (t == u) continue;
-        std::array<std::uint32_t, 3> v;
-        v[p] = u;
-        v[(p + 1) % 3] = w;
-        v[(p + 2) % 3] = t;
-        if (!(orient(model_points[v[0]], model_points[v[1]], model_points[v[2]]) > 0.f)) continue;
-        if (!plausible(v.data())) continue;
-        // Scene arc c -> a against model arcs t -> u (flipped: a -> c, u -> t).
-        const auto similar = [&](std::uint32_t slot) { return in.search->matches(query, slot); };
-        if (!(flip ? in.adjacency->any_arc(u, t, similar) : in.adjacency->any_arc(t, u, similar)))
-          continue;
+    // Candidates wait in a batch, so that their closing arcs' look-ups in
+    // the model overlap their cache misses (ArcAdjacency::find).
+    constexpr int kBatch = ArcAdjacency::kBatch;
+    std::array<std::uint32_t, 3> batch[kBatch];
+    std::uint32_t row[kBatch], target[kBatch];
+    int pending = 0;
+    auto flush = [&]() {
+      const std::uint64_t* begin[kBatch];
+      const std::uint64_t* end[kBatch];
+      in.adjacency->find(row, target, pending, begin, end);
+      for (int i = 0; i < pending; ++i)
+        if (begin[i] != end[i]) in.search->prefetch(static_cast<std::uint32_t>(*begin[i]));
+      for (int i = 0; i < pending && room; ++i) {
+        bool similar = false;
+        for (const std::uint64_t* e = begin[i]; e != end[i] && !similar; ++e)
+          similar = in.search->matches(query, static_cast<std::uint32_t>(*e));
+        if (!similar) continue;
         if (triple_count_ == capacity) {
           room = false;
           break;
         }
-        triples_[triple_count_++] = v;
+        triples_[triple_count_++] = batch[i];
+      }
+      pending = 0;
+    };
+    // Scene arc c -> a against model arcs t -> u (flipped: a -> c, u -> t).
+    auto close = [&](std::uint32_t u, std::uint32_t w, std::uint32_t t) {
+      if (t == u) return;
+      std::array<std::uint32_t, 3> v;
+      v[p] = u;
+      v[(p + 1) % 3] = w;
+      v[(p + 2) % 3] = t;
+      if (!(orient(model_points[v[0]], model_points[v[1]], model_points[v[2]]) > 0.f)) return;
+      if (!plausible(v.data())) return;
+      batch[pending] = v;
+      row[pending] = flip ? u : t;
+      target[pending] = flip ? t : u;
+      if (++pending == kBatch) flush();
+    };
+    const std::uint64_t *lo, *hi;
+    if (flip) {
+      for (std::uint32_t x = 0; x < na && room; ++x) {
+        const std::uint32_t u = key_from(ka[x]), w = key_to(ka[x]);
+        keys_from(kb, nb, w, lo, hi);
+        for (const std::uint64_t* b = lo; b != hi && room; ++b) close(u, w, key_to(*b));
+      }
+    } else {
+      // Each b = w -> t against the a = u -> w (ka holds w << 32 | u).
+      for (std::uint32_t x = 0; x < nb && room; ++x) {
+        const std::uint32_t w = key_from(kb[x]), t = key_to(kb[x]);
+        keys_from(ka, na, w, lo, hi);
+        for (const std::uint64_t* a = lo; a != hi && room; ++a) close(key_to(*a), w, t);
       }
     }
+    if (pending > 0 && room) flush();
   }
   // A circuit all three lists hold is found by every pass.
   std::sort(triples_.begin(), triples_.begin() + triple_count_);
@@ -489,7 +544,7 @@ void Selector::reserve(const Limits& limits, std::uint32_t model_keypoints, bool
   if (completion) {
     described_.reserve(half_edges);
     queries_.reserve(half_edges);
-    triples_.reserve(per_query);
+    triples_.reserve(3 * per_query);  // a circuit is found by up to 3 passes before dedupe
   }
 }
 
@@ -515,7 +570,7 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   if (in.adjacency != nullptr) {
     described_.assign(edges, 0);
     queries_.resize(edges);
-    if (triples_.size() < per_query) triples_.resize(per_query);
+    if (triples_.size() < 3 * per_query) triples_.resize(3 * per_query);
   }
   flags_left_ = false;
   semi_join_in_ = 0;
@@ -595,7 +650,7 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
       }
       if (found < 2) continue;
       const bool all =
-          complete_circuit(in, g, lists, static_cast<std::uint32_t>(per_query),
+          complete_circuit(in, g, lists, static_cast<std::uint32_t>(3 * per_query),
                            [&](const std::uint32_t* model) { return plausible(model, g); });
       if (checking_ && !all_flags_clear()) flags_left_ = true;
       if (!all) stats.truncated_correspondences = true;

@@ -75,6 +75,8 @@ class ArcSearch {
   // Whether the model arc in tree slot `slot` is within the similarity
   // radius and scale box of q: what search() tests, for one arc.
   bool matches(const Query& q, std::uint32_t slot) const;
+  // Asks the cache for the model arc point matches() reads.
+  void prefetch(std::uint32_t slot) const;
 
  private:
   template <class T>
@@ -180,7 +182,8 @@ class Selector {
   // keygraph's vertex order, sorted, each once) that two of the three lists
   // join into a clockwise circuit passing `plausible`, closed by a model arc
   // that matches the third scene arc. False when more than `capacity` were
-  // found (the rest are dropped).
+  // found before duplicates (up to one per pass) were removed: the rest are
+  // dropped.
   template <class Plausible>
   bool complete_circuit(const SelectionInput& in, const SceneKeygraph& g, const ArcList* lists,
                         std::uint32_t capacity, Plausible&& plausible);

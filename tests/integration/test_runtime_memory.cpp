@@ -318,6 +318,15 @@ TEST(RuntimeMemory, OptInMatchingChecksAllocateNothing) {
       EXPECT_GE(growth, 8u * box.index.arc_count());
       EXPECT_LE(growth, 8u * box.index.arc_count() + 4u * box.index.keypoint_count() + 1'000'000u)
           << "the table and the per-half-edge queries, nothing more";
+      // And the detector completes circuits: more correspondences than without.
+      Detector plain_detector(without.index);
+      ASSERT_TRUE(plain_detector.status()) << plain_detector.status().message();
+      DetectionList plain_found;
+      ASSERT_TRUE(plain_detector.detect(test::view(f.box_scene), plain_found).is_ok());
+      ASSERT_TRUE(detector.detect(test::view(f.box_scene), found).is_ok());
+      std::printf("box_in_scene: %d correspondences completed, %d not\n",
+                  detector.stats().correspondences, plain_detector.stats().correspondences);
+      EXPECT_GT(detector.stats().correspondences, plain_detector.stats().correspondences);
     }
   }
 }
