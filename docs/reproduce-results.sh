@@ -19,6 +19,9 @@
 #   oxford-ENC      the 400 crops with float32 and int16 descriptors
 #   real-*          the real photo sets (docs/EVAL.md): exit signs (all, dev, test),
 #                   planar pairs, negatives; manifests in OUT_DIR/real-manifests
+#   signs2, synth2-angled, synth2-tilt, oxford-angled, real-planar-pairs-angled
+#                   the angled opt-in (circuit completion) on the held-out sign set
+#                   (seed 2), the 400 crops and the photo pairs
 # Copy OUT_DIR/oxford/*.png to docs/figures/ to refresh the committed plots.
 set -eu
 KG=${1:-build/release/src/cli/keygraph}
@@ -76,3 +79,20 @@ run real-planar-pairs eval --truth "$M/planar-pairs.jsonl" --models "$M/planar-p
   --out "$OUT/real-planar-pairs" --gallery
 run real-negatives eval --truth "$M/negatives.jsonl" --models "$M/exit-sign-models.json" \
   --out "$OUT/real-negatives" --gallery
+# The angled opt-in (RESULTS.md, "Circuit completion"): tilted views, the
+# triangle check, circuit completion and 10 leaves, against tilted views
+# and the check alone, on the held-out sign set, Oxford and the photo pairs.
+TILT="--set views.max_tilt=60 --set views.tilt_levels=2 --set ransac.min_triangle_correlation=0.6"
+ANGLED="$TILT --set graph.complete_circuits=1 --set descriptor.max_search_leaves=10"
+rm -rf "$OUT/signs2"
+run signs2 synth -o "$OUT/signs2" --seed 2 --signs 50 --frames 300
+# shellcheck disable=SC2086 # the option lists are meant to split
+run synth2-angled eval --synth "$OUT/signs2" --sizes 1,10,50 --methods keygraph $ANGLED
+# shellcheck disable=SC2086
+run synth2-tilt eval --synth "$OUT/signs2" --sizes 1,10,50 --methods keygraph $TILT
+# shellcheck disable=SC2086
+run oxford-angled eval --dataset "$OXFORD" --crops 10 --seed 1 --methods keygraph --negatives \
+  --out "$OUT/oxford-angled" $ANGLED
+# shellcheck disable=SC2086
+run real-planar-pairs-angled eval --truth "$M/planar-pairs.jsonl" \
+  --models "$M/planar-pair-models.json" --methods keygraph $ANGLED
