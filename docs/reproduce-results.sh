@@ -1,8 +1,9 @@
 #!/bin/sh
 # Reproduces every table and figure of the Oxford, sign-benchmark and
-# real-photo sections of docs/RESULTS.md, in one run (about 1.5 hours on 2
+# real-photo sections of docs/RESULTS.md, in one run (about 1.75 hours on 2
 # busy cores: the 400-crop run with every method took 36 min, the centre
-# crops 6 min, the sign benchmark 10 min, the real photos 5 min):
+# crops 6 min, the sign benchmark 10 min, the real photos 5 min, the angled
+# block about 15 min):
 #
 #   docs/reproduce-results.sh [KEYGRAPH_BINARY] [OUT_DIR] [OXFORD_DIR] [REAL_DIR]
 #

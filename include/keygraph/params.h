@@ -129,7 +129,8 @@ struct GraphParams {
   // The search's budget is per query, so with many models in the index a
   // sign's arcs are crowded out of the leaves visited; two out of three
   // suffice then. Costs a per-keypoint arc table in the workspace (8 bytes
-  // per model arc, 4 per keypoint) and about 3x the selection time. 1: on
+  // per model arc, 4 per keypoint) and about 3x the selection's time
+  // (with tilted views, the frame is 2.4x the defaults' on bench_frame). 1: on
   // (3-circuits only; no effect on other structures), 0: off (and in files
   // before format 6.5). Sign benchmark with tilted views and 10 leaves,
   // held-out seed: 77.9 / 68.8 / 65.8 % -> 80.0 / 77.1 / 77.5 % within 10 px

@@ -43,8 +43,8 @@ void ArcAdjacency::find(const std::uint32_t* from, const std::uint32_t* to, int 
     __builtin_prefetch(base[i] + length[i] / 2);
 #endif
   }
-  // Branch-free lower bounds: each step halves every range still longer
-  // than one entry.
+  // Lower bounds by conditional moves: each step halves every range still
+  // longer than one entry.
   while (longest > 1) {
     longest = 0;
     for (int i = 0; i < n; ++i) {

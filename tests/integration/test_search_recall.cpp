@@ -87,8 +87,9 @@ class SearchRecall : public ::testing::TestWithParam<int> {
       ASSERT_FALSE(scenes_->back().empty()) << t.scene;
     }
     references_->push_back(test::graf_truth());
-    references_->push_back(
-        test::sift_reference(test::load_gray(test::opencv_data("box.png")), (*scenes_)[1]));
+    const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+    ASSERT_FALSE(box.empty()) << "box.png";
+    references_->push_back(test::sift_reference(box, (*scenes_)[1]));
   }
   static void TearDownTestSuite() {
     for (Built*& b : built_) {
