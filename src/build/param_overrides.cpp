@@ -91,4 +91,13 @@ std::vector<std::string> param_names() {
   return names;
 }
 
+Params angled_params(Params base) {
+  base.views.max_tilt = 60.f;
+  base.views.tilt_levels = 2;
+  base.ransac.min_triangle_correlation = 0.6f;
+  base.graph.complete_circuits = 1;
+  base.descriptor.max_search_leaves = 10;
+  return base;
+}
+
 }  // namespace kg

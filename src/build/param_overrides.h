@@ -22,4 +22,10 @@ bool param_value_text(const Params& params, const std::string& name, std::string
 // order), for help texts.
 std::vector<std::string> param_names();
 
+// The opt-in for many signs seen at an angle (README, "Results";
+// docs/RESULTS.md, "Circuit completion"): `base` with tilted views to 60
+// degrees in 2 levels, the triangle check at 0.6, circuit completion and 10
+// search leaves per query.
+Params angled_params(Params base = Params{});
+
 }  // namespace kg

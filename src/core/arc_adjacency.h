@@ -5,7 +5,6 @@
 // keypoint, from the Detector's workspace); a frame only reads it.
 #pragma once
 
-#include <algorithm>
 #include <cstdint>
 
 #include "core/workspace.h"
@@ -20,7 +19,6 @@ class ArcAdjacency {
   // Reserves the rows for `index` and, when `fill`, fills them (false: the
   // Detector's measuring pass, which only reserves).
   void build(const ModelIndex& index, bool fill);
-  bool empty() const { return row_begin_.empty(); }
 
   // The entries (to << 32 | slot) of the stored arcs from[i] -> to[i], for
   // i < n (at most kBatch): [begin[i], end[i]). The n binary searches run in
@@ -29,21 +27,6 @@ class ArcAdjacency {
   static constexpr int kBatch = 32;
   void find(const std::uint32_t* from, const std::uint32_t* to, int n, const std::uint64_t** begin,
             const std::uint64_t** end) const;
-
-  // Calls f(slot) for each stored arc from -> to (views may store one
-  // keypoint pair several times) until f returns true; returns whether one did.
-  template <class F>
-  bool any_arc(std::uint32_t from, std::uint32_t to, F&& f) const {
-    const std::uint64_t* lo = entries_.data() + row_begin_[from];
-    const std::uint64_t* hi = entries_.data() + row_begin_[from + 1];
-    const std::uint64_t first = static_cast<std::uint64_t>(to) << 32;
-    // Rows hold a keypoint's neighbours within max_distance in every view
-    // (hundreds with tilted views): a binary search.
-    lo = std::lower_bound(lo, hi, first);
-    for (; lo != hi && (*lo >> 32) == to; ++lo)
-      if (f(static_cast<std::uint32_t>(*lo))) return true;
-    return false;
-  }
 
  private:
   WorkVector<std::uint32_t> row_begin_;  // keypoint_count + 1 offsets into entries_

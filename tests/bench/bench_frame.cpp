@@ -44,6 +44,7 @@
 #include "build/eval_index.h"
 #include "build/image_io.h"
 #include "build/model_builder.h"
+#include "build/param_overrides.h"
 #include "core/arc_attributes.h"
 #include "core/arc_descriptor.h"
 #include "core/blur.h"
@@ -116,16 +117,6 @@ struct Data {
 Data& data() {
   static Data d;
   return d;
-}
-
-// README, "Results": the configuration for signs seen at an angle.
-Params angled_params(Params p) {
-  p.views.max_tilt = 60.f;
-  p.views.tilt_levels = 2;
-  p.ransac.min_triangle_correlation = 0.6f;
-  p.graph.complete_circuits = 1;
-  p.descriptor.max_search_leaves = 10;
-  return p;
 }
 
 Status load_models(Data& d) {

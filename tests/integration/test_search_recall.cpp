@@ -23,6 +23,7 @@
 
 #include "build/desktop_detect.h"
 #include "build/model_builder.h"
+#include "build/param_overrides.h"
 #include "core/selection.h"
 #include "opencv_scenes.h"
 #include "test_data.h"
@@ -59,15 +60,6 @@ struct Config {
   const char* name;
   Params params;
 };
-Params angled_params() {
-  Params p;
-  p.views.max_tilt = 60.f;
-  p.views.tilt_levels = 2;
-  p.ransac.min_triangle_correlation = 0.6f;
-  p.graph.complete_circuits = 1;
-  p.descriptor.max_search_leaves = 10;
-  return p;
-}
 const Config kConfigs[] = {{"defaults", Params{}}, {"angled", angled_params()}};
 
 // What a configuration's cases share: the targets and the distractors built

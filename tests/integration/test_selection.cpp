@@ -285,27 +285,44 @@ TEST(Selection, CompletedCircuitsRecoverArcsTheSearchBudgetMissed) {
 }
 
 // The arc table: every model arc once, in the row of its source, rows
-// sorted by target.
-TEST(ArcAdjacency, HoldsEveryModelArcInItsSourcesRow) {
+// sorted by target; find() answers a whole batch of look-ups at once with
+// each pair's complete range, and an empty one for a pair without an arc.
+TEST(ArcAdjacency, FindsEveryModelArcInItsSourcesRow) {
   const Case& c = the_case();
   const ModelIndex& index = c.built.index();
   ArcAdjacency adjacency(std::pmr::get_default_resource());
   adjacency.build(index, true);
   ASSERT_GT(index.arc_count(), 1000u);
-  for (std::uint32_t slot = 0; slot < index.arc_count(); ++slot) {
-    const ModelArc arc = index.arc(slot);
-    int visits = 0;
-    const bool found = adjacency.any_arc(arc.from, arc.to, [&](std::uint32_t s) {
-      ++visits;
-      EXPECT_EQ(index.arc(s).from, arc.from);
-      EXPECT_EQ(index.arc(s).to, arc.to);
-      return s == slot;
-    });
-    ASSERT_TRUE(found) << "arc in slot " << slot << " not in its row";
-    ASSERT_GE(visits, 1);
+  constexpr int kBatch = ArcAdjacency::kBatch;
+  for (std::uint32_t first = 0; first < index.arc_count(); first += kBatch) {
+    const int n = static_cast<int>(std::min<std::uint32_t>(kBatch, index.arc_count() - first));
+    std::uint32_t from[kBatch], to[kBatch];
+    for (int i = 0; i < n; ++i) {
+      const ModelArc arc = index.arc(first + static_cast<std::uint32_t>(i));
+      from[i] = arc.from;
+      to[i] = arc.to;
+    }
+    const std::uint64_t* begin[kBatch];
+    const std::uint64_t* end[kBatch];
+    adjacency.find(from, to, n, begin, end);
+    for (int i = 0; i < n; ++i) {
+      const std::uint32_t slot = first + static_cast<std::uint32_t>(i);
+      bool found = false;
+      for (const std::uint64_t* e = begin[i]; e != end[i]; ++e) {
+        const auto s = static_cast<std::uint32_t>(*e);
+        EXPECT_EQ(index.arc(s).from, from[i]);
+        EXPECT_EQ(index.arc(s).to, to[i]);
+        found = found || s == slot;
+      }
+      ASSERT_TRUE(found) << "arc in slot " << slot << " not in its row";
+    }
   }
   // A pair with no arc: a keypoint and itself.
-  EXPECT_FALSE(adjacency.any_arc(0, 0, [](std::uint32_t) { return true; }));
+  const std::uint32_t none = 0;
+  const std::uint64_t* begin[1];
+  const std::uint64_t* end[1];
+  adjacency.find(&none, &none, 1, begin, end);
+  EXPECT_EQ(begin[0], end[0]);
 }
 
 // The same for 4-circuits, whose middle lists are cut against both
