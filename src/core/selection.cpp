@@ -453,12 +453,9 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
       nb += static_cast<std::uint32_t>((flags[key_from(b)] & 2) != 0);
     }
     for (std::uint32_t x = 0; x < na; ++x) flags[key_to(ka[x])] = 0;
-    // The closing arc is looked up in the row of t (c_m), or of u (a_m)
-    // when flipped: the outer loop runs over the arcs that fix that row, so
-    // its look-ups after the first hit the cache. kb is sorted by (from,
-    // to); ka by (from, to) when flipped, else by (to, from).
-    if (!flip)
-      for (std::uint32_t x = 0; x < na; ++x) ka[x] = arc(ka[x], 32);
+    // Both kept lists sorted by the shared vertex w (ka as w << 32 | u, kb
+    // as w << 32 | t) and merged: each w's a-arcs against its b-arcs.
+    for (std::uint32_t x = 0; x < na; ++x) ka[x] = arc(ka[x], 32);
     sort_arc_keys(ka, sort_scratch_.data(), na, id_bits_);
     na = static_cast<std::uint32_t>(std::unique(ka, ka + na) - ka);
     sort_arc_keys(kb, sort_scratch_.data(), nb, id_bits_);
@@ -502,20 +499,32 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
       target[pending] = flip ? t : u;
       if (++pending == kBatch) flush();
     };
-    const std::uint64_t *lo, *hi;
-    if (flip) {
-      for (std::uint32_t x = 0; x < na && room; ++x) {
-        const std::uint32_t u = key_from(ka[x]), w = key_to(ka[x]);
-        keys_from(kb, nb, w, lo, hi);
-        for (const std::uint64_t* b = lo; b != hi && room; ++b) close(u, w, key_to(*b));
+    // The closing arc is looked up in the row of t (c_m), or of u (a_m)
+    // when flipped: within a w, the outer loop runs over the arcs that fix
+    // that row, so its look-ups after the first hit the cache.
+    std::uint32_t ia = 0, ib = 0;
+    while (ia < na && ib < nb && room) {
+      const std::uint32_t w = key_from(ka[ia]);
+      if (key_from(kb[ib]) != w) {
+        // Never after the semi-join (each kept w is in both lists); a guard.
+        if (key_from(kb[ib]) < w)
+          ++ib;
+        else
+          ++ia;
+        continue;
       }
-    } else {
-      // Each b = w -> t against the a = u -> w (ka holds w << 32 | u).
-      for (std::uint32_t x = 0; x < nb && room; ++x) {
-        const std::uint32_t w = key_from(kb[x]), t = key_to(kb[x]);
-        keys_from(ka, na, w, lo, hi);
-        for (const std::uint64_t* a = lo; a != hi && room; ++a) close(key_to(*a), w, t);
+      std::uint32_t ea = ia + 1, eb = ib + 1;
+      while (ea < na && key_from(ka[ea]) == w) ++ea;
+      while (eb < nb && key_from(kb[eb]) == w) ++eb;
+      if (flip) {
+        for (std::uint32_t y = ia; y < ea && room; ++y)
+          for (std::uint32_t x = ib; x < eb && room; ++x) close(key_to(ka[y]), w, key_to(kb[x]));
+      } else {
+        for (std::uint32_t x = ib; x < eb && room; ++x)
+          for (std::uint32_t y = ia; y < ea && room; ++y) close(key_to(ka[y]), w, key_to(kb[x]));
       }
+      ia = ea;
+      ib = eb;
     }
     if (pending > 0 && room) flush();
   }
@@ -600,10 +609,26 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   // Half the smallest pose area scale of each model (homography.h): a local
   // map may shrink twice as much as the whole pose.
   const float symmetric_min_area = 0.5f / static_cast<float>(params.ransac.max_scale_change);
-  auto min_area_of = [&](int model_id) {
-    if (!(params.views.min_size > 0.f)) return symmetric_min_area;
-    const ModelInfo info = in.index->model(model_id);
-    return static_cast<float>(0.5 * smallest_area_scale(params, info.width, info.height));
+  // The model of the last keypoint asked about, with its keypoint range and
+  // smallest local area: a keygraph's candidates mostly lie in one model,
+  // and decoding its record for each of them was a tenth of the completion.
+  struct Owner {
+    int model = -1;
+    float min_area = 0.f;
+  };
+  Owner last;
+  std::uint32_t last_begin = 0, last_count = 0;
+  auto owner_of = [&](std::uint32_t keypoint) {
+    if (keypoint - last_begin < last_count) return last;
+    last.model = in.index->model_of_keypoint(keypoint);
+    const ModelInfo info = in.index->model(last.model);
+    last_begin = info.keypoint_begin;
+    last_count = info.keypoint_count;
+    last.min_area =
+        params.views.min_size > 0.f
+            ? static_cast<float>(0.5 * smallest_area_scale(params, info.width, info.height))
+            : symmetric_min_area;
+    return last;
   };
   auto plausible = [&](const std::uint32_t* model, const SceneKeygraph& g) {
     Point2f mp[kMaxVertices], sp[kMaxVertices];
@@ -611,14 +636,13 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
       mp[i] = model_points[model[i]];
       sp[i] = in.scene_points[tri[g.edges[i]]];
     }
-    return plausible_local_map(mp, sp, k, params,
-                               min_area_of(in.index->model_of_keypoint(model[0])));
+    return plausible_local_map(mp, sp, k, params, owner_of(model[0]).min_area);
   };
   // Appends a plausible correspondence (`checked`: already known to be);
   // false when the output is full.
   auto emit = [&](const std::uint32_t* model, const SceneKeygraph& g, bool checked = false) {
     if (!checked && !plausible(model, g)) return true;
-    const int model_id = in.index->model_of_keypoint(model[0]);
+    const int model_id = owner_of(model[0]).model;
     if (check_vertices && !similar_vertices(model, g)) {
       ++stats.vertex_rejections;
       return true;

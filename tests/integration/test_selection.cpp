@@ -15,6 +15,7 @@
 #include <array>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <set>
 #include <vector>
 
@@ -293,6 +294,11 @@ TEST(ArcAdjacency, FindsEveryModelArcInItsSourcesRow) {
   ArcAdjacency adjacency(std::pmr::get_default_resource());
   adjacency.build(index, true);
   ASSERT_GT(index.arc_count(), 1000u);
+  // How many arcs each keypoint pair has (views store a pair once per
+  // distinct description): a range must hold all of them.
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::ptrdiff_t> arcs_of_pair;
+  for (std::uint32_t slot = 0; slot < index.arc_count(); ++slot)
+    ++arcs_of_pair[{index.arc(slot).from, index.arc(slot).to}];
   constexpr int kBatch = ArcAdjacency::kBatch;
   for (std::uint32_t first = 0; first < index.arc_count(); first += kBatch) {
     const int n = static_cast<int>(std::min<std::uint32_t>(kBatch, index.arc_count() - first));
@@ -315,14 +321,46 @@ TEST(ArcAdjacency, FindsEveryModelArcInItsSourcesRow) {
         found = found || s == slot;
       }
       ASSERT_TRUE(found) << "arc in slot " << slot << " not in its row";
+      EXPECT_EQ(end[i] - begin[i], (arcs_of_pair[{from[i], to[i]}]));
     }
   }
-  // A pair with no arc: a keypoint and itself.
-  const std::uint32_t none = 0;
-  const std::uint64_t* begin[1];
-  const std::uint64_t* end[1];
-  adjacency.find(&none, &none, 1, begin, end);
-  EXPECT_EQ(begin[0], end[0]);
+  // Every target, present or not, from every 7th keypoint: most look-ups
+  // of the selection are of pairs without an arc.
+  const std::uint32_t keypoints = index.keypoint_count();
+  for (std::uint32_t from = 0; from < keypoints; from += 7) {
+    for (std::uint32_t first = 0; first < keypoints; first += kBatch) {
+      const int n = static_cast<int>(std::min<std::uint32_t>(kBatch, keypoints - first));
+      std::uint32_t froms[kBatch], tos[kBatch];
+      for (int i = 0; i < n; ++i) {
+        froms[i] = from;
+        tos[i] = first + static_cast<std::uint32_t>(i);
+      }
+      const std::uint64_t* begin[kBatch];
+      const std::uint64_t* end[kBatch];
+      adjacency.find(froms, tos, n, begin, end);
+      for (int i = 0; i < n; ++i) {
+        const auto pair = arcs_of_pair.find({from, tos[i]});
+        ASSERT_EQ(end[i] - begin[i], pair == arcs_of_pair.end() ? 0 : pair->second)
+            << from << " -> " << tos[i];
+      }
+    }
+  }
+  // The rows hold the cases the blocks make special: a row whose length is
+  // a multiple of the block, and a pair whose arcs span two blocks.
+  bool whole_blocks = false, spanning = false;
+  std::uint32_t row = 0, position = 0;
+  for (const auto& [pair, count] : arcs_of_pair) {
+    if (pair.first != row) {
+      whole_blocks = whole_blocks || (position > 0 && position % ArcAdjacency::kBlock == 0);
+      row = pair.first;
+      position = 0;
+    }
+    const auto last = position + static_cast<std::uint32_t>(count) - 1;
+    spanning = spanning || position / ArcAdjacency::kBlock != last / ArcAdjacency::kBlock;
+    position = last + 1;
+  }
+  EXPECT_TRUE(whole_blocks);
+  EXPECT_TRUE(spanning);
 }
 
 // The same for 4-circuits, whose middle lists are cut against both
