@@ -128,14 +128,13 @@ struct GraphParams {
   // similarity threshold and scale box of the scene arc's, checked directly.
   // The search's budget is per query, so with many models in the index a
   // sign's arcs are crowded out of the leaves visited; two out of three
-  // suffice then. Costs a per-keypoint arc table in the workspace (8 bytes
-  // per model arc, 4 per keypoint) and about 3x the selection's time
-  // (with tilted views, the frame is 2.4x the defaults' on bench_frame). 1: on
-  // (3-circuits only; no effect on other structures), 0: off (and in files
-  // before format 6.5). Sign benchmark with tilted views and 10 leaves,
-  // held-out seed: 77.9 / 68.8 / 65.8 % -> 80.0 / 77.1 / 77.5 % within 10 px
-  // at 1 / 10 / 50 signs (docs/RESULTS.md, "Circuit completion").
-  int complete_circuits = 0;
+  // suffice then. Costs a per-keypoint arc table in the workspace (8.25
+  // bytes per model arc, at most 136 per keypoint) and about 3x the
+  // selection's time. 1: on (3-circuits only; no effect on other
+  // structures), 0: off (and in files before format 6.5). On by default
+  // with the 45-degree views, the check and 10 leaves (ViewParams): see
+  // there for what the four do together.
+  int complete_circuits = 1;
 };
 
 // How arc descriptors are stored in the model index and compared at search
@@ -188,8 +187,12 @@ struct DescriptorParams {
   // scan more arcs than 32 of 32 (the format 4 default) for less than
   // half the tree walking: Oxford 400 crops 56.5 % / 67.0 %, 3 wrong,
   // against 56.5 % / 66.5 %, 5 wrong, exact (docs/RESULTS.md, "Detection
-  // on the Oxford set"; docs/RUNTIME.md, "Frame benchmark").
-  int max_search_leaves = 20;
+  // on the Oxford set"; docs/RUNTIME.md, "Frame benchmark"). 10 since the
+  // tilted views and circuit completion are on (ViewParams): completion
+  // needs two of a circuit's three arcs from the search, not three, and
+  // 10 leaves found as much as 20 for less time (docs/RESULTS.md, "Circuit
+  // completion").
+  int max_search_leaves = 10;
   // Not in the paper: the budget above holds for an index of up to this
   // many models and grows with the square root of the models beyond it
   // (at most 8-fold), so the search keeps finding a sign's arcs as other
@@ -241,9 +244,10 @@ struct RansacParams {
   // (no appearance, a tiny or flat triangle) are kept. Format 6.4; 0 (off)
   // in older files. At 0.6: Oxford 400 crops 68.5 / 76.8 % -> 75.8 / 85.8 %
   // within 3 / 10 px, but the held-out 50-sign benchmark 64.6 -> 61.2 %
-  // within 10 px and 1.27x the frame time, so off by default
-  // (docs/RESULTS.md, "Triangle patch check").
-  float min_triangle_correlation = 0.f;
+  // within 10 px and 1.27x the frame time, so off by default then
+  // (docs/RESULTS.md, "Triangle patch check"); 0.6 by default since the
+  // tilted views, whose extra correspondences it cleans (ViewParams).
+  float min_triangle_correlation = 0.6f;
   // Not in the paper (issue 14, lever 2): 1 orders each model's keygraph
   // correspondences by how many keypoint pairs they share with others and
   // samples them progressively (PROSAC), with PROSAC's stopping rule on
@@ -272,9 +276,16 @@ struct ViewParams {
   float scale_step = 0.7071f;  // each view's scale over the previous one's
   // Largest simulated out-of-plane rotation, degrees (0: frontal only),
   // reached in tilt_levels steps equally spaced in t = 1 / cos(angle);
-  // longitudes 72 / t degrees apart (ASIFT's sampling).
-  float max_tilt = 0.f;
-  int tilt_levels = 0;
+  // longitudes 72 / t degrees apart (ASIFT's sampling). By default 45
+  // degrees in one level (t = 1.41 at 3 longitudes: 4 pyramids with the
+  // frontal one), with the triangle check (0.6), circuit completion and
+  // 10 leaves: held-out sign benchmark 63.3 / 62.5 / 63.3 % -> 76.2 / 75.8
+  // / 72.9 % within 10 px at 1 / 10 / 50 signs, Oxford 400 crops 74.8 /
+  // 83.8 % -> 78.0 / 91.5 % within 3 / 10 px, for about 1.5x the frame;
+  // ASIFT's 60 degrees in two levels (angled_params()) finds a little more
+  // for 2.2x (docs/RESULTS.md, "Tilted views at 45 degrees by default").
+  float max_tilt = 45.f;
+  int tilt_levels = 1;
   // Keypoints of different views closer than this many view pixels (mapped
   // back to the model) are one model keypoint.
   float merge_distance = 1.5f;

@@ -87,6 +87,13 @@ std::vector<ModelView> model_views(int width, int height, const ViewParams& para
   return views;
 }
 
+int asift_tilt_levels(float max_tilt) {
+  if (!(max_tilt > 0.f && max_tilt < 90.f)) return 1;
+  const double t = 1.0 / std::cos(max_tilt * kPi / 180.0);
+  // At most the 8 levels validate_params accepts (t = 5.8 at 80 degrees).
+  return std::clamp(static_cast<int>(std::lround((t - 1.0) / 0.5)), 1, 8);
+}
+
 void render_view(const cv::Mat& gray, const ModelView& view, cv::Mat& out, cv::Mat& inside) {
   const cv::Matx23d& a = view.to_view;
   // Shrink of each model axis direction is at most the largest singular

@@ -38,4 +38,10 @@ std::vector<ModelView> model_views(int width, int height, const ViewParams& para
 // show). `inside` gets 255 where the view shows model pixels.
 void render_view(const cv::Mat& gray, const ModelView& view, cv::Mat& out, cv::Mat& inside);
 
+// Tilt levels for views up to `max_tilt` degrees in steps of about 0.5 in
+// t = 1 / cos(angle), as ASIFT's tilts: 1 level to about 55 degrees
+// (45: t = 1.41), 2 to about 62 (60: t = 1.5 and 2), at least 1 and at
+// most 8.
+int asift_tilt_levels(float max_tilt);
+
 }  // namespace kg

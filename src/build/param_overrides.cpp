@@ -100,4 +100,13 @@ Params angled_params(Params base) {
   return base;
 }
 
+Params frontal_params(Params base) {
+  base.views.max_tilt = 0.f;
+  base.views.tilt_levels = 0;
+  base.ransac.min_triangle_correlation = 0.f;
+  base.graph.complete_circuits = 0;
+  base.descriptor.max_search_leaves = 20;
+  return base;
+}
+
 }  // namespace kg

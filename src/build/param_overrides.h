@@ -28,4 +28,9 @@ std::vector<std::string> param_names();
 // search leaves per query.
 Params angled_params(Params base = Params{});
 
+// The frontal configuration (the defaults of format 6.4, and the cheapest
+// frame): `base` without tilted views, triangle check or circuit
+// completion, with 20 search leaves per query.
+Params frontal_params(Params base = Params{});
+
 }  // namespace kg

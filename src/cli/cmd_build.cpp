@@ -1,6 +1,7 @@
 // keygraph build: its options are the Options table below (keygraph build --help).
 // --min-size and --max-tilt set the simulated views (views.min_size,
-// views.max_tilt; --max-tilt also asks for two tilt levels when none is set).
+// views.max_tilt; --max-tilt also sets the tilt levels, steps of about 0.5
+// in t as ASIFT's, unless views.tilt_levels is --set).
 // --name and --roi apply to the model image that follows them: --roi makes
 // the model that rectangle of the image (model pixel (0,0) is image pixel
 // (X,Y)); without --name the model is named after the file's stem.
@@ -22,6 +23,7 @@
 #include "build/model_builder.h"
 #include "build/model_quality.h"
 #include "build/model_set.h"
+#include "build/model_views.h"
 #include "build/parallel.h"
 #include "build/param_overrides.h"
 #include "build/progress.h"
@@ -97,6 +99,7 @@ int cmd_build(const Args& args) {
   std::string output, draw_dir;
   bool look_alikes = true;
   Params params;
+  bool tilt_given = false, tilt_levels_given = false;
   bool quiet = false;
   int jobs = 0;
   // A value of `params` (the defaults of the options below) as text.
@@ -180,20 +183,22 @@ int cmd_build(const Args& args) {
           param_text("views.min_size"))
       .value(
           "--max-tilt", "DEG",
-          "the largest simulated out-of-plane tilt, degrees; sets two tilt levels\n"
-          "when views.tilt_levels is 0 (views.max_tilt)",
-          [&params](const std::string& v) -> std::string {
+          "the largest simulated out-of-plane tilt, degrees (0: frontal only); also sets\n"
+          "the tilt levels in ASIFT's steps (1 to about 55, 2 to about 62) unless\n"
+          "views.tilt_levels is --set (views.max_tilt)",
+          [&params, &tilt_given](const std::string& v) -> std::string {
             if (Status s = apply_param_override("views.max_tilt=" + v, params); !s)
               return "--max-tilt: " + s.message();
-            if (params.views.tilt_levels == 0) params.views.tilt_levels = 2;
+            tilt_given = true;
             return {};
           },
           param_text("views.max_tilt"))
       .value("--set", "NAME=VALUE",
              "any parameter of keygraph/params.h, repeatable\n"
              "(e.g. graph.max_keypoints=300; keygraph inspect lists them all)",
-             [&params](const std::string& v) -> std::string {
+             [&params, &tilt_levels_given](const std::string& v) -> std::string {
                if (Status s = apply_param_override(v, params); !s) return s.message();
+               if (v.rfind("views.tilt_levels=", 0) == 0) tilt_levels_given = true;
                return {};
              })
       .text("--draw-model", "DIR", draw_dir,
@@ -211,6 +216,9 @@ int cmd_build(const Args& args) {
             "terminal, otherwise a line per model)")
       .example("keygraph build --name exit --roi 10,10,200,120 exit.png stairs.png -o signs.kgi");
   if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
+  if (tilt_given && !tilt_levels_given)
+    params.views.tilt_levels =
+        params.views.max_tilt > 0.f ? asift_tilt_levels(params.views.max_tilt) : 0;
   if (pending_roi) return table.usage_error("--roi must come before the model image it applies to");
   if (pending_name)
     return table.usage_error("--name must come before the model image it applies to");

@@ -230,7 +230,7 @@ if "$KG" inspect "$INDEX" >"$LOG/stdout" 2>"$LOG/stderr"; then
     bad "inspect: parameter descriptor.encoding not shown"
   grep -Eq '^bytes per arc: [0-9.]+ ' "$LOG/stdout" || bad "inspect: no bytes-per-arc line"
   # One model: the budget as recorded (it grows beyond 10 models).
-  grep -Eq '^search: 20 leaves per query \(descriptor\.max_search_leaves 20, grown beyond 10 models: this index has 1\)$' \
+  grep -Eq '^search: 10 leaves per query \(descriptor\.max_search_leaves 10, grown beyond 10 models: this index has 1\)$' \
     "$LOG/stdout" || bad "inspect: no search budget line in: $(cat "$LOG/stdout")"
 else
   bad "inspect of a good index failed: $(cat "$LOG/stderr")"
@@ -246,6 +246,22 @@ for enc in float32 int16 int8; do
       bad "inspect: descriptors section of the $enc index not marked $enc"
   else
     bad "build/inspect --encoding $enc failed: $(cat "$LOG/stderr")"
+  fi
+done
+# --max-tilt picks ASIFT's tilt levels unless views.tilt_levels is --set
+# (before or after it); 0 turns the tilts off.
+for tilt in "60:2" "45:1" "0:0" "60 --set views.tilt_levels=3:3" "--set views.tilt_levels=3 --max-tilt 60:3"; do
+  checks=$((checks + 1))
+  options=${tilt%:*}
+  levels=${tilt##*:}
+  case $options in --set*) ;; *) options="--max-tilt $options" ;; esac
+  # shellcheck disable=SC2086 # the options are meant to be split
+  if "$KG" build -q --no-look-alikes --min-size 150 $options "$DATA/box.png" -o "$WORK/box-tilt.kgi" \
+    >"$LOG/stdout" 2>"$LOG/stderr" && "$KG" inspect "$WORK/box-tilt.kgi" >"$LOG/stdout" 2>"$LOG/stderr"; then
+    grep -Eq "^  views\.tilt_levels +$levels\$" "$LOG/stdout" ||
+      bad "build $options: views.tilt_levels is not $levels: $(grep tilt_levels "$LOG/stdout")"
+  else
+    bad "build/inspect $options failed: $(cat "$LOG/stderr")"
   fi
 done
 next_case

@@ -51,6 +51,10 @@ TEST(OxfordEval, CurvesOfKeygraphsAndKeypointsOnGraf) {
   options.subsets = {"graf"};
   options.centre_crop = true;
   options.curves = true;
+  // The frontal configuration (no tilted views, triangle check or circuit
+  // completion): the curve joins the three searched lists, as its
+  // selection does.
+  options.params = frontal_params();
   // float32, as the curve selection: the curve at the index's threshold is
   // then exactly the detector's own selection.
   options.params.descriptor.encoding = DescriptorEncoding::kFloat32;

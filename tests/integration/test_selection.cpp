@@ -417,8 +417,9 @@ namespace {
 // either parameter turns the growth off.
 TEST(ArcSearchBudget, GrowsWithTheSquareRootOfTheModelsBeyondTheReference) {
   DescriptorParams p;
-  ASSERT_EQ(p.max_search_leaves, 20);
+  ASSERT_EQ(p.max_search_leaves, 10);
   ASSERT_EQ(p.search_reference_models, 10);
+  p.max_search_leaves = 20;  // the figures of format 6.3's default
   EXPECT_EQ(ArcSearch::leaves_for(p, 1), 20);
   EXPECT_EQ(ArcSearch::leaves_for(p, 10), 20);
   EXPECT_EQ(ArcSearch::leaves_for(p, 40), 40);  // 4x the models: 2x the leaves

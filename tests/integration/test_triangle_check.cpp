@@ -22,7 +22,8 @@ constexpr float kThreshold = 0.3f;
 
 TEST(TriangleCheckParam, RangeAndOlderFiles) {
   Params p;
-  EXPECT_EQ(p.ransac.min_triangle_correlation, 0.f) << "off by default: re-measure before changing";
+  EXPECT_EQ(p.ransac.min_triangle_correlation, 0.6f)
+      << "0.6 by default with the tilted views: re-measure before changing";
   for (const float bad : {-0.1f, 1.f, 2.f}) {
     p.ransac.min_triangle_correlation = bad;
     const Status s = format::validate_params(p);

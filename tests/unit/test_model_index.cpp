@@ -1104,13 +1104,14 @@ TEST(Golden, EveryGoldenLoadsAndDetects) {
     // The search budget grows from 6.3 on; older files keep it fixed.
     EXPECT_EQ(index.params().descriptor.search_reference_models,
               index.version_minor() >= 3 ? 10 : 0);
-    // The triangle patch check (6.4) is off in every file: older ones read
-    // their zero, and the default is off.
-    EXPECT_EQ(index.params().ransac.min_triangle_correlation, 0.f);
+    // The triangle patch check (6.4) is on (0.6) in the files of 6.5's
+    // defaults and off in older ones (their zero, or the default then).
+    EXPECT_EQ(index.params().ransac.min_triangle_correlation,
+              index.version_minor() >= 5 ? 0.6f : 0.f);
     // Progressive sampling (6.4) is on by default; older files draw uniformly.
     EXPECT_EQ(index.params().ransac.progressive_sampling, index.version_minor() >= 4 ? 1 : 0);
-    // Circuit completion (6.5) is off by default and in older files.
-    EXPECT_EQ(index.params().graph.complete_circuits, 0);
+    // Circuit completion (6.5) is on by default, off in older files.
+    EXPECT_EQ(index.params().graph.complete_circuits, index.version_minor() >= 5 ? 1 : 0);
     if (index.version_minor() >= 2) {
       ASSERT_TRUE(index.has_appearance());
       const ModelAppearance look = index.appearance(0);

@@ -25,6 +25,7 @@ cv::Point2d map(const cv::Matx23d& a, cv::Point2d p) {
 
 TEST(ModelViews, FrontalPyramidStopsAtTheSmallestSize) {
   ViewParams params;
+  params.max_tilt = 0.f;  // the frontal pyramid alone
   params.min_size = 40.f;
   params.scale_step = 0.5f;
   const std::vector<ModelView> views = model_views(320, 160, params, 3);
@@ -45,6 +46,17 @@ TEST(ModelViews, WithoutViewsTheLegacyScales) {
   ASSERT_EQ(views.size(), 3u);
   EXPECT_NEAR(views[2].scale, 0.5, 1e-12);
   EXPECT_EQ(views[2].size, cv::Size(100, 50));
+}
+
+// keygraph build --max-tilt: ASIFT's spacing of t, whatever the angle.
+TEST(ModelViews, TiltLevelsInAsiftSteps) {
+  EXPECT_EQ(asift_tilt_levels(30.f), 1);  // t = 1.15
+  EXPECT_EQ(asift_tilt_levels(45.f), 1);  // 1.41
+  EXPECT_EQ(asift_tilt_levels(60.f), 2);  // 2
+  EXPECT_EQ(asift_tilt_levels(70.f), 4);  // 2.92
+  EXPECT_EQ(asift_tilt_levels(80.f), 8);  // 5.76: the most validation accepts
+  EXPECT_EQ(asift_tilt_levels(0.f), 1);
+  EXPECT_EQ(asift_tilt_levels(90.f), 1);  // not a tilt (validation refuses it)
 }
 
 TEST(ModelViews, TiltsAtAsiftLongitudes) {
