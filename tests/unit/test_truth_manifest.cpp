@@ -9,6 +9,7 @@
 
 #include "build/truth_eval.h"
 #include "build/truth_manifest.h"
+#include "temp_dir.h"
 
 namespace kg {
 namespace {
@@ -105,15 +106,18 @@ TEST(TruthManifestLine, BadLinesSayWhatIsWrong) {
 
 class TruthManifestFile : public ::testing::Test {
  protected:
+  // A directory of its own per test: ctest runs the tests of this fixture as
+  // parallel processes, which must not write one shared manifest.
   void SetUp() override {
-    dir_ = std::filesystem::path(KG_TEST_OUTPUT_DIR) / "truth_manifest_test";
-    std::filesystem::create_directories(dir_);
+    ASSERT_FALSE(temp_.path().empty()) << "no temporary directory";
+    dir_ = temp_.path();
   }
   std::string write(const std::string& text) {
     const std::string path = (dir_ / "m.jsonl").string();
     std::ofstream(path) << text;
     return path;
   }
+  kg::test::TempDir temp_;
   std::filesystem::path dir_;
 };
 
