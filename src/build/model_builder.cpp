@@ -303,10 +303,9 @@ Status build_views(const cv::Mat& gray, const Params& params, BuiltModel& out) {
   return Status::ok();
 }
 
-// The model image resampled by area averaging with one scale on both axes,
-// so that its long edge is `size` pixels, or a copy of it when it is not
-// larger than that (ModelAppearance). A short edge that would round to
-// nothing keeps one pixel.
+}  // namespace
+
+// A short edge that would round to nothing keeps one pixel.
 void model_appearance(const cv::Mat& gray, int size, cv::Mat& out, float& scale) {
   const int long_edge = std::max(gray.cols, gray.rows);
   if (long_edge <= size) {
@@ -325,8 +324,6 @@ void model_appearance(const cv::Mat& gray, int size, cv::Mat& out, float& scale)
   }
   scale = static_cast<float>(factor);
 }
-
-}  // namespace
 
 Status build_model(const cv::Mat& gray, const std::string& name, const Params& params,
                    BuiltModel& out) {

@@ -58,6 +58,12 @@ struct BuiltModel {
   float appearance_scale = 0.f;  // appearance pixels per model pixel
 };
 
+// The model image resampled by area averaging with one scale on both axes,
+// so that its long edge is `size` pixels, or a copy of it when it is not
+// larger than that: the appearance BuiltModel stores; `scale` is its
+// pixels per model pixel.
+void model_appearance(const cv::Mat& gray, int size, cv::Mat& out, float& scale);
+
 // Builds one model from an 8-bit gray image.
 Status build_model(const cv::Mat& gray, const std::string& name, const Params& params,
                    BuiltModel& out);

@@ -16,6 +16,7 @@
 #include "build/eval_index.h"
 #include "build/image_io.h"
 #include "build/model_builder.h"
+#include "core/appearance_align.h"
 #include "core/rng.h"
 
 namespace kg {
@@ -31,6 +32,23 @@ Status read_homography(const std::string& path, Homography& h) {
 }
 
 namespace {
+
+// The appearance's long edge for the correlations: the index's default.
+constexpr int kCorrelationAppearanceSize = ViewParams{}.appearance_size;
+
+// OxfordCase::truth_correlation and found_correlation: the correlation
+// the appearance aligner measures at the pose it is given (its
+// refinement, which follows, is left unused).
+double pose_correlation(AppearanceAligner& aligner, const cv::Mat& appearance, float scale,
+                        const cv::Mat& blurred_scene, const Homography& pose) {
+  Homography h = pose;
+  const AppearanceFit fit =
+      aligner.align({appearance.data, appearance.cols, appearance.rows, scale, scale},
+                    ImageView(blurred_scene.data, blurred_scene.cols, blurred_scene.rows,
+                              static_cast<std::ptrdiff_t>(blurred_scene.step)),
+                    h);
+  return fit.measured ? fit.ncc_before : -1.0;
+}
 
 Homography compose_with_offset(const Homography& h, double dx, double dy) {
   // H * [1 0 dx; 0 1 dy; 0 0 1]
@@ -202,6 +220,11 @@ Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>
         y = static_cast<int>(rng.uniform(static_cast<std::uint32_t>(img1.rows - size + 1)));
       }
       const cv::Mat crop = img1(cv::Rect(x, y, size, size)).clone();
+      cv::Mat appearance;
+      float appearance_scale = 1.f;
+      model_appearance(crop, kCorrelationAppearanceSize, appearance, appearance_scale);
+      AppearanceAligner aligner;
+      aligner.reserve(appearance.cols * appearance.rows);
       for (KeygraphRun& run : keygraphs) {
         const std::string where = subsets[si] + " crop " + std::to_string(c) + ": ";
         Status s = build_model(crop, "crop", run.params, run.model);
@@ -232,6 +255,17 @@ Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>
         for (int n = 2; n <= 6; ++n) {
           const cv::Mat& scene = data[ti].scenes[n];
           const Homography truth = compose_with_offset(data[ti].truths[n], x, y);
+          cv::Mat blurred;
+          double truth_correlation = -1.0;
+          if (set == 0) {
+            const double sigma = options.params.descriptor.blur_sigma;
+            if (sigma > 0.0)
+              cv::GaussianBlur(scene, blurred, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
+            else
+              blurred = scene;
+            truth_correlation =
+                pose_correlation(aligner, appearance, appearance_scale, blurred, truth);
+          }
           for (std::size_t m = 0; m < baselines.size() + keygraphs.size(); ++m) {
             OxfordCase r;
             r.subset = subsets[si];
@@ -267,6 +301,10 @@ Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>
               baselines[m].detect(scene, r.detected, found_h, r.inliers);
               r.time_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
             }
+            r.truth_correlation = truth_correlation;
+            if (r.detected && !r.negative)
+              r.found_correlation =
+                  pose_correlation(aligner, appearance, appearance_scale, blurred, found_h);
             if (r.detected) {
               r.corner_error = 0;
               for (const Point2f& corner : outline) {

@@ -67,6 +67,16 @@ struct OxfordCase {
   int correspondences = 0;
   int first_ransac_iterations = 0;  // of the first detection's RANSAC attempt
   double time_ms = 0;
+  // The image's own say on a pose, for any method: the normalised
+  // cross-correlation of the crop (its appearance, as an index stores it)
+  // with the scene (blurred as the detector blurs it) under the ground
+  // truth, on every positive case, and under the first detection's pose;
+  // -1 where it cannot be measured (core/appearance_align.h: under 70 % of
+  // the crop inside the scene, a degenerate pose) or there is no detection.
+  // A wrong pose that the image fits far better than the ground truth is
+  // the ground truth's error, not the method's.
+  double truth_correlation = -1;
+  double found_correlation = -1;
   // With OxfordEvalOptions::curves, keygraph methods, positive scenes:
   bool has_curves = false;
   int model_keypoints = 0, scene_keypoints = 0;  // scene: after sampling

@@ -391,6 +391,28 @@ std::string oxford_text(const std::vector<OxfordRow>& rows,
   return out;
 }
 
+std::string oxford_wrong_poses_text(const std::vector<OxfordCase>& cases) {
+  std::string out;
+  char line[256];
+  for (const OxfordCase& c : cases) {
+    if (c.negative || !c.detected || !(c.corner_error > 10.0)) continue;
+    if (out.empty()) {
+      out =
+          "\nWrong poses (a corner more than 10 px from the ground truth), and the correlation of "
+          "the crop\nwith the scene under the ground truth and under the pose found (-1: not "
+          "measured):\n";
+      std::snprintf(line, sizeof(line), "%-13s %-8s %5s %6s %9s %6s %6s\n", "method", "subset",
+                    "crop", "scene", "corner px", "truth", "found");
+      out += line;
+    }
+    std::snprintf(line, sizeof(line), "%-13s %-8s %5d %6s %9.1f %6.2f %6.2f\n", c.method.c_str(),
+                  c.subset.c_str(), c.crop, ("img" + std::to_string(c.degree)).c_str(),
+                  c.corner_error, c.truth_correlation, c.found_correlation);
+    out += line;
+  }
+  return out;
+}
+
 Status write_oxford_report(const std::string& dir, const OxfordEvalOptions& options,
                            const std::vector<OxfordCase>& cases) {
   Status s = ensure_directory(dir);
@@ -410,7 +432,7 @@ Status write_oxford_report(const std::string& dir, const OxfordEvalOptions& opti
          "model_keypoints,scene_keypoints,true_correspondences,model_inside,model_repeated,"
          "scene_inside,scene_repeated,keygraph_selected_at_index_threshold,"
          "keygraph_correct_at_index_threshold,keygraph_correct_at_max_threshold,"
-         "keygraph_recalled_at_index_threshold\n";
+         "keygraph_recalled_at_index_threshold,truth_correlation,found_correlation\n";
   for (const OxfordCase& c : cases) {
     csv << c.method << ',' << c.subset << ',' << c.scene_subset << ',' << c.negative << ','
         << c.crop << ',' << c.crop_x << ',' << c.crop_y << ',' << c.degree << ',' << c.detected
@@ -422,10 +444,11 @@ Status write_oxford_report(const std::string& dir, const OxfordEvalOptions& opti
     if (c.has_curves) {
       const CaseCurve& k = c.keygraph_curve;
       csv << k.selected[op] << ',' << k.correct[op] << ',' << k.correct.back() << ','
-          << k.recalled[op] << '\n';
+          << k.recalled[op];
     } else {
-      csv << ",,,\n";
+      csv << ",,,";
     }
+    csv << ',' << c.truth_correlation << ',' << c.found_correlation << '\n';
   }
   if (s = write_text_file(dir + "/cases.csv", csv.str()); !s) return s;
 

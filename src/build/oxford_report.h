@@ -87,6 +87,11 @@ std::string oxford_text(const std::vector<OxfordRow>& rows,
                         const std::vector<OxfordIterationRow>& iterations,
                         const std::vector<OxfordLimitRow>& limits = {});
 
+// One line per wrong pose (positive scene, a corner more than 10 px off)
+// with OxfordCase::truth_correlation and found_correlation; empty when
+// there is none.
+std::string oxford_wrong_poses_text(const std::vector<OxfordCase>& cases);
+
 Status write_oxford_report(const std::string& dir, const OxfordEvalOptions& options,
                            const std::vector<OxfordCase>& cases);
 

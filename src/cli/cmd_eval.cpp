@@ -203,18 +203,21 @@ int cmd_eval(const Args& args) {
   std::fputs(
       oxford_text(rows, oxford_iterations(cases, options), oxford_limits(cases, options)).c_str(),
       stdout);
+  std::fputs(oxford_wrong_poses_text(cases).c_str(), stdout);
   if (!out_dir.empty()) {
     if (s = write_oxford_report(out_dir, options, cases); !s) return fail("eval: " + s.message());
   }
   if (!csv.empty()) {
     std::ostringstream out;
     out << "method,subset,scene_subset,negative,crop,crop_x,crop_y,degree,detected,corner_error,"
-           "inliers,correspondences,ransac_iterations,time_ms\n";
+           "inliers,correspondences,ransac_iterations,time_ms,truth_correlation,"
+           "found_correlation\n";
     for (const OxfordCase& c : cases) {
       out << c.method << ',' << c.subset << ',' << c.scene_subset << ',' << c.negative << ','
           << c.crop << ',' << c.crop_x << ',' << c.crop_y << ',' << c.degree << ',' << c.detected
           << ',' << c.corner_error << ',' << c.inliers << ',' << c.correspondences << ','
-          << c.ransac_iterations << ',' << c.time_ms << '\n';
+          << c.ransac_iterations << ',' << c.time_ms << ',' << c.truth_correlation << ','
+          << c.found_correlation << '\n';
     }
     if (s = write_text_file(csv, out.str()); !s) return fail("eval: " + s.message());
   }

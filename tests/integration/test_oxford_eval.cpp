@@ -2,6 +2,7 @@
 // paper's protocol end to end, and parameter overrides by name.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,56 @@ TEST(OxfordEval, CentreCropsOfGrafAndBoatFoundInTheMildScenes) {
       EXPECT_LT(c.corner_error, 10.0) << c.subset << " img" << c.degree;
     }
   }
+}
+
+// Where a pose is "wrong", the image may say the ground truth is: in boat's
+// img6 (the strongest zoom) the homography misses parts of the scene by
+// 10 to 20 px, and there the crop correlates with the scene far better
+// under the pose found than under the ground truth (SIFT + RANSAC finds
+// the same corners within 2 px; docs/RESULTS.md, "Wrong poses and the
+// ground truth"). This holds the measurement to that: exact truths
+// correlate highly, correct poses at least as well as the truth, and a
+// wrong pose is wrong against the image only if it fits no better.
+TEST(OxfordEval, WrongPosesOfBoatFitTheImageBetterThanItsGroundTruth) {
+  KG_REQUIRE_DATA("oxford");
+  OxfordEvalOptions options;
+  options.dataset = test::data_dir("oxford");
+  options.subsets = {"boat"};
+  options.crops_per_subset = 5;
+  std::vector<OxfordCase> cases;
+  const Status s = evaluate_oxford(options, cases);
+  ASSERT_TRUE(s.is_ok()) << s.message();
+  ASSERT_EQ(cases.size(), 25u);
+  int wrong = 0;
+  for (const OxfordCase& c : cases) {
+    const std::string where = "crop " + std::to_string(c.crop) + " img" + std::to_string(c.degree);
+    ASSERT_GT(c.truth_correlation, -1.0) << where;  // measured on every positive case
+    // img2..img5: the ground truth holds across each crop.
+    if (c.degree <= 5) {
+      EXPECT_GT(c.truth_correlation, 0.85) << where;
+    }
+    // Crop 4 (157, 302) in img6: the ground truth is off there.
+    if (c.crop == 4 && c.degree == 6) {
+      EXPECT_EQ(c.crop_x, 157) << where;
+      EXPECT_LT(c.truth_correlation, 0.5) << where;
+    }
+    if (!c.detected) {
+      EXPECT_EQ(c.found_correlation, -1.0) << where;
+      continue;
+    }
+    EXPECT_GT(c.found_correlation, 0.8) << where;
+    if (c.corner_error <= 3.0) {
+      EXPECT_GE(c.found_correlation, c.truth_correlation - 0.01) << where;
+    }
+    if (c.corner_error > 10.0) {
+      EXPECT_GT(c.found_correlation, c.truth_correlation + 0.15) << where;
+      ++wrong;
+    }
+  }
+  // The report lists each wrong pose on a line of its own, under a header
+  // of four lines.
+  const std::string text = oxford_wrong_poses_text(cases);
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), wrong == 0 ? 0 : wrong + 4) << text;
 }
 
 // The paper's precision-recall measurement on graf's centre crop.
