@@ -33,7 +33,9 @@ Status read_homography(const std::string& path, Homography& h) {
 
 namespace {
 
-// The appearance's long edge for the correlations: the index's default.
+// The appearance's long edge for the correlations: the index's default,
+// whatever --set views.appearance_size says (the measurement is the same
+// for every configuration and method).
 constexpr int kCorrelationAppearanceSize = ViewParams{}.appearance_size;
 
 // OxfordCase::truth_correlation and found_correlation: the correlation
@@ -258,11 +260,7 @@ Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>
           cv::Mat blurred;
           double truth_correlation = -1.0;
           if (set == 0) {
-            const double sigma = options.params.descriptor.blur_sigma;
-            if (sigma > 0.0)
-              cv::GaussianBlur(scene, blurred, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
-            else
-              blurred = scene;
+            blurred = blur_for_descriptors(scene, options.params.descriptor.blur_sigma);
             truth_correlation =
                 pose_correlation(aligner, appearance, appearance_scale, blurred, truth);
           }

@@ -68,11 +68,15 @@ struct OxfordCase {
   int first_ransac_iterations = 0;  // of the first detection's RANSAC attempt
   double time_ms = 0;
   // The image's own say on a pose, for any method: the normalised
-  // cross-correlation of the crop (its appearance, as an index stores it)
-  // with the scene (blurred as the detector blurs it) under the ground
-  // truth, on every positive case, and under the first detection's pose;
-  // -1 where it cannot be measured (core/appearance_align.h: under 70 % of
-  // the crop inside the scene, a degenerate pose) or there is no detection.
+  // cross-correlation of the crop (its appearance as an index stores it
+  // by default, 128 px long edge) with the scene (blurred as the detector
+  // blurs it) under the ground truth, on every positive case, and under
+  // the first detection's pose; -1 on negative cases, without a detection,
+  // and where it cannot be measured (core/appearance_align.h: under 70 %
+  // of the appearance inside the scene, a degenerate pose). keygraph's own
+  // appearance refinement maximises this correlation, so its found value
+  // is partly by construction; a method without one (SIFT) is the
+  // independent check.
   // A wrong pose that the image fits far better than the ground truth is
   // the ground truth's error, not the method's.
   double truth_correlation = -1;

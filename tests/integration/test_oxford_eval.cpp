@@ -47,9 +47,9 @@ TEST(OxfordEval, CentreCropsOfGrafAndBoatFoundInTheMildScenes) {
 // Where a pose is "wrong", the image may say the ground truth is: in boat's
 // img6 (the strongest zoom) the homography misses parts of the scene by
 // 10 to 20 px, and there the crop correlates with the scene far better
-// under the pose found than under the ground truth (SIFT + RANSAC finds
-// the same corners within 2 px; docs/RESULTS.md, "Wrong poses and the
-// ground truth"). This holds the measurement to that: exact truths
+// under the pose found than under the ground truth (SIFT + RANSAC is as
+// far off on the same crops; docs/RESULTS.md, "Wrong poses and the ground
+// truth"). This holds the measurement to that: exact truths
 // correlate highly, correct poses at least as well as the truth, and a
 // wrong pose is wrong against the image only if it fits no better.
 TEST(OxfordEval, WrongPosesOfBoatFitTheImageBetterThanItsGroundTruth) {
