@@ -76,9 +76,8 @@ struct OxfordCase {
   // of the appearance inside the scene, a degenerate pose). keygraph's own
   // appearance refinement maximises this correlation, so its found value
   // is partly by construction; a method without one (SIFT) is the
-  // independent check.
-  // A wrong pose that the image fits far better than the ground truth is
-  // the ground truth's error, not the method's.
+  // independent check. A wrong pose that the image fits far better than
+  // the ground truth is the ground truth's error, not the method's.
   double truth_correlation = -1;
   double found_correlation = -1;
   // With OxfordEvalOptions::curves, keygraph methods, positive scenes:

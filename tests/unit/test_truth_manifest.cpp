@@ -108,17 +108,14 @@ class TruthManifestFile : public ::testing::Test {
  protected:
   // A directory of its own per test: ctest runs the tests of this fixture as
   // parallel processes, which must not write one shared manifest.
-  void SetUp() override {
-    ASSERT_FALSE(temp_.path().empty()) << "no temporary directory";
-    dir_ = temp_.path();
-  }
+  void SetUp() override { ASSERT_FALSE(dir().empty()) << "no temporary directory"; }
+  const std::filesystem::path& dir() const { return temp_.path(); }
   std::string write(const std::string& text) {
-    const std::string path = (dir_ / "m.jsonl").string();
+    const std::string path = (dir() / "m.jsonl").string();
     std::ofstream(path) << text;
     return path;
   }
   kg::test::TempDir temp_;
-  std::filesystem::path dir_;
 };
 
 TEST_F(TruthManifestFile, PathsAreRelativeToTheManifestAndCommentsSkipped) {
@@ -132,7 +129,7 @@ TEST_F(TruthManifestFile, PathsAreRelativeToTheManifestAndCommentsSkipped) {
   ASSERT_TRUE(read_truth_manifest(path, m));
   ASSERT_EQ(m.scenes.size(), 2u);
   EXPECT_EQ(m.scenes[0].line, 3);
-  EXPECT_EQ(m.scenes[0].path, (dir_ / "frames/1.jpg").string());
+  EXPECT_EQ(m.scenes[0].path, (dir() / "frames/1.jpg").string());
   EXPECT_EQ(m.scenes[1].path, "/abs/2.jpg");
   EXPECT_EQ(m.scenes[1].line, 4);
 }
@@ -148,7 +145,7 @@ TEST_F(TruthManifestFile, ErrorsNameTheFileAndLine) {
   ASSERT_FALSE(s);
   EXPECT_EQ(s.message(), path + ":2: \"corners\" must be four [x, y] points");
   EXPECT_FALSE(read_truth_manifest(write("# only a comment\n"), m));
-  EXPECT_FALSE(read_truth_manifest((dir_ / "missing.jsonl").string(), m));
+  EXPECT_FALSE(read_truth_manifest((dir() / "missing.jsonl").string(), m));
 }
 
 TEST(TruthModels, UnknownNamesInInstancesAndSearch) {
