@@ -106,6 +106,16 @@ struct DetectStats {
   // (RansacParams::min_triangle_correlation); correspondences counts them.
   int patch_rejections = 0;
   int ransac_iterations = 0;  // summed over models and instances
+  // Circuit completion (GraphParams::complete_circuits), summed over the
+  // keygraphs: model triples joined from two arcs similar to scene arcs,
+  // of which clockwise, of which a plausible local map (whose closing arc
+  // is then looked up in the model), and of which the closing arc is
+  // similar to the third scene arc too. A circuit that several passes find
+  // is counted once per pass. What the completion's time grows with.
+  long long completion_candidates = 0;
+  long long completion_clockwise = 0;
+  long long completion_plausible = 0;
+  long long completion_closed = 0;
   bool truncated_keypoints = false;
   bool truncated_arc_matches = false;
   bool truncated_correspondences = false;

@@ -477,6 +477,7 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
         for (const std::uint64_t* e = begin[i]; e != end[i] && !similar; ++e)
           similar = in.search->matches(query, static_cast<std::uint32_t>(*e));
         if (!similar) continue;
+        ++completion_closed_;
         if (triple_count_ == capacity) {
           room = false;
           break;
@@ -488,12 +489,15 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
     // Scene arc c -> a against model arcs t -> u (flipped: a -> c, u -> t).
     auto close = [&](std::uint32_t u, std::uint32_t w, std::uint32_t t) {
       if (t == u) return;
+      ++completion_candidates_;
       std::array<std::uint32_t, 3> v;
       v[p] = u;
       v[(p + 1) % 3] = w;
       v[(p + 2) % 3] = t;
       if (!(orient(model_points[v[0]], model_points[v[1]], model_points[v[2]]) > 0.f)) return;
+      ++completion_clockwise_;
       if (!plausible(v.data())) return;
+      ++completion_plausible_;
       batch[pending] = v;
       row[pending] = flip ? u : t;
       target[pending] = flip ? t : u;
@@ -584,6 +588,8 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   flags_left_ = false;
   semi_join_in_ = 0;
   semi_join_kept_ = 0;
+  completion_candidates_ = completion_clockwise_ = 0;
+  completion_plausible_ = completion_closed_ = 0;
   const Structure structure = in.index->params().graph.structure;
   const int k = vertex_count(structure);
   // An arc keygraph has one arc; a circuit has as many arcs as vertices.
@@ -744,6 +750,10 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     if (!room) break;
   }
   stats.correspondences = static_cast<int>(matches.size());
+  stats.completion_candidates = static_cast<long long>(completion_candidates_);
+  stats.completion_clockwise = static_cast<long long>(completion_clockwise_);
+  stats.completion_plausible = static_cast<long long>(completion_plausible_);
+  stats.completion_closed = static_cast<long long>(completion_closed_);
 }
 
 }  // namespace kg

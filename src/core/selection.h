@@ -219,6 +219,9 @@ class Selector {
   WorkVector<ArcSearch::Query> queries_;
   WorkVector<std::array<std::uint32_t, 3>> triples_;
   std::uint32_t triple_count_ = 0;
+  // The completion's funnel this frame (DetectStats::completion_*).
+  std::uint64_t completion_candidates_ = 0, completion_clockwise_ = 0;
+  std::uint64_t completion_plausible_ = 0, completion_closed_ = 0;
   WorkVector<float> profile_;
   WorkVector<std::int32_t> sums_;  // fixed-point profiles
   std::size_t pool_limit_ = static_cast<std::size_t>(-1);

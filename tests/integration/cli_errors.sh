@@ -319,6 +319,10 @@ assert isinstance(d["confidence"], numbers.Real) and 0.9 < d["confidence"] <= 1.
 st = doc["stats"]
 assert st["arc_matches"] > 0 and st["correspondences"] > 0, st
 assert 0 <= st["patch_rejections"] <= st["correspondences"], st
+# The defaults complete circuits: a funnel that narrows down to the
+# correspondences selected.
+c = st["completion"]
+assert c["tried"] >= c["clockwise"] >= c["plausible"] >= c["closed"] >= st["correspondences"], st
 assert st["truncated"] == [], st
 EOF
 else

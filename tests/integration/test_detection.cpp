@@ -74,6 +74,19 @@ TEST_F(Detection2Models, GrafCropFoundInGraf3WithinFivePixels) {
   EXPECT_GT(found[0].confidence, 0.9);  // 100+ inliers
   std::printf("graf crop -> graf3: max corner error %.2f px, %d inliers, %d iterations\n", err,
               found[0].inliers, detector.stats().ransac_iterations);
+  // The defaults complete circuits: each step of the funnel drops triples,
+  // and every correspondence selected was closed.
+  const DetectStats& st = detector.stats();
+  EXPECT_GT(st.completion_candidates, st.completion_clockwise);
+  EXPECT_GT(st.completion_clockwise, st.completion_plausible);
+  EXPECT_GT(st.completion_plausible, st.completion_closed);
+  EXPECT_GE(st.completion_closed, st.correspondences);
+  EXPECT_GT(st.correspondences, 0);
+  std::printf(
+      "completion: %lld triples joined, %lld clockwise, %lld plausible, %lld closed, %d "
+      "correspondences\n",
+      st.completion_candidates, st.completion_clockwise, st.completion_plausible,
+      st.completion_closed, st.correspondences);
 }
 
 TEST_F(Detection2Models, BoxFoundInBoxInScene) {

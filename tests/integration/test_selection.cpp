@@ -249,7 +249,9 @@ TEST(Selection, EqualsBruteForceJoinOnRealImages) {
 // and box of the third scene arc, compared directly. With the exact search
 // the third arc is among the searched ones whenever it matches, so the
 // output is the brute-force set again, each circuit once although every
-// pass of the three finds it.
+// pass of the three finds it: the completion's funnel (DetectStats) closes
+// each exactly three times (the case checks no local map: every clockwise
+// triple is plausible).
 TEST(Selection, CompletedCircuitsWithExactSearchEqualBruteForceJoin) {
   const Case& c = the_case();
   ArcAdjacency adjacency(std::pmr::get_default_resource());
@@ -259,6 +261,13 @@ TEST(Selection, CompletedCircuitsWithExactSearchEqualBruteForceJoin) {
   ASSERT_FALSE(stats.truncated_arc_matches);
   ASSERT_FALSE(stats.truncated_correspondences);
   EXPECT_EQ(selected, c.expected);
+  EXPECT_EQ(stats.completion_closed, 3 * static_cast<long long>(selected.size()));
+  EXPECT_GT(stats.completion_candidates, stats.completion_clockwise);
+  EXPECT_EQ(stats.completion_clockwise, stats.completion_plausible);
+  EXPECT_GT(stats.completion_plausible, stats.completion_closed);
+  std::printf("completion: %lld triples joined, %lld clockwise, %lld plausible, %lld closed\n",
+              stats.completion_candidates, stats.completion_clockwise, stats.completion_plausible,
+              stats.completion_closed);
 }
 
 // With an approximate search of one leaf per query most arcs go unfound.
@@ -274,6 +283,10 @@ TEST(Selection, CompletedCircuitsRecoverArcsTheSearchBudgetMissed) {
   const std::set<Match> completed =
       select_all(c, Limits{}, completed_stats, nullptr, 1, &adjacency);
   ASSERT_FALSE(completed_stats.truncated_correspondences);
+  // Without completion the funnel is empty.
+  EXPECT_EQ(plain_stats.completion_candidates, 0);
+  EXPECT_EQ(plain_stats.completion_closed, 0);
+  EXPECT_GE(completed_stats.completion_closed, static_cast<long long>(completed.size()));
   EXPECT_TRUE(std::includes(completed.begin(), completed.end(), plain.begin(), plain.end()))
       << "completion lost a circuit the three lists join";
   EXPECT_TRUE(
