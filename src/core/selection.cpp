@@ -453,13 +453,35 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
       nb += static_cast<std::uint32_t>((flags[key_from(b)] & 2) != 0);
     }
     for (std::uint32_t x = 0; x < na; ++x) flags[key_to(ka[x])] = 0;
-    // Both kept lists sorted by the shared vertex w (ka as w << 32 | u, kb
-    // as w << 32 | t) and merged: each w's a-arcs against its b-arcs.
-    for (std::uint32_t x = 0; x < na; ++x) ka[x] = arc(ka[x], 32);
-    sort_arc_keys(ka, sort_scratch_.data(), na, id_bits_);
-    na = static_cast<std::uint32_t>(std::unique(ka, ka + na) - ka);
-    sort_arc_keys(kb, sort_scratch_.data(), nb, id_bits_);
-    nb = static_cast<std::uint32_t>(std::unique(kb, kb + nb) - kb);
+    // The kept arcs chained by their shared vertex w, each keypoint pair
+    // once (views store a pair once per view that describes it
+    // differently): linear in the kept arcs, where sorting both lists
+    // by w took a quarter of the completion. The triples come out in
+    // another order; they are sorted below.
+    std::uint32_t* const head = chain_head_.data();
+    std::uint32_t* const next_a = chain_next_.data();
+    std::uint32_t* const next_b = next_a + na;
+    auto absent = [](const std::uint64_t* keys, const std::uint32_t* next, std::uint32_t entry,
+                     std::uint64_t key) {
+      for (std::uint32_t e = entry; e != 0; e = next[e - 1])
+        if (keys[e - 1] == key) return false;
+      return true;
+    };
+    for (std::uint32_t x = 0; x < nb; ++x) {
+      std::uint32_t& first_b = head[2 * std::size_t{key_from(kb[x])} + 1];
+      if (!absent(kb, next_b, first_b, kb[x])) continue;
+      next_b[x] = first_b;
+      first_b = x + 1;
+    }
+    std::uint32_t joined = 0;
+    for (std::uint32_t y = 0; y < na; ++y) {
+      const std::uint32_t w = key_to(ka[y]);
+      std::uint32_t& first_a = head[2 * std::size_t{w}];
+      if (!absent(ka, next_a, first_a, ka[y])) continue;
+      if (first_a == 0) joined_[joined++] = w;
+      next_a[y] = first_a;
+      first_a = y + 1;
+    }
     // Candidates wait in a batch, so that their closing arcs' look-ups in
     // the model overlap their cache misses (ArcAdjacency::find).
     constexpr int kBatch = ArcAdjacency::kBatch;
@@ -506,30 +528,22 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
     // The closing arc is looked up in the row of t (c_m), or of u (a_m)
     // when flipped: within a w, the outer loop runs over the arcs that fix
     // that row, so its look-ups after the first hit the cache.
-    std::uint32_t ia = 0, ib = 0;
-    while (ia < na && ib < nb && room) {
-      const std::uint32_t w = key_from(ka[ia]);
-      if (key_from(kb[ib]) != w) {
-        // Never after the semi-join (each kept w is in both lists); a guard.
-        if (key_from(kb[ib]) < w)
-          ++ib;
-        else
-          ++ia;
-        continue;
-      }
-      std::uint32_t ea = ia + 1, eb = ib + 1;
-      while (ea < na && key_from(ka[ea]) == w) ++ea;
-      while (eb < nb && key_from(kb[eb]) == w) ++eb;
+    for (std::uint32_t j = 0; j < joined && room; ++j) {
+      const std::uint32_t w = joined_[j];
+      const std::uint32_t first_a = head[2 * std::size_t{w}];
+      const std::uint32_t first_b = head[2 * std::size_t{w} + 1];
       if (flip) {
-        for (std::uint32_t y = ia; y < ea && room; ++y)
-          for (std::uint32_t x = ib; x < eb && room; ++x) close(key_to(ka[y]), w, key_to(kb[x]));
+        for (std::uint32_t ea = first_a; ea != 0 && room; ea = next_a[ea - 1])
+          for (std::uint32_t eb = first_b; eb != 0 && room; eb = next_b[eb - 1])
+            close(key_from(ka[ea - 1]), w, key_to(kb[eb - 1]));
       } else {
-        for (std::uint32_t x = ib; x < eb && room; ++x)
-          for (std::uint32_t y = ia; y < ea && room; ++y) close(key_to(ka[y]), w, key_to(kb[x]));
+        for (std::uint32_t eb = first_b; eb != 0 && room; eb = next_b[eb - 1])
+          for (std::uint32_t ea = first_a; ea != 0 && room; ea = next_a[ea - 1])
+            close(key_from(ka[ea - 1]), w, key_to(kb[eb - 1]));
       }
-      ia = ea;
-      ib = eb;
     }
+    for (std::uint32_t j = 0; j < joined; ++j) head[2 * std::size_t{joined_[j]}] = 0;
+    for (std::uint32_t x = 0; x < nb; ++x) head[2 * std::size_t{key_from(kb[x])} + 1] = 0;
     if (pending > 0 && room) flush();
   }
   // A circuit all three lists hold is found by every pass.
@@ -558,6 +572,9 @@ void Selector::reserve(const Limits& limits, std::uint32_t model_keypoints, bool
     described_.reserve(half_edges);
     queries_.reserve(half_edges);
     triples_.reserve(3 * per_query);  // a circuit is found by up to 3 passes before dedupe
+    chain_head_.reserve(2 * static_cast<std::size_t>(model_keypoints));
+    chain_next_.reserve(2 * per_query);
+    joined_.reserve(per_query);
   }
 }
 
@@ -584,6 +601,11 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     described_.assign(edges, 0);
     queries_.resize(edges);
     if (triples_.size() < 3 * per_query) triples_.resize(3 * per_query);
+    if (chain_next_.size() < 2 * per_query) chain_next_.resize(2 * per_query);
+    if (joined_.size() < per_query) joined_.resize(per_query);
+    // All zero between passes: set once per index size.
+    const std::size_t heads = 2 * static_cast<std::size_t>(in.index->keypoint_count());
+    if (chain_head_.size() != heads) chain_head_.assign(heads, 0);
   }
   flags_left_ = false;
   semi_join_in_ = 0;

@@ -139,6 +139,9 @@ class Selector {
         described_(memory),
         queries_(memory),
         triples_(memory),
+        chain_head_(memory),
+        chain_next_(memory),
+        joined_(memory),
         profile_(memory),
         sums_(memory) {}
 
@@ -156,8 +159,9 @@ class Selector {
               DetectStats& stats);
 
   // For tests. A left-over candidate flag would only cost time (the join
-  // checks every arc), so outputs cannot show one: with checking on,
-  // select() looks at every flag after every keygraph, and
+  // checks every arc), so outputs cannot show one, and a left-over chain
+  // head of the completion's join could rarely: with checking on,
+  // select() looks at every flag and head after every keygraph, and
   // candidate_flags_clear() says whether all were clear each time.
   void set_checking(bool on) { checking_ = on; }
   bool candidate_flags_clear() const { return !flags_left_ && all_flags_clear(); }
@@ -195,6 +199,8 @@ class Selector {
   bool all_flags_clear() const {
     for (std::uint8_t f : flags_)
       if (f != 0) return false;
+    for (std::uint32_t h : chain_head_)
+      if (h != 0) return false;
     return true;
   }
 
@@ -219,6 +225,13 @@ class Selector {
   WorkVector<ArcSearch::Query> queries_;
   WorkVector<std::array<std::uint32_t, 3>> triples_;
   std::uint32_t triple_count_ = 0;
+  // The completion's join on the shared vertex w: per model keypoint the
+  // first kept arc into w (2w) and out of w (2w + 1), plus one (0: none);
+  // per kept arc the next of its w (arcs into w, then arcs out of w).
+  // All zero between passes.
+  WorkVector<std::uint32_t> chain_head_;
+  WorkVector<std::uint32_t> chain_next_;
+  WorkVector<std::uint32_t> joined_;  // the shared vertices of a pass
   // The completion's funnel this frame (DetectStats::completion_*).
   std::uint64_t completion_candidates_ = 0, completion_clockwise_ = 0;
   std::uint64_t completion_plausible_ = 0, completion_closed_ = 0;
