@@ -110,9 +110,11 @@ struct DetectStats {
   // keygraphs: model triples joined from two arcs similar to scene arcs,
   // of which clockwise, of which a plausible local map (whose closing arc
   // is then looked up in the model), and of which the closing arc is
-  // similar to the third scene arc too. A circuit that several passes find
-  // is counted once per pass. What the completion's time grows with.
-  long long completion_candidates = 0;
+  // similar to the third scene arc too (counted before the output's
+  // capacity is checked). A circuit that several passes find is counted
+  // once per pass. With scene_upsample 3, of the last pass only (as
+  // correspondences).
+  long long completion_tried = 0;
   long long completion_clockwise = 0;
   long long completion_plausible = 0;
   long long completion_closed = 0;

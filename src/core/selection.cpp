@@ -511,7 +511,7 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
     // Scene arc c -> a against model arcs t -> u (flipped: a -> c, u -> t).
     auto close = [&](std::uint32_t u, std::uint32_t w, std::uint32_t t) {
       if (t == u) return;
-      ++completion_candidates_;
+      ++completion_tried_;
       std::array<std::uint32_t, 3> v;
       v[p] = u;
       v[(p + 1) % 3] = w;
@@ -610,7 +610,7 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   flags_left_ = false;
   semi_join_in_ = 0;
   semi_join_kept_ = 0;
-  completion_candidates_ = completion_clockwise_ = 0;
+  completion_tried_ = completion_clockwise_ = 0;
   completion_plausible_ = completion_closed_ = 0;
   const Structure structure = in.index->params().graph.structure;
   const int k = vertex_count(structure);
@@ -772,7 +772,7 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     if (!room) break;
   }
   stats.correspondences = static_cast<int>(matches.size());
-  stats.completion_candidates = static_cast<long long>(completion_candidates_);
+  stats.completion_tried = static_cast<long long>(completion_tried_);
   stats.completion_clockwise = static_cast<long long>(completion_clockwise_);
   stats.completion_plausible = static_cast<long long>(completion_plausible_);
   stats.completion_closed = static_cast<long long>(completion_closed_);

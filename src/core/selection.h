@@ -233,8 +233,10 @@ class Selector {
   WorkVector<std::uint32_t> chain_next_;
   WorkVector<std::uint32_t> joined_;  // the shared vertices of a pass
   // The completion's funnel this frame (DetectStats::completion_*).
-  std::uint64_t completion_candidates_ = 0, completion_clockwise_ = 0;
-  std::uint64_t completion_plausible_ = 0, completion_closed_ = 0;
+  std::uint64_t completion_tried_ = 0;
+  std::uint64_t completion_clockwise_ = 0;
+  std::uint64_t completion_plausible_ = 0;
+  std::uint64_t completion_closed_ = 0;
   WorkVector<float> profile_;
   WorkVector<std::int32_t> sums_;  // fixed-point profiles
   std::size_t pool_limit_ = static_cast<std::size_t>(-1);

@@ -231,8 +231,10 @@ void detect_with(benchmark::State& state, const Frame* f, const ModelIndex& inde
   state.counters["sampled"] = st.sampled_keypoints;
   state.counters["correspondences"] = st.correspondences;
   state.counters["detections"] = static_cast<double>(found.size());
-  if (st.completion_candidates > 0) {
-    state.counters["completion_tried"] = static_cast<double>(st.completion_candidates);
+  if (st.completion_tried > 0) {
+    state.counters["completion_tried"] = static_cast<double>(st.completion_tried);
+    state.counters["completion_clockwise"] = static_cast<double>(st.completion_clockwise);
+    state.counters["completion_plausible"] = static_cast<double>(st.completion_plausible);
     state.counters["completion_closed"] = static_cast<double>(st.completion_closed);
   }
 }

@@ -77,7 +77,7 @@ TEST_F(Detection2Models, GrafCropFoundInGraf3WithinFivePixels) {
   // The defaults complete circuits: each step of the funnel drops triples,
   // and every correspondence selected was closed.
   const DetectStats& st = detector.stats();
-  EXPECT_GT(st.completion_candidates, st.completion_clockwise);
+  EXPECT_GT(st.completion_tried, st.completion_clockwise);
   EXPECT_GT(st.completion_clockwise, st.completion_plausible);
   EXPECT_GT(st.completion_plausible, st.completion_closed);
   EXPECT_GE(st.completion_closed, st.correspondences);
@@ -85,8 +85,8 @@ TEST_F(Detection2Models, GrafCropFoundInGraf3WithinFivePixels) {
   std::printf(
       "completion: %lld triples joined, %lld clockwise, %lld plausible, %lld closed, %d "
       "correspondences\n",
-      st.completion_candidates, st.completion_clockwise, st.completion_plausible,
-      st.completion_closed, st.correspondences);
+      st.completion_tried, st.completion_clockwise, st.completion_plausible, st.completion_closed,
+      st.correspondences);
 }
 
 TEST_F(Detection2Models, BoxFoundInBoxInScene) {

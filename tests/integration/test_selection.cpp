@@ -262,11 +262,11 @@ TEST(Selection, CompletedCircuitsWithExactSearchEqualBruteForceJoin) {
   ASSERT_FALSE(stats.truncated_correspondences);
   EXPECT_EQ(selected, c.expected);
   EXPECT_EQ(stats.completion_closed, 3 * static_cast<long long>(selected.size()));
-  EXPECT_GT(stats.completion_candidates, stats.completion_clockwise);
+  EXPECT_GT(stats.completion_tried, stats.completion_clockwise);
   EXPECT_EQ(stats.completion_clockwise, stats.completion_plausible);
   EXPECT_GT(stats.completion_plausible, stats.completion_closed);
   std::printf("completion: %lld triples joined, %lld clockwise, %lld plausible, %lld closed\n",
-              stats.completion_candidates, stats.completion_clockwise, stats.completion_plausible,
+              stats.completion_tried, stats.completion_clockwise, stats.completion_plausible,
               stats.completion_closed);
 }
 
@@ -284,7 +284,7 @@ TEST(Selection, CompletedCircuitsRecoverArcsTheSearchBudgetMissed) {
       select_all(c, Limits{}, completed_stats, nullptr, 1, &adjacency);
   ASSERT_FALSE(completed_stats.truncated_correspondences);
   // Without completion the funnel is empty.
-  EXPECT_EQ(plain_stats.completion_candidates, 0);
+  EXPECT_EQ(plain_stats.completion_tried, 0);
   EXPECT_EQ(plain_stats.completion_closed, 0);
   EXPECT_GE(completed_stats.completion_closed, static_cast<long long>(completed.size()));
   EXPECT_TRUE(std::includes(completed.begin(), completed.end(), plain.begin(), plain.end()))

@@ -85,11 +85,11 @@ void print_text(const LoadedFrame& f, int repeat, int min_found, int max_found,
   }
   std::printf("; %d keypoints, %d sampled, %d keygraphs, %d correspondences\n", stats.keypoints,
               stats.sampled_keypoints, stats.keygraphs, stats.correspondences);
-  if (stats.completion_candidates > 0) {
+  if (stats.completion_tried > 0) {
     std::printf(
         "  circuit completion: %lld model triples joined, %lld clockwise, %lld plausible, "
         "%lld closed\n",
-        stats.completion_candidates, stats.completion_clockwise, stats.completion_plausible,
+        stats.completion_tried, stats.completion_clockwise, stats.completion_plausible,
         stats.completion_closed);
   }
   std::printf("  %-10s %9s %9s %9s %9s\n", "ms", "min", "median", "p90", "max");

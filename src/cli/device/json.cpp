@@ -73,7 +73,7 @@ std::string detection_json(const std::string& scene, int width, int height, doub
        ", \"arc_matches\": " + std::to_string(stats.arc_matches) +
        ", \"correspondences\": " + std::to_string(stats.correspondences) +
        ", \"patch_rejections\": " + std::to_string(stats.patch_rejections) +
-       ", \"completion\": {\"tried\": " + std::to_string(stats.completion_candidates) +
+       ", \"completion\": {\"tried\": " + std::to_string(stats.completion_tried) +
        ", \"clockwise\": " + std::to_string(stats.completion_clockwise) +
        ", \"plausible\": " + std::to_string(stats.completion_plausible) +
        ", \"closed\": " + std::to_string(stats.completion_closed) + "}" +
