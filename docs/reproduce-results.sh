@@ -88,13 +88,13 @@ run real-negatives eval --truth "$M/negatives.jsonl" --models "$M/exit-sign-mode
 # triangle check, circuit completion and 10 leaves, against tilted views
 # and the check alone, on the held-out sign set, Oxford and the photo pairs.
 TILT="--set views.max_tilt=60 --set views.tilt_levels=2 --set ransac.min_triangle_correlation=0.6 \
-  --set graph.complete_circuits=0 --set descriptor.max_search_leaves=20"
+  --set graph.complete_circuits=0 --set graph.max_neighbour_rank=0 --set descriptor.max_search_leaves=20"
 ANGLED="--set views.max_tilt=60 --set views.tilt_levels=2 --set ransac.min_triangle_correlation=0.6 \
-  --set graph.complete_circuits=1 --set descriptor.max_search_leaves=10"
+  --set graph.complete_circuits=1 --set graph.max_neighbour_rank=0 --set descriptor.max_search_leaves=10"
 # The frontal configuration, the defaults before 2026-12-04 (RESULTS.md,
 # "Tilted views at 45 degrees by default").
 FRONTAL="--set views.max_tilt=0 --set ransac.min_triangle_correlation=0 \
-  --set graph.complete_circuits=0 --set descriptor.max_search_leaves=20"
+  --set graph.complete_circuits=0 --set graph.max_neighbour_rank=0 --set descriptor.max_search_leaves=20"
 rm -rf "$OUT/signs2"
 run signs2 synth -o "$OUT/signs2" --seed 2 --signs 50 --frames 300
 # shellcheck disable=SC2086 # the option lists are meant to split

@@ -122,6 +122,16 @@ struct GraphParams {
   // (sigma) of either end keypoint are not stored (0: no limit). Frames
   // rarely ask for them: a frame's Delaunay edges join near neighbours.
   float max_relative_length = 0.f;
+  // Not in the paper: in each model view, an arc a -> b is stored only when
+  // b is among the max_neighbour_rank nearest keypoints of a within the arc
+  // range above, or a among b's (0: every pair in range). A frame's arcs are
+  // Delaunay edges, which join near neighbours, so arcs between far
+  // keypoints are rarely asked for, yet they were most of a tilted index and
+  // crowded the search's leaves. At 24 the ten models of bench_frame take
+  // 8.2 MB instead of 31.7, and with 8 leaves instead of 10 the sign
+  // benchmark's tuning seed finds as many signs (docs/RESULTS.md, "Near-
+  // neighbour arcs"). Format 6.6; 0 in older files.
+  int max_neighbour_rank = 24;
   // Not in the paper: a 3-circuit correspondence is also selected when only
   // two of its arcs were found by the search, provided the model holds the
   // third arc (between the two free ends) and its descriptor is within the
@@ -132,8 +142,9 @@ struct GraphParams {
   // bytes per model arc, at most 136 per keypoint) and about 3x the
   // selection's time. 1: on (3-circuits only; no effect on other
   // structures), 0: off (and in files before format 6.5). On by default
-  // with the 45-degree views, the check and 10 leaves (ViewParams): see
-  // there for what the four do together.
+  // since the 45-degree views, with the check and then 10 leaves
+  // (ViewParams; 8 since near-neighbour arcs): see there for what they do
+  // together.
   int complete_circuits = 1;
 };
 
@@ -191,8 +202,10 @@ struct DescriptorParams {
   // tilted views and circuit completion are on (ViewParams): completion
   // needs two of a circuit's three arcs from the search, not three, and
   // 10 leaves found as much as 20 for less time (docs/RESULTS.md, "Circuit
-  // completion").
-  int max_search_leaves = 10;
+  // completion"). 8 since model arcs join near neighbours only
+  // (GraphParams::max_neighbour_rank): the smaller index's leaves hold
+  // more of what frames ask for (docs/RESULTS.md, "Near-neighbour arcs").
+  int max_search_leaves = 8;
   // Not in the paper: the budget above holds for an index of up to this
   // many models and grows with the square root of the models beyond it
   // (at most 8-fold), so the search keeps finding a sign's arcs as other
@@ -279,9 +292,10 @@ struct ViewParams {
   // longitudes 72 / t degrees apart (ASIFT's sampling). By default 45
   // degrees in one level (t = 1.41 at 3 longitudes: 4 pyramids with the
   // frontal one), with the triangle check (0.6), circuit completion and
-  // 10 leaves: held-out sign benchmark 63.3 / 62.5 / 63.3 % -> 76.2 / 75.8
-  // / 72.9 % within 10 px at 1 / 10 / 50 signs, Oxford 400 crops 74.8 /
-  // 83.8 % -> 78.0 / 91.5 % within 3 / 10 px, for about 1.5x the frame;
+  // 10 leaves (8 since near-neighbour arcs, GraphParams): held-out sign
+  // benchmark 63.3 / 62.5 / 63.3 % -> 76.2 / 75.8 / 72.9 % within 10 px at
+  // 1 / 10 / 50 signs, Oxford 400 crops 74.8 / 83.8 % -> 78.0 / 91.5 %
+  // within 3 / 10 px, for about 1.5x the frame;
   // ASIFT's 60 degrees in two levels (angled_params()) finds a little more
   // for 2.2x (docs/RESULTS.md, "Tilted views at 45 degrees by default").
   float max_tilt = 45.f;

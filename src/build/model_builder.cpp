@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <system_error>
 #include <type_traits>
 #include <unordered_map>
@@ -115,8 +116,46 @@ class ArcDescriber {
   std::vector<std::int32_t> sums_;
 };
 
+// In double: the products of floats are exact there, so the result does not
+// depend on whether the compiler fuses the multiply-add.
+double squared_length(Point2f a, Point2f b) {
+  const double dx = b.x - a.x, dy = b.y - a.y;
+  return dx * dx + dy * dy;
+}
+
+// Per local keypoint, the squared distance to its `rank`-th nearest arc
+// partner (another model keypoint within the arc range), or infinity when it
+// has no more partners than that: arcs no longer than either end's are the
+// near-neighbour arcs graph.max_neighbour_rank keeps. Partners whose arc
+// cannot be described (near the view's border) are counted too, so a
+// keypoint may keep fewer than `rank` arcs.
+std::vector<double> neighbour_radii(const std::vector<Keypoint>& points,
+                                    const std::vector<std::uint32_t>& ids,
+                                    const GraphParams& graph) {
+  const std::size_t n = points.size();
+  std::vector<double> radii(n, std::numeric_limits<double>::infinity());
+  const auto rank = static_cast<std::size_t>(std::max(0, graph.max_neighbour_rank));
+  if (rank == 0) return radii;
+  std::vector<double> d2;
+  for (std::size_t a = 0; a < n; ++a) {
+    d2.clear();
+    const Point2f pa{points[a].x, points[a].y};
+    for (std::size_t b = 0; b < n; ++b) {
+      if (a == b || ids[a] == ids[b]) continue;
+      const Point2f pb{points[b].x, points[b].y};
+      if (!is_model_arc(pa, pb, points[a].scale, points[b].scale, graph)) continue;
+      d2.push_back(squared_length(pa, pb));
+    }
+    if (d2.size() <= rank) continue;
+    std::nth_element(d2.begin(), d2.begin() + static_cast<std::ptrdiff_t>(rank - 1), d2.end());
+    radii[a] = d2[rank - 1];
+  }
+  return radii;
+}
+
 // Arcs of one keypoint set in one image: every pair within the Chebyshev
-// range, described on that image. ids map local keypoints to model ids.
+// range (and, with graph.max_neighbour_rank, among either end's nearest),
+// described on that image. ids map local keypoints to model ids.
 // `described` (optional) gets, per local keypoint a, the local targets of
 // the arcs described from it (duplicates of other views' arcs included):
 // offsets (n + 1) and targets, as count_model_keygraphs() reads them.
@@ -132,6 +171,7 @@ void add_arcs(const std::vector<Keypoint>& points, const std::vector<std::uint32
     described->offsets.assign(n + 1, 0);
     described->to.clear();
   }
+  const std::vector<double> radii = neighbour_radii(points, ids, params.graph);
   for (std::size_t a = 0; a < n; ++a) {
     if (described != nullptr)
       described->offsets[a] = static_cast<std::uint32_t>(described->to.size());
@@ -140,6 +180,8 @@ void add_arcs(const std::vector<Keypoint>& points, const std::vector<std::uint32
       if (a == b || ids[a] == ids[b]) continue;
       const Point2f pb{points[b].x, points[b].y};
       if (!is_model_arc(pa, pb, points[a].scale, points[b].scale, params.graph)) continue;
+      const double length2 = squared_length(pa, pb);
+      if (length2 > radii[a] && length2 > radii[b]) continue;
       ArcDescriptor d;
       if (!describer.describe(pa, pb, d)) continue;
       if (described != nullptr) described->to.push_back(static_cast<std::uint32_t>(b));

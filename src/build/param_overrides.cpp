@@ -96,6 +96,7 @@ Params angled_params(Params base) {
   base.views.tilt_levels = 2;
   base.ransac.min_triangle_correlation = 0.6f;
   base.graph.complete_circuits = 1;
+  base.graph.max_neighbour_rank = 0;
   base.descriptor.max_search_leaves = 10;
   return base;
 }
@@ -105,6 +106,7 @@ Params frontal_params(Params base) {
   base.views.tilt_levels = 0;
   base.ransac.min_triangle_correlation = 0.f;
   base.graph.complete_circuits = 0;
+  base.graph.max_neighbour_rank = 0;
   base.descriptor.max_search_leaves = 20;
   return base;
 }

@@ -24,13 +24,15 @@ std::vector<std::string> param_names();
 
 // The opt-in for many signs seen at an angle (README, "Results";
 // docs/RESULTS.md, "Circuit completion"): `base` with tilted views to 60
-// degrees in 2 levels, the triangle check at 0.6, circuit completion and 10
-// search leaves per query.
+// degrees in 2 levels, the triangle check at 0.6, circuit completion, model
+// arcs between every pair in range (as measured) and 10 search leaves per
+// query.
 Params angled_params(Params base = Params{});
 
 // The frontal configuration (the defaults of format 6.4, and the cheapest
 // frame): `base` without tilted views, triangle check or circuit
-// completion, with 20 search leaves per query.
+// completion, with model arcs between every pair in range and 20 search
+// leaves per query.
 Params frontal_params(Params base = Params{});
 
 }  // namespace kg

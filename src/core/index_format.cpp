@@ -124,6 +124,8 @@ Status validate_params(const Params& p) {
     return bad("ransac.progressive_sampling", "must be 0 (uniform draws) or 1 (progressive)");
   if (p.graph.complete_circuits != 0 && p.graph.complete_circuits != 1)
     return bad("graph.complete_circuits", "must be 0 (off) or 1 (on)");
+  if (p.graph.max_neighbour_rank < 0)
+    return bad("graph.max_neighbour_rank", "must be >= 0 (0: every pair in range)");
   if (p.descriptor.search_reference_models < 0)
     return bad("descriptor.search_reference_models", "must be >= 0 (0: a fixed search budget)");
   if (!(std::isfinite(p.keypoints.hessian_threshold) && p.keypoints.hessian_threshold >= 0.f))

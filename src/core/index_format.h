@@ -35,7 +35,9 @@ inline constexpr std::uint16_t kVersionMajor = 6;
 // them as 0, off, as they were matched and sampled.
 // 6.5: graph.complete_circuits (3-circuits from two searched arcs and a
 // direct check of the third); older files read it as 0, off.
-inline constexpr std::uint16_t kVersionMinor = 5;
+// 6.6: graph.max_neighbour_rank (model arcs join near neighbours only);
+// older files read it as 0, every pair in range, as they were built.
+inline constexpr std::uint16_t kVersionMinor = 6;
 inline constexpr std::size_t kAlignment = 64;
 
 inline constexpr std::size_t kHeaderSize = 64;
@@ -234,6 +236,7 @@ void visit_params(P& p, F&& f) {
   f("ransac.min_triangle_correlation", p.ransac.min_triangle_correlation);  // 6.4; 0: off
   f("ransac.progressive_sampling", p.ransac.progressive_sampling);          // 6.4; 0: off
   f("graph.complete_circuits", p.graph.complete_circuits);                  // 6.5; 0: off
+  f("graph.max_neighbour_rank", p.graph.max_neighbour_rank);  // 6.6; 0: every pair in range
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }

@@ -109,10 +109,12 @@ next_case
 expect_failure "build: bad --encoding" "$KG" build --encoding int4 "$DATA/box.png" -o "$CASE/o.kgi"
 # The appearance parameters (format 6.2) are range-checked, naming the field.
 # So is the search budget (6.3), and the triangle patch check and
-# progressive sampling (6.4), and circuit completion (6.5).
+# progressive sampling (6.4), circuit completion (6.5) and the neighbour
+# rank of model arcs (6.6).
 for assignment in views.appearance_size=9999 views.appearance_size=-1 ransac.min_appearance=1.5 \
   ransac.min_appearance=nan descriptor.search_reference_models=-5 \
-  ransac.min_triangle_correlation=1.5 ransac.progressive_sampling=2 graph.complete_circuits=2; do
+  ransac.min_triangle_correlation=1.5 ransac.progressive_sampling=2 graph.complete_circuits=2 \
+  graph.max_neighbour_rank=-1; do
   next_case
   expect_failure "build: --set $assignment" \
     "$KG" build --set "$assignment" "$DATA/box.png" -o "$CASE/o.kgi"
@@ -230,7 +232,7 @@ if "$KG" inspect "$INDEX" >"$LOG/stdout" 2>"$LOG/stderr"; then
     bad "inspect: parameter descriptor.encoding not shown"
   grep -Eq '^bytes per arc: [0-9.]+ ' "$LOG/stdout" || bad "inspect: no bytes-per-arc line"
   # One model: the budget as recorded (it grows beyond 10 models).
-  grep -Eq '^search: 10 leaves per query \(descriptor\.max_search_leaves 10, grown beyond 10 models: this index has 1\)$' \
+  grep -Eq '^search: 8 leaves per query \(descriptor\.max_search_leaves 8, grown beyond 10 models: this index has 1\)$' \
     "$LOG/stdout" || bad "inspect: no search budget line in: $(cat "$LOG/stdout")"
 else
   bad "inspect of a good index failed: $(cat "$LOG/stderr")"

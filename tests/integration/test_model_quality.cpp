@@ -200,6 +200,12 @@ TEST(ModelQuality, ArrowDirectionLookAlikes) {
   // two arrows apart; with them (the default) the aligned images do.
   for (const bool appearance_check : {false, true}) {
     Params params;
+    // Format 6.5's defaults (arcs between every pair in range, 10 leaves),
+    // where the measured look-alike below exists: with the near-neighbour
+    // arcs and 8 leaves of 6.6 the small arrows are not confused even
+    // without appearances, and the report has no pair to list.
+    params.graph.max_neighbour_rank = 0;
+    params.descriptor.max_search_leaves = 10;
     if (!appearance_check) params.views.appearance_size = 0;
     for (const int arrow : {100, 35}) {
       SCOPED_TRACE("arrow " + std::to_string(arrow) + " px, appearance check " +

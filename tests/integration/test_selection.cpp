@@ -430,7 +430,7 @@ namespace {
 // either parameter turns the growth off.
 TEST(ArcSearchBudget, GrowsWithTheSquareRootOfTheModelsBeyondTheReference) {
   DescriptorParams p;
-  ASSERT_EQ(p.max_search_leaves, 10);
+  ASSERT_EQ(p.max_search_leaves, 8);
   ASSERT_EQ(p.search_reference_models, 10);
   p.max_search_leaves = 20;  // the figures of format 6.3's default
   EXPECT_EQ(ArcSearch::leaves_for(p, 1), 20);

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -39,6 +40,7 @@
 #include "core/homography.h"
 #include "core/index_format.h"
 #include "core/kdtree.h"
+#include "core/keygraph.h"
 #include "core/selection.h"
 #include "temp_dir.h"
 #include "test_data.h"
@@ -151,6 +153,7 @@ constexpr DescriptorEncoding kEncodings[] = {DescriptorEncoding::kFloat32,
 Params paper_params() {
   Params p;
   p.views.min_size = 0.f;
+  p.graph.max_neighbour_rank = 0;  // every pair in range, as the paper's model graph
   return p;
 }
 
@@ -987,6 +990,61 @@ std::filesystem::path golden_path(DescriptorEncoding e) {
                          std::to_string(format::kVersionMinor) + "-" + encoding_name(e) + ".kgi");
 }
 
+// graph.max_neighbour_rank (format 6.6): built from one image (no views),
+// the arcs stored are exactly those of every pair in range (rank 0) whose
+// ends are, one of them, among the other's K nearest keypoints in range;
+// a rank above the keypoint count stores every pair as rank 0 does.
+TEST(ModelBuilder, ArcsJoinNearNeighboursOnly) {
+  const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+  ASSERT_FALSE(box.empty()) << "box.png missing (install opencv-doc)";
+  Params params;
+  params.views.min_size = 0.f;  // one image at the legacy scales
+  auto build = [&](int rank, BuiltModel& out) {
+    params.graph.max_neighbour_rank = rank;
+    ASSERT_TRUE(build_model(box, "box", params, out));
+  };
+  BuiltModel every, near, beyond;
+  build(0, every);
+  constexpr int kRank = 8;
+  build(kRank, near);
+  build(1 << 20, beyond);
+  auto pairs = [](const BuiltModel& m) {
+    std::set<std::pair<std::uint32_t, std::uint32_t>> out;
+    for (const ModelArc& a : m.arcs) out.insert({a.from, a.to});
+    return out;
+  };
+  EXPECT_EQ(pairs(beyond), pairs(every));
+  ASSERT_EQ(near.keypoints.size(), every.keypoints.size());
+  const std::size_t n = every.keypoints.size();
+  ASSERT_GT(n, static_cast<std::size_t>(4 * kRank));
+  // Each keypoint's K-th nearest partner in arc range, as the builder ranks
+  // (float differences, squared and summed in double).
+  auto length2 = [&](std::size_t a, std::size_t b) {
+    const double dx = every.keypoints[b].x - every.keypoints[a].x;
+    const double dy = every.keypoints[b].y - every.keypoints[a].y;
+    return dx * dx + dy * dy;
+  };
+  std::vector<double> radius2(n, std::numeric_limits<double>::infinity());
+  for (std::size_t a = 0; a < n; ++a) {
+    std::vector<double> d2;
+    for (std::size_t b = 0; b < n; ++b)
+      if (b != a && is_model_arc(every.keypoints[a], every.keypoints[b], every.keypoint_scales[a],
+                                 every.keypoint_scales[b], params.graph))
+        d2.push_back(length2(a, b));
+    if (d2.size() <= static_cast<std::size_t>(kRank)) continue;
+    std::sort(d2.begin(), d2.end());
+    radius2[a] = d2[kRank - 1];
+  }
+  std::set<std::pair<std::uint32_t, std::uint32_t>> expected;
+  for (const auto& [from, to] : pairs(every))
+    if (length2(from, to) <= radius2[from] || length2(from, to) <= radius2[to])
+      expected.insert({from, to});
+  EXPECT_EQ(pairs(near), expected);
+  // Near neighbours are a small part of the pairs in range.
+  EXPECT_LT(4 * near.arcs.size(), every.arcs.size());
+  EXPECT_GT(near.arcs.size(), n * static_cast<std::size_t>(kRank) / 2);
+}
+
 // An index built through views (the defaults): several arcs may join one
 // keypoint pair (described in different views), every keypoint carries the
 // range of views that detected it, and the tree points hold the attributes
@@ -1112,6 +1170,8 @@ TEST(Golden, EveryGoldenLoadsAndDetects) {
     EXPECT_EQ(index.params().ransac.progressive_sampling, index.version_minor() >= 4 ? 1 : 0);
     // Circuit completion (6.5) is on by default, off in older files.
     EXPECT_EQ(index.params().graph.complete_circuits, index.version_minor() >= 5 ? 1 : 0);
+    // Near-neighbour arcs (6.6): 24 by default; older files joined every pair.
+    EXPECT_EQ(index.params().graph.max_neighbour_rank, index.version_minor() >= 6 ? 24 : 0);
     if (index.version_minor() >= 2) {
       ASSERT_TRUE(index.has_appearance());
       const ModelAppearance look = index.appearance(0);
@@ -1661,6 +1721,11 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
     put_params(b, p);
     EXPECT_TRUE(rejected(b, "parameter graph.complete_circuits must be 0"));
   }
+  p = paper_params();
+  p.graph.max_neighbour_rank = -1;
+  b = bytes();
+  put_params(b, p);
+  EXPECT_TRUE(rejected(b, "parameter graph.max_neighbour_rank must be >= 0"));
   p = paper_params();
   p.descriptor.search_reference_models = -1;
   b = bytes();
