@@ -1045,6 +1045,40 @@ TEST(ModelBuilder, ArcsJoinNearNeighboursOnly) {
   EXPECT_GT(near.arcs.size(), n * static_cast<std::size_t>(kRank) / 2);
 }
 
+// The same through the views of the defaults: each view describes at most
+// 2 K arcs a keypoint (K nearest of each end, both directions), a bound the
+// every-pair build exceeds; the stored keypoint pairs are a subset of the
+// every-pair build's, and a small part of them.
+TEST(ModelBuilder, EveryViewKeepsNearNeighbourArcsOnly) {
+  const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+  ASSERT_FALSE(box.empty()) << "box.png missing (install opencv-doc)";
+  Params params;  // views on
+  ASSERT_EQ(params.graph.max_neighbour_rank, 24);
+  const auto rank = static_cast<long>(params.graph.max_neighbour_rank);
+  BuiltModel near, every;
+  ASSERT_TRUE(build_model(box, "box", params, near));
+  params.graph.max_neighbour_rank = 0;
+  ASSERT_TRUE(build_model(box, "box", params, every));
+  ASSERT_EQ(near.views.size(), every.views.size());
+  ASSERT_GT(near.views.size(), 4u);
+  ASSERT_EQ(near.keypoints.size(), every.keypoints.size());
+  bool bound_binds = false;
+  for (std::size_t v = 0; v < near.views.size(); ++v) {
+    SCOPED_TRACE("view " + std::to_string(v));
+    ASSERT_EQ(near.views[v].keypoints, every.views[v].keypoints);
+    const long bound = 2 * rank * near.views[v].keypoints;
+    EXPECT_LE(near.views[v].view_arcs, bound);
+    EXPECT_LE(near.views[v].view_arcs, every.views[v].view_arcs);
+    bound_binds = bound_binds || every.views[v].view_arcs > bound;
+  }
+  EXPECT_TRUE(bound_binds) << "no view has more pairs in range than the rank keeps";
+  std::set<std::pair<std::uint32_t, std::uint32_t>> all;
+  for (const ModelArc& a : every.arcs) all.insert({a.from, a.to});
+  for (const ModelArc& a : near.arcs)
+    ASSERT_TRUE(all.count({a.from, a.to}) == 1) << a.from << " -> " << a.to;
+  EXPECT_LT(3 * near.arcs.size(), every.arcs.size());
+}
+
 // An index built through views (the defaults): several arcs may join one
 // keypoint pair (described in different views), every keypoint carries the
 // range of views that detected it, and the tree points hold the attributes
