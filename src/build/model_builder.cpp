@@ -123,6 +123,15 @@ double squared_length(Point2f a, Point2f b) {
   return dx * dx + dy * dy;
 }
 
+// Whether local keypoints a and b, two different model keypoints, are in
+// arc range of each other (GraphParams: Chebyshev and relative length).
+bool arc_partners(const std::vector<Keypoint>& points, const std::vector<std::uint32_t>& ids,
+                  std::size_t a, std::size_t b, const GraphParams& graph) {
+  if (a == b || ids[a] == ids[b]) return false;
+  return is_model_arc(Point2f{points[a].x, points[a].y}, Point2f{points[b].x, points[b].y},
+                      points[a].scale, points[b].scale, graph);
+}
+
 // Per local keypoint, the squared distance to its `rank`-th nearest arc
 // partner (another model keypoint within the arc range), or infinity when it
 // has no more partners than that: arcs no longer than either end's are the
@@ -140,12 +149,9 @@ std::vector<double> neighbour_radii(const std::vector<Keypoint>& points,
   for (std::size_t a = 0; a < n; ++a) {
     d2.clear();
     const Point2f pa{points[a].x, points[a].y};
-    for (std::size_t b = 0; b < n; ++b) {
-      if (a == b || ids[a] == ids[b]) continue;
-      const Point2f pb{points[b].x, points[b].y};
-      if (!is_model_arc(pa, pb, points[a].scale, points[b].scale, graph)) continue;
-      d2.push_back(squared_length(pa, pb));
-    }
+    for (std::size_t b = 0; b < n; ++b)
+      if (arc_partners(points, ids, a, b, graph))
+        d2.push_back(squared_length(pa, {points[b].x, points[b].y}));
     if (d2.size() <= rank) continue;
     std::nth_element(d2.begin(), d2.begin() + static_cast<std::ptrdiff_t>(rank - 1), d2.end());
     radii[a] = d2[rank - 1];
@@ -177,9 +183,8 @@ void add_arcs(const std::vector<Keypoint>& points, const std::vector<std::uint32
       described->offsets[a] = static_cast<std::uint32_t>(described->to.size());
     const Point2f pa{points[a].x, points[a].y};
     for (std::size_t b = 0; b < n; ++b) {
-      if (a == b || ids[a] == ids[b]) continue;
+      if (!arc_partners(points, ids, a, b, params.graph)) continue;
       const Point2f pb{points[b].x, points[b].y};
-      if (!is_model_arc(pa, pb, points[a].scale, points[b].scale, params.graph)) continue;
       const double length2 = squared_length(pa, pb);
       if (length2 > radii[a] && length2 > radii[b]) continue;
       ArcDescriptor d;

@@ -1001,13 +1001,13 @@ TEST(ModelBuilder, ArcsJoinNearNeighboursOnly) {
   params.views.min_size = 0.f;  // one image at the legacy scales
   auto build = [&](int rank, BuiltModel& out) {
     params.graph.max_neighbour_rank = rank;
-    ASSERT_TRUE(build_model(box, "box", params, out));
+    return build_model(box, "box", params, out);
   };
   BuiltModel every, near, beyond;
-  build(0, every);
+  ASSERT_TRUE(build(0, every));
   constexpr int kRank = 8;
-  build(kRank, near);
-  build(1 << 20, beyond);
+  ASSERT_TRUE(build(kRank, near));
+  ASSERT_TRUE(build(1 << 20, beyond));
   auto pairs = [](const BuiltModel& m) {
     std::set<std::pair<std::uint32_t, std::uint32_t>> out;
     for (const ModelArc& a : m.arcs) out.insert({a.from, a.to});
