@@ -287,6 +287,17 @@ struct ViewParams {
   // model image; keypoints from KeypointParams::model_scales).
   float min_size = 40.f;
   float scale_step = 0.7071f;  // each view's scale over the previous one's
+  // Largest size, relative to the model image, at which a model must still
+  // be found: frontal views each 1 / scale_step larger than the last are
+  // added up to it (1: none). For models a camera sees larger than their
+  // image, such as a whiteboard photographed from farther away than the
+  // frames: at 1.42 the real planar pairs go from 7 / 9 / 9 to 8 / 10 / 10
+  // of 14 within 2 / 5 / 10 px (WhiteBoard, 1.44x its model in the scene,
+  // is found). Signs are seen smaller than a model image of a few hundred
+  // pixels, and there 1.42 costs 3 points at 1 sign and more false
+  // detections, so 1 by default (docs/RESULTS.md, "Views larger than the
+  // model"). Format 6.7; older files read 1.
+  float max_scale = 1.f;
   // Largest simulated out-of-plane rotation, degrees (0: frontal only),
   // reached in tilt_levels steps equally spaced in t = 1 / cos(angle);
   // longitudes 72 / t degrees apart (ASIFT's sampling). By default 45

@@ -75,14 +75,26 @@ std::vector<ModelView> model_views(int width, int height, const ViewParams& para
     return views;
   }
   add_pyramid(width, height, 1.0, 0.0, params, views);
-  if (params.max_tilt <= 0.f || params.tilt_levels <= 0) return views;
-  const double max_t = 1.0 / std::cos(params.max_tilt * kPi / 180.0);
-  for (int level = 1; level <= params.tilt_levels; ++level) {
-    const double t = 1.0 + (max_t - 1.0) * level / params.tilt_levels;
-    const double step = 72.0 / t;
-    const int longitudes = std::max(1, static_cast<int>(std::floor(180.0 / step + 1e-9)));
-    for (int k = 0; k < longitudes; ++k)
-      add_pyramid(width, height, t, 180.0 * k / longitudes, params, views);
+  if (params.max_tilt > 0.f && params.tilt_levels > 0) {
+    const double max_t = 1.0 / std::cos(params.max_tilt * kPi / 180.0);
+    for (int level = 1; level <= params.tilt_levels; ++level) {
+      const double t = 1.0 + (max_t - 1.0) * level / params.tilt_levels;
+      const double step = 72.0 / t;
+      const int longitudes = std::max(1, static_cast<int>(std::floor(180.0 / step + 1e-9)));
+      for (int k = 0; k < longitudes; ++k)
+        add_pyramid(width, height, t, 180.0 * k / longitudes, params, views);
+    }
+  }
+  // Views larger than the model image last, so that the model keypoints
+  // the other views found (the first to claim a position keeps it) are the
+  // same with or without them.
+  for (int up = 1;; ++up) {
+    const double scale = std::pow(1.0 / params.scale_step, up);
+    if (scale > params.max_scale * (1.0 + 1e-3)) break;
+    ModelView v;
+    v.scale = scale;
+    v.to_view = view_map(width, height, scale, 1.0, 0.0, v.size);
+    views.push_back(v);
   }
   return views;
 }
@@ -111,7 +123,10 @@ void render_view(const cv::Mat& gray, const ModelView& view, cv::Mat& out, cv::M
                        cv::BORDER_REPLICATE);
       source = blurred;
     }
-    cv::warpAffine(source, out, cv::Mat(a), view.size, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    // Enlarged views by cubic interpolation: linear leaves creases at the
+    // model's pixel grid, which a fine-scale detector responds to.
+    cv::warpAffine(source, out, cv::Mat(a), view.size,
+                   view.scale > 1.0 ? cv::INTER_CUBIC : cv::INTER_LINEAR, cv::BORDER_REPLICATE);
   } else {
     // Rotate first (no shrink), blur along the rotated axes, then squeeze.
     cv::Size rotated_size;

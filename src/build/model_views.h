@@ -27,7 +27,9 @@ struct ModelView {
 // The views of a width x height model for `params`, finest first: the
 // frontal scale pyramid (scale 1, then each params.scale_step smaller until
 // the long edge reaches params.min_size), and for each tilt level the same
-// pyramid at longitudes 72 / t degrees apart. With views disabled
+// pyramid at longitudes 72 / t degrees apart, then the frontal views larger
+// than the model image (each 1 / params.scale_step larger, up to
+// params.max_scale). With views disabled
 // (min_size == 0) the frontal pyramid of `legacy_scales` levels, each
 // 1/sqrt(2) smaller.
 std::vector<ModelView> model_views(int width, int height, const ViewParams& params,

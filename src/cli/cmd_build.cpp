@@ -1,7 +1,8 @@
 // keygraph build: its options are the Options table below (keygraph build --help).
-// --min-size and --max-tilt set the simulated views (views.min_size,
-// views.max_tilt; --max-tilt also sets the tilt levels, steps of about 0.5
-// in t as ASIFT's, unless views.tilt_levels is --set).
+// --min-size, --max-scale and --max-tilt set the simulated views
+// (views.min_size, views.max_scale, views.max_tilt; --max-tilt also sets the
+// tilt levels, steps of about 0.5 in t as ASIFT's, unless views.tilt_levels
+// is --set).
 // --name and --roi apply to the model image that follows them: --roi makes
 // the model that rectangle of the image (model pixel (0,0) is image pixel
 // (X,Y)); without --name the model is named after the file's stem.
@@ -181,6 +182,17 @@ int cmd_build(const Args& args) {
             return {};
           },
           param_text("views.min_size"))
+      .value(
+          "--max-scale", "S",
+          "the largest size, relative to the model image, at which a model must still\n"
+          "be found: frontal views are simulated up to it; 1: none larger than the\n"
+          "image (views.max_scale)",
+          [&params](const std::string& v) -> std::string {
+            if (Status s = apply_param_override("views.max_scale=" + v, params); !s)
+              return "--max-scale: " + s.message();
+            return {};
+          },
+          param_text("views.max_scale"))
       .value(
           "--max-tilt", "DEG",
           "the largest simulated out-of-plane tilt, degrees (0: frontal only); also sets\n"

@@ -101,6 +101,7 @@ Status parse_params(const std::uint8_t* in, std::size_t size, Params& params) {
   });
   // Written before the parameter existed: its zero tail means off.
   if (params.keypoints.scene_upsample == 0) params.keypoints.scene_upsample = 1;
+  if (params.views.max_scale == 0.f) params.views.max_scale = 1.f;
   return validate_params(params);
 }
 
@@ -208,6 +209,8 @@ Status validate_params(const Params& p) {
     return bad("views.scale_step", "must be in [0.3, 0.95]");
   if (!(std::isfinite(p.views.max_tilt) && p.views.max_tilt >= 0.f && p.views.max_tilt <= 80.f))
     return bad("views.max_tilt", "must be in [0, 80] degrees");
+  if (!(std::isfinite(p.views.max_scale) && p.views.max_scale >= 1.f && p.views.max_scale <= 4.f))
+    return bad("views.max_scale", "must be in [1, 4] (1: no views larger than the model image)");
   if (p.views.tilt_levels < 0 || p.views.tilt_levels > 8)
     return bad("views.tilt_levels", "must be in 0..8");
   if (!(std::isfinite(p.views.merge_distance) && p.views.merge_distance >= 0.f &&

@@ -37,7 +37,9 @@ inline constexpr std::uint16_t kVersionMajor = 6;
 // direct check of the third); older files read it as 0, off.
 // 6.6: graph.max_neighbour_rank (model arcs join near neighbours only);
 // older files read it as 0, every pair in range, as they were built.
-inline constexpr std::uint16_t kVersionMinor = 6;
+// 6.7: views.max_scale (views larger than the model image); older files
+// read it as 1, none, as they were built.
+inline constexpr std::uint16_t kVersionMinor = 7;
 inline constexpr std::size_t kAlignment = 64;
 
 inline constexpr std::size_t kHeaderSize = 64;
@@ -138,7 +140,7 @@ inline constexpr std::uint32_t kQualityFoundInScene = 1;  // detected in its own
 inline constexpr std::uint32_t kQualityFlagsKnown = kQualityFoundInScene;
 // View quality record (section 13, kViewQualitySize bytes).
 inline constexpr std::size_t kViewQualitySize = 24;
-inline constexpr std::size_t kVqScale = 0;       // f32, (0, 1]
+inline constexpr std::size_t kVqScale = 0;       // f32, (0, views.max_scale]
 inline constexpr std::size_t kVqTilt = 4;        // f32, >= 1
 inline constexpr std::size_t kVqLongitude = 8;   // f32, degrees in [0, 180)
 inline constexpr std::size_t kVqKeypoints = 12;  // u32
@@ -237,6 +239,7 @@ void visit_params(P& p, F&& f) {
   f("ransac.progressive_sampling", p.ransac.progressive_sampling);          // 6.4; 0: off
   f("graph.complete_circuits", p.graph.complete_circuits);                  // 6.5; 0: off
   f("graph.max_neighbour_rank", p.graph.max_neighbour_rank);  // 6.6; 0: every pair in range
+  f("views.max_scale", p.views.max_scale);                    // 6.7; 0 in older files: read as 1
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }

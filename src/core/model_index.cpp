@@ -608,11 +608,13 @@ Status ModelIndex::validate_quality(const std::uint8_t* quality, std::uint32_t q
   }
   if (next_view != view_count)
     return corrupt("model quality section: view ranges do not cover all view records");
+  // Views larger than the model image reach views.max_scale (6.7; 1 before).
+  const float largest_scale = params_.views.max_scale * 1.001f;
   for (std::uint32_t v = 0; v < view_count; ++v) {
     const std::uint8_t* r = views + static_cast<std::size_t>(v) * kViewQualitySize;
     const float scale = load<float>(r + kVqScale), tilt = load<float>(r + kVqTilt),
                 longitude = load<float>(r + kVqLongitude);
-    if (!(scale > 0.f && scale <= 1.f) || !(tilt >= 1.f && tilt < 1e3f) ||
+    if (!(scale > 0.f && scale <= largest_scale) || !(tilt >= 1.f && tilt < 1e3f) ||
         !(longitude >= 0.f && longitude < 180.f))
       return corrupt("view quality " + std::to_string(v) + ": bad scale, tilt or longitude");
   }

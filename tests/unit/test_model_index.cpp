@@ -1206,6 +1206,9 @@ TEST(Golden, EveryGoldenLoadsAndDetects) {
     EXPECT_EQ(index.params().graph.complete_circuits, index.version_minor() >= 5 ? 1 : 0);
     // Near-neighbour arcs (6.6): 24 by default; older files joined every pair.
     EXPECT_EQ(index.params().graph.max_neighbour_rank, index.version_minor() >= 6 ? 24 : 0);
+    // No views larger than the model image (6.7): the default, and what
+    // older files' zero reads as.
+    EXPECT_EQ(index.params().views.max_scale, 1.f);
     if (index.version_minor() >= 2) {
       ASSERT_TRUE(index.has_appearance());
       const ModelAppearance look = index.appearance(0);
@@ -1760,6 +1763,13 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
   b = bytes();
   put_params(b, p);
   EXPECT_TRUE(rejected(b, "parameter graph.max_neighbour_rank must be >= 0"));
+  for (const float scale : {0.5f, 4.5f, std::nanf("")}) {
+    p = paper_params();
+    p.views.max_scale = scale;
+    b = bytes();
+    put_params(b, p);
+    EXPECT_TRUE(rejected(b, "parameter views.max_scale must be in [1, 4]"));
+  }
   p = paper_params();
   p.descriptor.search_reference_models = -1;
   b = bytes();
@@ -1993,6 +2003,40 @@ TEST_F(ModelIndexTest, QualityReportRoundTrips) {
   EXPECT_EQ(index.view_quality(index.view_quality_count()).keypoints, 0u);
 }
 
+// views.max_scale (format 6.7): the views larger than the model image are
+// recorded with their scales, and an index holding them loads; the same
+// scale in a view record is refused when the parameters do not allow it
+// (RejectsBadQualitySections).
+TEST(ModelIndexLargerViews, RecordsAndLoadsViewsUpToMaxScale) {
+  const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+  ASSERT_FALSE(box.empty()) << "box.png missing (install opencv-doc)";
+  const cv::Mat crop = box(kGoldenCrop).clone();
+  Params params;
+  params.views.max_scale = 2.f;
+  std::vector<BuiltModel> models(1);
+  ASSERT_TRUE(build_model(crop, "box_crop", params, models[0]));
+  Params frontal_only = params;
+  frontal_only.views.max_scale = 1.f;
+  BuiltModel without;
+  ASSERT_TRUE(build_model(crop, "box_crop", frontal_only, without));
+  // Two more views (sqrt(2) and 2), after the others, with more keypoints.
+  ASSERT_EQ(models[0].views.size(), without.views.size() + 2);
+  EXPECT_NEAR(models[0].views.back().scale, 2.0, 1e-3);
+  EXPECT_GT(models[0].keypoints.size(), without.keypoints.size());
+  QualityReport quality;
+  ASSERT_TRUE(measure_quality(models, {crop}, params, {}, quality));
+  Bytes bytes;
+  ASSERT_TRUE(serialize_index(models, params, bytes, &quality));
+  AlignedBytes buffer(bytes);
+  ModelIndex index;
+  const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_EQ(index.params().views.max_scale, 2.f);
+  const ModelQuality mq = index.model_quality(0);
+  ASSERT_EQ(mq.view_count, models[0].views.size());
+  EXPECT_NEAR(index.view_quality(mq.view_begin + mq.view_count - 1).scale, 2.f, 1e-3f);
+}
+
 // The small corpus with look-alike pairs written in (the writer takes any
 // valid report), so that the look-alikes section has bytes to damage.
 Bytes with_look_alikes(const std::vector<LookAlike>& pairs) {
@@ -2048,6 +2092,9 @@ TEST_F(ModelIndexTest, RejectsBadQualitySections) {
   EXPECT_TRUE(rejected(damaged([&](Bytes& b) { b[mq + kMqReserved + 7] = 1; }),
                        "unknown flags or reserved bytes set"));
   EXPECT_TRUE(rejected(damaged([&](Bytes& b) { store<float>(b.data() + vq + kVqScale, 0.f); }),
+                       "view quality 0: bad scale, tilt or longitude"));
+  // Larger than the model image, in an index without such views (6.7).
+  EXPECT_TRUE(rejected(damaged([&](Bytes& b) { store<float>(b.data() + vq + kVqScale, 1.5f); }),
                        "view quality 0: bad scale, tilt or longitude"));
   EXPECT_TRUE(rejected(damaged([&](Bytes& b) { store<float>(b.data() + vq + kVqTilt, 0.5f); }),
                        "view quality 0: bad scale, tilt or longitude"));

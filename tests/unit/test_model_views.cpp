@@ -39,6 +39,37 @@ TEST(ModelViews, FrontalPyramidStopsAtTheSmallestSize) {
   }
 }
 
+// views.max_scale: frontal views each 1 / scale_step larger, after all the
+// others, which stay as they were.
+TEST(ModelViews, LargerViewsComeLastUpToTheLargestScale) {
+  ViewParams params;
+  params.min_size = 40.f;
+  params.max_tilt = 45.f;
+  params.tilt_levels = 1;
+  const std::vector<ModelView> base = model_views(320, 160, params, 1);
+  params.max_scale = 2.f;
+  const std::vector<ModelView> views = model_views(320, 160, params, 1);
+  ASSERT_EQ(views.size(), base.size() + 2);
+  for (std::size_t i = 0; i < base.size(); ++i) {
+    EXPECT_EQ(views[i].scale, base[i].scale);
+    EXPECT_EQ(views[i].tilt, base[i].tilt);
+    EXPECT_EQ(views[i].longitude, base[i].longitude);
+    EXPECT_EQ(views[i].size, base[i].size);
+  }
+  const double step = 1.0 / params.scale_step;
+  for (int up = 1; up <= 2; ++up) {
+    const ModelView& v = views[base.size() + up - 1];
+    EXPECT_DOUBLE_EQ(v.scale, std::pow(step, up));
+    EXPECT_EQ(v.tilt, 1.0);
+    EXPECT_EQ(v.longitude, 0.0);
+    EXPECT_EQ(v.size.width, static_cast<int>(std::ceil(320 * v.scale - 1e-6)));
+    EXPECT_NEAR(v.to_view(0, 0), v.scale, 1e-12);
+  }
+  // Just under one step up: none.
+  params.max_scale = 1.4f;
+  EXPECT_EQ(model_views(320, 160, params, 1).size(), base.size());
+}
+
 TEST(ModelViews, WithoutViewsTheLegacyScales) {
   ViewParams off;
   off.min_size = 0.f;
@@ -103,8 +134,10 @@ TEST(ModelViews, RenderedViewShowsModelPixelsWhereTheMapSays) {
   params.scale_step = 0.6f;
   params.max_tilt = 60.f;
   params.tilt_levels = 2;
+  params.max_scale = 2.f;  // and enlarged views, rendered by cubic interpolation
   const std::vector<ModelView> views = model_views(model.cols, model.rows, params, 1);
   ASSERT_GT(views.size(), 20u);
+  ASSERT_GT(views.back().scale, 1.5);  // 1 / 0.6
   for (const ModelView& v : views) {
     SCOPED_TRACE("scale " + std::to_string(v.scale) + " tilt " + std::to_string(v.tilt) +
                  " longitude " + std::to_string(v.longitude));
@@ -200,6 +233,63 @@ TEST(ModelViews, SmallInstanceFoundOnlyWithViews) {
   single.views.min_size = 0.f;
   found(single, error);
   EXPECT_GT(error, 5.0) << "the single-image model now finds the small box: make the test harder";
+}
+
+// The other way: a page of text shown 1.8x larger than its image and turned
+// by 20 degrees. Its fine strokes are coarse blobs in the frame that no view
+// of the model at its own size or smaller shows; views up to sqrt(2) larger
+// (views.max_scale) find it, within a few pixels at every corner.
+TEST(ModelViews, LargeInstanceFoundWithLargerViews) {
+  const cv::Mat text = test::load_gray(test::opencv_data("imageTextN.png"));
+  const cv::Mat background = test::load_gray(test::opencv_data("fruits.jpg"));
+  ASSERT_FALSE(text.empty());
+  ASSERT_FALSE(background.empty());
+  cv::Mat scene;
+  cv::resize(background, scene, cv::Size(640, 480), 0, 0, cv::INTER_AREA);
+  const cv::Point2d centre(0.5 * text.cols, 0.5 * text.rows);
+  cv::Mat place = cv::getRotationMatrix2D(centre, 20.0, 1.8);
+  place.at<double>(0, 2) += 320.0 - centre.x;
+  place.at<double>(1, 2) += 240.0 - centre.y;
+  cv::Mat warped, warped_mask;
+  const cv::Mat mask(text.size(), CV_8UC1, cv::Scalar(255));
+  cv::warpAffine(text, warped, place, scene.size(), cv::INTER_LINEAR);
+  cv::warpAffine(mask, warped_mask, place, scene.size(), cv::INTER_NEAREST);
+  warped.copyTo(scene, warped_mask);
+  const cv::Matx23d to_scene(place);
+
+  auto detect = [&](float max_scale, DetectionList& out) {
+    Params params;
+    params.views.max_scale = max_scale;
+    BuiltModel model;
+    ASSERT_TRUE(build_model(text, "text", params, model));
+    EvalIndex index;
+    ASSERT_TRUE(index.build({model}, params));
+    DesktopDetector detector(index.index());
+    ASSERT_TRUE(detector.detect(scene, out));
+  };
+  DetectionList at_own_size, with_larger;
+  detect(1.f, at_own_size);
+  detect(1.42f, with_larger);
+  // Corners only partly inside the frame: the error of the model points
+  // the frame shows, on a grid.
+  auto worst_error = [&](const Detection& d) {
+    double worst = 0.0;
+    for (int gy = 0; gy <= 10; ++gy) {
+      for (int gx = 0; gx <= 10; ++gx) {
+        const Point2f m{static_cast<float>(gx * (text.cols - 1) / 10.0),
+                        static_cast<float>(gy * (text.rows - 1) / 10.0)};
+        const cv::Point2d want = map(to_scene, cv::Point2d(m.x, m.y));
+        if (want.x < 0 || want.y < 0 || want.x > 639 || want.y > 479) continue;
+        const Point2f got = kg::apply(d.homography, m);
+        worst = std::max(worst, std::hypot(got.x - want.x, got.y - want.y));
+      }
+    }
+    return worst;
+  };
+  ASSERT_EQ(with_larger.size(), 1u);
+  EXPECT_LT(worst_error(with_larger[0]), 3.0);
+  for (const Detection& d : at_own_size)
+    EXPECT_GT(worst_error(d), 3.0) << "found without the larger views: make the test harder";
 }
 
 }  // namespace
