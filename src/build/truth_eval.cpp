@@ -14,9 +14,13 @@
 #include "build/desktop_detect.h"
 #include "build/eval_index.h"
 #include "build/image_io.h"
+#include "build/keypoints.h"
 #include "build/model_set.h"
 #include "build/quad_geometry.h"
 #include "core/index_format.h"
+#include "core/keygraph.h"
+#include "core/point_grid.h"
+#include "core/pose.h"
 #include "keygraph/model_index.h"
 
 namespace kg {
@@ -111,6 +115,102 @@ cv::Mat draw_scene(const cv::Mat& gray, const std::vector<TruthQuad>& truth,
              detection_kind_name(kinds[i]) + ")");
   }
   return canvas;
+}
+
+// The support of each truth instance's pose (TruthCase::truth_*) among
+// the frame's keypoints, for a keygraph detector whose model ids are
+// `detector_model` of the evaluation's (-1: not in its index).
+// `detector` has just searched `gray`: its correspondences are counted too.
+void measure_truth_support(const Detector& detector, const std::vector<int>& detector_model,
+                           const std::vector<TruthModel>& models, const cv::Mat& gray,
+                           const std::vector<TruthQuad>& truth, KeypointExtractor& extractor,
+                           std::vector<TruthCase>& cases) {
+  const ModelIndex& index = detector.index();
+  const Params& params = index.params();
+  const int vertices = vertex_count(params.graph.structure);
+  const ConstSpan<KeygraphMatch> matches = detector.last_matches();
+  const ConstSpan<Keypoint> sampled = detector.last_keypoints();
+  // With an upsampled frame the detector works on other keypoints.
+  if (params.keypoints.scene_upsample != 1 || truth.empty()) return;
+  std::vector<Keypoint> keypoints;
+  extractor.extract(gray, params.keypoints, Limits{}.max_keypoints, keypoints);
+  PointGrid grid;
+  grid.reserve(static_cast<int>(keypoints.size()), gray.cols, gray.rows,
+               std::max(4.f, static_cast<float>(params.ransac.inlier_threshold)));
+  grid.build(keypoints.data(), static_cast<int>(keypoints.size()), gray.cols, gray.rows,
+             std::max(4.f, static_cast<float>(params.ransac.inlier_threshold)));
+  FrameKeypoints frame;
+  frame.keypoints = keypoints.data();
+  frame.count = static_cast<int>(keypoints.size());
+  frame.grid = &grid;
+  frame.width = gray.cols;
+  frame.height = gray.rows;
+  const RansacParams& rp = params.ransac;
+  for (std::size_t i = 0; i < truth.size() && i < cases.size(); ++i) {
+    const TruthQuad& t = truth[i];
+    TruthCase& c = cases[i];
+    for (const int m : t.models) {
+      const int id = detector_model[static_cast<std::size_t>(m)];
+      if (id < 0) continue;
+      Point2f outline[4];
+      model_outline(models[static_cast<std::size_t>(m)], outline);
+      std::vector<Homography> poses;
+      if (t.has_homography) {
+        poses.push_back(t.homography);
+      } else {
+        // The corners' order is unknown: every cyclic shift, both ways.
+        std::vector<cv::Point2f> from(4), to(4);
+        for (int corner = 0; corner < 4; ++corner)
+          from[corner] = {outline[corner].x, outline[corner].y};
+        for (int start = 0; start < 4; ++start) {
+          for (const int step : {1, 3}) {
+            for (int corner = 0; corner < 4; ++corner) {
+              const Point2f& q = t.corners[(start + step * corner) % 4];
+              to[corner] = {q.x, q.y};
+            }
+            const cv::Mat h = cv::getPerspectiveTransform(from, to);
+            if (h.empty() || !(std::abs(h.at<double>(2, 2)) > 1e-12)) continue;
+            Homography pose{};
+            for (int e = 0; e < 9; ++e) pose[e] = h.at<double>(e / 3, e % 3) / h.at<double>(2, 2);
+            poses.push_back(pose);
+          }
+        }
+      }
+      for (const Homography& pose : poses) {
+        const PoseSupport s = measure_pose_support(index, id, frame, pose);
+        if (s.refound > c.truth_refound || (s.refound == c.truth_refound && s.z > c.truth_z)) {
+          c.truth_shown = s.shown;
+          c.truth_refound = s.refound;
+          c.truth_z = s.z;
+          // Correspondences of this model that agree with this pose.
+          const auto tolerance = static_cast<float>(rp.inlier_threshold);
+          c.truth_matches = 0;
+          for (const KeygraphMatch& match : matches) {
+            if (match.model_id != id) continue;
+            bool agrees = true;
+            for (int v = 0; v < vertices && agrees; ++v) {
+              const auto scene = static_cast<std::size_t>(match.scene_vertices[v]);
+              if (scene >= sampled.size()) {
+                agrees = false;
+                break;
+              }
+              const Point2f want = kg::apply(pose, index.keypoints()[match.model_vertices[v]]);
+              agrees =
+                  std::hypot(want.x - sampled[scene].x, want.y - sampled[scene].y) <= tolerance;
+            }
+            c.truth_matches += agrees ? 1 : 0;
+          }
+        }
+      }
+    }
+    if (c.truth_refound >= 0) {
+      c.truth_enough_matches = c.truth_matches >= rp.min_inlier_keygraphs;
+      c.truth_verifiable =
+          (c.truth_refound >= rp.min_inliers && c.truth_z >= rp.min_verification_z) ||
+          (rp.confirmed_min_inliers > 0 && c.truth_refound >= rp.confirmed_min_inliers &&
+           c.truth_z >= rp.confirmed_min_verification_z);
+    }
+  }
 }
 
 }  // namespace
@@ -280,6 +380,7 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
   };
 
   using Clock = std::chrono::steady_clock;
+  KeypointExtractor extractor;  // the frame's keypoints for measure_truth_support()
   const int scene_count = static_cast<int>(manifest.scenes.size());
   for (int si = 0; si < scene_count; ++si) {
     const TruthScene& scene = manifest.scenes[static_cast<std::size_t>(si)];
@@ -376,6 +477,20 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
       std::vector<int> instance_of;
       score_truth_scene(found, truth, results.models, gray.cols, gray.rows, options.tolerance,
                         options.min_iou, cases, kinds, instance_of);
+      if (d.keygraph) {
+        std::vector<int> detector_model(results.models.size(), -1);
+        for (std::size_t i = 0; i < results.models.size(); ++i) {
+          if (!options.index.empty()) {
+            detector_model[i] = static_cast<int>(i);
+          } else {
+            const auto at = std::lower_bound(d.models.begin(), d.models.end(), static_cast<int>(i));
+            if (at != d.models.end() && *at == static_cast<int>(i))
+              detector_model[i] = static_cast<int>(at - d.models.begin());
+          }
+        }
+        measure_truth_support(d.keygraph->core(), detector_model, results.models, gray, truth,
+                              extractor, cases);
+      }
       bool interesting = false;
       for (TruthCase& c : cases) {
         c.method = m.name;

@@ -75,6 +75,24 @@ struct TruthCase {
   double homography_error = -1;
   int detections = 0, wrong_identity = 0, false_detections = 0;  // the scene's
   double time_ms = 0;                                            // the scene's, for this method
+  // keygraph methods (Hessian keypoints on the frame as it is): the
+  // instance's ground-truth pose asked of the detector's verification
+  // (measure_pose_support(), core/pose.h) over the frame's keypoints, for
+  // the acceptable model and, without a truth homography, the corner order
+  // that re-finds the most model keypoints. shown / refound -1: not
+  // measured. verifiable: refound and z reach ransac.min_inliers and
+  // min_verification_z, or the confirmed_* keypoint thresholds (which also
+  // ask the appearance): whether the frame's keypoints could confirm the
+  // true pose at all; a miss where they could not is the keypoints', not
+  // the search's or RANSAC's.
+  // truth_matches: the keygraph correspondences of that model the
+  // selection passed to RANSAC whose every vertex lies within
+  // ransac.inlier_threshold of the true pose's image (-1: not measured);
+  // truth_enough_matches: at least ransac.min_inlier_keygraphs of them,
+  // what a pose needs.
+  int truth_shown = -1, truth_refound = -1, truth_matches = -1;
+  double truth_z = 0;
+  bool truth_verifiable = false, truth_enough_matches = false;
 };
 
 struct TruthDetection {

@@ -136,7 +136,7 @@ std::vector<TruthRow> truth_tallies(const TruthResults& results) {
   for (const std::string& method : results.methods) {
     TruthRow r;
     r.method = method;
-    std::vector<double> times, errors;
+    std::vector<double> times, errors, shown, refound;
     std::vector<const TruthCase*> instances;
     for (const TruthCase& c : results.cases) {
       if (c.method != method) continue;
@@ -157,6 +157,15 @@ std::vector<TruthRow> truth_tallies(const TruthResults& results) {
       r.found += c.found;
       r.found_iou += c.found_iou;
       if (c.found) errors.push_back(c.corner_error);
+      if (c.truth_refound >= 0) {
+        ++r.truth_measured;
+        r.truth_verifiable += c.truth_verifiable;
+        r.truth_verifiable_found += c.truth_verifiable && c.found_iou;
+        r.truth_matched += c.truth_enough_matches;
+        r.truth_verifiable_matched += c.truth_verifiable && c.truth_enough_matches;
+        shown.push_back(c.truth_shown);
+        refound.push_back(c.truth_refound);
+      }
       const TruthScene& scene = results.manifest.scenes[static_cast<std::size_t>(c.scene)];
       if (scene.instances[static_cast<std::size_t>(c.instance)].has_homography) {
         ++r.homography_instances;
@@ -167,6 +176,10 @@ std::vector<TruthRow> truth_tallies(const TruthResults& results) {
       }
     }
     r.median_corner_error = errors.empty() ? -1 : percentile(errors, 0.5);
+    if (!shown.empty()) {
+      r.median_truth_shown = percentile(shown, 0.5);
+      r.median_truth_refound = percentile(refound, 0.5);
+    }
     r.median_ms = percentile(times, 0.5);
     r.p90_ms = percentile(times, 0.9);
     r.by_size = bin_cases(instances, size_edges(), true);
@@ -219,6 +232,26 @@ std::string truth_text(const std::vector<TruthRow>& rows, const TruthEvalOptions
       out += line;
     }
   }
+  bool any_truth_support = false;
+  for (const TruthRow& r : rows) any_truth_support = any_truth_support || r.truth_measured > 0;
+  if (any_truth_support) {
+    out +=
+        "\nAt the ground-truth pose (keygraph): model keypoints shown and re-found among the "
+        "frame's\n(medians); instances the keypoints could confirm; instances with enough "
+        "correct keygraph\ncorrespondences for a pose; the confirmable ones with them, and "
+        "found (IoU)\n";
+    std::snprintf(line, sizeof(line), "%-13s %9s %7s %8s %12s %8s %10s %7s\n", "method", "measured",
+                  "shown", "refound", "confirmable", "matched", "both", "found");
+    out += line;
+    for (const TruthRow& r : rows) {
+      if (r.truth_measured == 0) continue;
+      std::snprintf(line, sizeof(line), "%-13s %9d %7.0f %8.0f %12d %8d %10d %7d\n",
+                    r.method.c_str(), r.truth_measured, r.median_truth_shown,
+                    r.median_truth_refound, r.truth_verifiable, r.truth_matched,
+                    r.truth_verifiable_matched, r.truth_verifiable_found);
+      out += line;
+    }
+  }
   if (instances == 0) return out;
   for (const bool by_size : {true, false}) {
     out += by_size ? "\nFound / instances by the object's long edge in the scene (px)\n"
@@ -255,7 +288,8 @@ Status write_truth_report(const std::string& dir, const TruthEvalOptions& option
   const std::vector<TruthScene>& scenes = results.manifest.scenes;
   std::ostringstream cases;
   cases << "method,scene,line,scene_file,instance,models,found,found_iou,corner_error,iou,"
-           "long_edge,scale,homography_error,detections,wrong_identity,false_detections,time_ms\n";
+           "long_edge,scale,homography_error,detections,wrong_identity,false_detections,time_ms,"
+           "truth_shown,truth_refound,truth_z,truth_verifiable,truth_matches\n";
   for (const TruthCase& c : results.cases) {
     const TruthScene& scene = scenes[static_cast<std::size_t>(c.scene)];
     cases << csv_field(c.method) << ',' << c.scene << ',' << scene.line << ','
@@ -263,7 +297,9 @@ Status write_truth_report(const std::string& dir, const TruthEvalOptions& option
           << csv_field(model_list(scene, c.instance)) << ',' << c.found << ',' << c.found_iou << ','
           << c.corner_error << ',' << c.iou << ',' << c.long_edge << ',' << c.scale << ','
           << c.homography_error << ',' << c.detections << ',' << c.wrong_identity << ','
-          << c.false_detections << ',' << c.time_ms << '\n';
+          << c.false_detections << ',' << c.time_ms << ',' << c.truth_shown << ','
+          << c.truth_refound << ',' << c.truth_z << ',' << c.truth_verifiable << ','
+          << c.truth_matches << '\n';
   }
   if (s = write_text_file(dir + "/truth-cases.csv", cases.str()); !s) return s;
   std::ostringstream detections;
@@ -300,6 +336,15 @@ Status write_truth_report(const std::string& dir, const TruthEvalOptions& option
       << ", \"homography_within_2px\": " << r.within2
       << ", \"homography_within_5px\": " << r.within5
       << ", \"homography_within_10px\": " << r.within10
+      << ", \"truth_measured\": " << r.truth_measured
+      << ", \"truth_verifiable\": " << r.truth_verifiable
+      << ", \"truth_verifiable_found\": " << r.truth_verifiable_found
+      << ", \"truth_matched\": " << r.truth_matched
+      << ", \"truth_verifiable_matched\": " << r.truth_verifiable_matched
+      << ", \"median_truth_shown\": "
+      << json_value(r.median_truth_shown >= 0 ? r.median_truth_shown : NAN)
+      << ", \"median_truth_refound\": "
+      << json_value(r.median_truth_refound >= 0 ? r.median_truth_refound : NAN)
       << ", \"median_ms\": " << json_value(r.median_ms) << ", \"p90_ms\": " << json_value(r.p90_ms)
       << ",\n     \"by_long_edge_px\": " << bins_json(r.by_size)
       << ",\n     \"by_scale\": " << bins_json(r.by_scale) << "}"

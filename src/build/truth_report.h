@@ -27,6 +27,14 @@ struct TruthRow {
   int detections = 0, wrong_identity = 0, false_detections = 0;
   // Homography truth: instances, and those whose grid error is within 2, 5, 10 px.
   int homography_instances = 0, within2 = 0, within5 = 0, within10 = 0;
+  // keygraph methods: instances whose ground-truth pose was asked of the
+  // verification (TruthCase::truth_*), those it could confirm, those of
+  // them found, and the median model keypoints shown and re-found there.
+  // truth_matched: instances with enough correct correspondences
+  // (TruthCase::truth_enough_matches), alone and among the confirmable.
+  int truth_measured = 0, truth_verifiable = 0, truth_verifiable_found = 0;
+  int truth_matched = 0, truth_verifiable_matched = 0;
+  double median_truth_shown = -1, median_truth_refound = -1;
   double median_ms = 0, p90_ms = 0;  // per scene
   std::vector<TruthBin> by_size;     // long edge in px
   std::vector<TruthBin> by_scale;    // relative to the model image

@@ -90,6 +90,54 @@ bool seen_at(const std::uint8_t* views, std::uint32_t i, int code) {
   return code >= views[2 * i] - kMargin && code <= views[2 * i + 1] + kMargin;
 }
 
+// Calls visit(i, p) for each model keypoint i that the pose's scale shows
+// (seen_at) and that lands at p inside the frame under h, shifted by
+// `offset` scene pixels; returns the verification radius at that scale.
+template <class Visit>
+float for_each_shown_keypoint(const ModelIndex& index, const ModelInfo& info,
+                              const FrameKeypoints& frame, const Homography& h, Point2f offset,
+                              Visit&& visit) {
+  const Point2f* model_points = index.keypoints() + info.keypoint_begin;
+  const std::uint8_t* views = index.keypoint_views() + 2 * std::size_t{info.keypoint_begin};
+  const int code = pose_view_code(h, info);
+  const float radius = verification_radius(index.params().ransac, code);
+  for (std::uint32_t i = 0; i < info.keypoint_count; ++i) {
+    if (!seen_at(views, i, code)) continue;
+    Point2f p = kg::apply(h, model_points[i]);
+    p.x += offset.x;
+    p.y += offset.y;
+    if (!(p.x >= 0.f && p.y >= 0.f && p.x <= static_cast<float>(frame.width - 1) &&
+          p.y <= static_cast<float>(frame.height - 1)))
+      continue;
+    visit(i, p, radius);
+  }
+  return radius;
+}
+
+double chance_fraction(const ModelIndex& index, const ModelInfo& info, const FrameKeypoints& frame,
+                       const Homography& h) {
+  // The same count under the pose shifted in the scene by a few inlier
+  // thresholds: how often model keypoints land on frame keypoints by chance
+  // in this part of the frame.
+  const auto shift = static_cast<float>(3.0 * index.params().ransac.inlier_threshold);
+  const Point2f offsets[4] = {{shift, 0.f}, {-shift, 0.f}, {0.f, shift}, {0.f, -shift}};
+  int inside = 0, hits = 0;
+  for (const Point2f& o : offsets) {
+    for_each_shown_keypoint(index, info, frame, h, o, [&](std::uint32_t, Point2f p, float r) {
+      ++inside;
+      hits += frame.grid->nearest(p, r) >= 0 ? 1 : 0;
+    });
+  }
+  return inside > 0 ? static_cast<double>(hits) / inside : 0.0;
+}
+
+// Binomial z-score of the fraction of `shown` model keypoints re-found
+// against the fraction chance gives.
+double support_z(double fraction, double chance, int shown) {
+  const double spread = std::sqrt(std::max(1e-9, shown * chance * (1.0 - chance)));
+  return (fraction - chance) * shown / spread;
+}
+
 }  // namespace
 
 namespace {
@@ -325,29 +373,38 @@ void PoseEstimator::reserve(int max_matches, int k, std::uint32_t max_model_keyp
   aligner_.reserve(max_appearance_pixels);
 }
 
+PoseSupport measure_pose_support(const ModelIndex& index, int model_id, const FrameKeypoints& frame,
+                                 const Homography& h) {
+  PoseSupport support;
+  if (model_id < 0 || model_id >= index.model_count() || frame.grid == nullptr) return support;
+  const ModelInfo info = index.model(model_id);
+  for_each_shown_keypoint(index, info, frame, h, {0.f, 0.f},
+                          [&](std::uint32_t, Point2f p, float radius) {
+                            ++support.shown;
+                            support.refound += frame.grid->nearest(p, radius) >= 0 ? 1 : 0;
+                          });
+  if (support.shown == 0) return support;
+  support.chance = chance_fraction(index, info, frame, h);
+  support.z = support_z(static_cast<double>(support.refound) / support.shown, support.chance,
+                        support.shown);
+  return support;
+}
+
 PoseEstimator::Support PoseEstimator::guided_pairs(const ModelIndex& index, const ModelInfo& info,
                                                    const FrameKeypoints& frame,
                                                    const Homography& h) {
-  const RansacParams& rp = index.params().ransac;
   const Point2f* model_points = index.keypoints() + info.keypoint_begin;
-  const std::uint8_t* views = index.keypoint_views() + 2 * std::size_t{info.keypoint_begin};
   guided_model_.clear();
   guided_scene_.clear();
   int inside = 0;
-  const int code = pose_view_code(h, info);
-  const float radius = verification_radius(rp, code);
-  for (std::uint32_t i = 0; i < info.keypoint_count; ++i) {
-    if (!seen_at(views, i, code)) continue;
-    const Point2f p = kg::apply(h, model_points[i]);
-    if (!(p.x >= 0.f && p.y >= 0.f && p.x <= static_cast<float>(frame.width - 1) &&
-          p.y <= static_cast<float>(frame.height - 1)))
-      continue;
-    ++inside;
-    const int j = frame.grid->nearest(p, radius);
-    if (j < 0) continue;
-    guided_model_.push_back(model_points[i]);
-    guided_scene_.push_back({frame.keypoints[j].x, frame.keypoints[j].y});
-  }
+  for_each_shown_keypoint(index, info, frame, h, {0.f, 0.f},
+                          [&](std::uint32_t i, Point2f p, float radius) {
+                            ++inside;
+                            const int j = frame.grid->nearest(p, radius);
+                            if (j < 0) return;
+                            guided_model_.push_back(model_points[i]);
+                            guided_scene_.push_back({frame.keypoints[j].x, frame.keypoints[j].y});
+                          });
   Support support;
   support.inside = inside;
   support.fraction = inside > 0 ? static_cast<double>(guided_model_.size()) / inside : 0.0;
@@ -370,35 +427,6 @@ PoseEstimator::Support PoseEstimator::guided_refine(const ModelIndex& index, con
     h = candidate;
   }
   return support;
-}
-
-double PoseEstimator::chance_fraction(const ModelIndex& index, const ModelInfo& info,
-                                      const FrameKeypoints& frame, const Homography& h) const {
-  // The same count under the pose shifted in the scene by a few inlier
-  // thresholds: how often model keypoints land on frame keypoints by chance
-  // in this part of the frame.
-  const RansacParams& rp = index.params().ransac;
-  const auto shift = static_cast<float>(3.0 * rp.inlier_threshold);
-  const Point2f offsets[4] = {{shift, 0.f}, {-shift, 0.f}, {0.f, shift}, {0.f, -shift}};
-  const Point2f* model_points = index.keypoints() + info.keypoint_begin;
-  const std::uint8_t* views = index.keypoint_views() + 2 * std::size_t{info.keypoint_begin};
-  const int code = pose_view_code(h, info);
-  const float radius = verification_radius(rp, code);
-  int inside = 0, hits = 0;
-  for (const Point2f& o : offsets) {
-    for (std::uint32_t i = 0; i < info.keypoint_count; ++i) {
-      if (!seen_at(views, i, code)) continue;
-      Point2f p = kg::apply(h, model_points[i]);
-      p.x += o.x;
-      p.y += o.y;
-      if (!(p.x >= 0.f && p.y >= 0.f && p.x <= static_cast<float>(frame.width - 1) &&
-            p.y <= static_cast<float>(frame.height - 1)))
-        continue;
-      ++inside;
-      hits += frame.grid->nearest(p, radius) >= 0 ? 1 : 0;
-    }
-  }
-  return inside > 0 ? static_cast<double>(hits) / inside : 0.0;
 }
 
 int PoseEstimator::estimate(const ModelIndex& index, int model_id, const KeygraphMatch* matches,
@@ -558,8 +586,7 @@ int PoseEstimator::estimate(const ModelIndex& index, int model_id, const Keygrap
     }
     const double chance = chance_fraction(index, info, frame, refined);
     // Binomial z-score of the re-found model keypoints against chance.
-    const double spread = std::sqrt(std::max(1e-9, support.inside * chance * (1.0 - chance)));
-    const double z = (support.fraction - chance) * support.inside / spread;
+    const double z = support_z(support.fraction, chance, support.inside);
     final_score = estimator.score(refined);
 
     // Distinct scene keypoints among the inliers (a scene point explained

@@ -35,6 +35,23 @@ struct FrameKeypoints {
   ImageView image;
 };
 
+// The keypoint support of a pose, as the detector's verification measures
+// it: the model keypoints the pose's scale shows inside the frame, those
+// that land within the verification radius of a frame keypoint, the
+// fraction that lands so under the pose shifted by three inlier thresholds
+// (chance), and the binomial z-score of the first fraction against it. A
+// detection needs z >= ransac.min_verification_z. For evaluation: asked of
+// a ground-truth pose, it says whether the frame's keypoints could have
+// confirmed it at all (`keygraph eval --truth`).
+struct PoseSupport {
+  int shown = 0;
+  int refound = 0;
+  double chance = 0.0;
+  double z = 0.0;
+};
+PoseSupport measure_pose_support(const ModelIndex& index, int model_id, const FrameKeypoints& frame,
+                                 const Homography& h);
+
 // Whether two detections' outlines cover the same part of the frame: the
 // centre of either lies inside the other.
 bool outlines_overlap(const Point2f* a, const Point2f* b);
@@ -75,8 +92,6 @@ class PoseEstimator {
   // Refines h on guided pairs and measures the support of the final pose.
   Support guided_refine(const ModelIndex& index, const ModelInfo& info, const FrameKeypoints& frame,
                         Homography& h);
-  double chance_fraction(const ModelIndex& index, const ModelInfo& info,
-                         const FrameKeypoints& frame, const Homography& h) const;
   // Distinct keypoint correspondences and, per keygraph match, its k indices into them.
   WorkVector<std::uint64_t> pairs_;
   WorkVector<Point2f> pair_model_;

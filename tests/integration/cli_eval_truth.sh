@@ -143,7 +143,28 @@ for x in r.values():
 s = r["sift-magsac"]
 assert s["found"] == 2 and s["found_iou"] == 2 and s["homography_within_5px"] == 1, s
 assert sum(b["instances"] for b in s["by_long_edge_px"]) == 2, s
+# The ground truth asked of keygraph's verification: both poses (box from
+# its corners in some order, graf from its homography) are confirmed by the
+# frame's keypoints and have correct correspondences; the baselines are not
+# measured.
+k = r["keygraph"]
+assert k["truth_measured"] == 2 and k["truth_verifiable"] == 2, k
+assert k["truth_matched"] == 2 and k["truth_verifiable_matched"] == 2, k
+assert k["median_truth_refound"] >= 12 and k["median_truth_shown"] > k["median_truth_refound"], k
+assert s["truth_measured"] == 0 and s["truth_verifiable"] == 0, s
 PY
+python3 - "$WORK/out/truth-cases.csv" <<'PY' || bad "truth-cases.csv: truth support columns not as expected"
+import csv, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+for r in rows:
+    if r["instance"] == "-1" or r["method"] != "keygraph":
+        assert r["truth_shown"] == "-1" and r["truth_refound"] == "-1", r
+        assert r["truth_matches"] == "-1", r
+    else:
+        assert int(r["truth_refound"]) >= 12 and float(r["truth_z"]) >= 4, r
+        assert r["truth_verifiable"] == "1" and int(r["truth_matches"]) >= 3, r
+PY
+grep -q '^At the ground-truth pose' "$WORK/stdout" || bad "no ground-truth support table: $(cat "$WORK/stdout")"
 [ "$(wc -l <"$WORK/out/truth-cases.csv")" -eq 7 ] || bad "truth-cases.csv: expected 6 rows"
 awk -F, 'NR==1 {n=NF} NF!=n {exit 1}' "$WORK/out/truth-cases.csv" ||
   bad "truth-cases.csv: rows and header disagree"

@@ -224,6 +224,46 @@ TEST(PoseEstimator, ExactCorrespondencesGiveTheExactPose) {
   EXPECT_LT(max_corner_error(s.truth, r.out[0]), 0.05);
 }
 
+// measure_pose_support(), the verification asked of a given pose (what
+// `keygraph eval --truth` asks of the ground truth): under the true pose
+// every model keypoint lands on its frame keypoint, far above chance;
+// under the pose shifted by 30 px only chance hits remain.
+TEST(PoseSupport, TruePoseIsConfirmedAndAShiftedOneIsNot) {
+  Scenario s;
+  make(s, 0, 0, 0.3, 14);
+  PointGrid grid;
+  grid.reserve(static_cast<int>(s.frame_keypoints.size()), 640, 480, 4.f);
+  grid.build(s.frame_keypoints.data(), static_cast<int>(s.frame_keypoints.size()), 640, 480, 4.f);
+  FrameKeypoints frame;
+  frame.keypoints = s.frame_keypoints.data();
+  frame.count = static_cast<int>(s.frame_keypoints.size());
+  frame.grid = &grid;
+  frame.width = 640;
+  frame.height = 480;
+  const ModelIndex& index = s.index.index();
+  const PoseSupport at_truth = measure_pose_support(index, 0, frame, s.truth);
+  int inside = 0;
+  for (const Keypoint& k : s.frame_keypoints) inside += k.response == 1.f;  // the model's images
+  EXPECT_EQ(at_truth.shown, inside);
+  EXPECT_GT(at_truth.shown, 100);
+  EXPECT_EQ(at_truth.refound, at_truth.shown);
+  EXPECT_LT(at_truth.chance, 0.3);
+  EXPECT_GT(at_truth.z, index.params().ransac.min_verification_z);
+
+  Homography shifted = s.truth;  // 30 px to the right: h13 += 30 h33
+  shifted[2] += 30.0;
+  const PoseSupport off = measure_pose_support(index, 0, frame, shifted);
+  EXPECT_GT(off.shown, 100);
+  EXPECT_LT(off.refound, off.shown / 3);
+  EXPECT_LT(off.z, 2.0);
+
+  // Nothing to measure: an unknown model, no grid.
+  EXPECT_EQ(measure_pose_support(index, 1, frame, s.truth).shown, 0);
+  FrameKeypoints no_grid = frame;
+  no_grid.grid = nullptr;
+  EXPECT_EQ(measure_pose_support(index, 0, no_grid, s.truth).shown, 0);
+}
+
 // Local optimisation: a mock estimator whose fit_within() moves a 1-D model
 // to the mean of the values near it; RANSAC reports the refinements and
 // keeps the refit.
