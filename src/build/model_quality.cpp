@@ -32,8 +32,10 @@ float smallest_size(const BuiltModel& model, const Params& params) {
   const auto enough_keygraphs =
       static_cast<std::uint64_t>(kViewKeygraphFactor * params.ransac.min_inlier_keygraphs);
   float smallest = 0.f;
-  for (const ViewSummary& v : model.views) {  // frontal views come first, largest first
-    if (v.tilt != 1.0) break;
+  // The frontal pyramid comes first, largest first; then tilted views, then
+  // (views.max_scale) views larger than the model image.
+  for (const ViewSummary& v : model.views) {
+    if (v.tilt != 1.0 || v.scale > 1.0) break;
     if (static_cast<std::uint64_t>(v.keypoints) < enough_keypoints ||
         v.keygraphs < enough_keygraphs)
       break;

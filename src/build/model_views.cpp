@@ -90,7 +90,7 @@ std::vector<ModelView> model_views(int width, int height, const ViewParams& para
   // same with or without them.
   for (int up = 1;; ++up) {
     const double scale = std::pow(1.0 / params.scale_step, up);
-    if (scale > params.max_scale * (1.0 + 1e-3)) break;
+    if (!(scale <= params.max_scale * (1.0 + 1e-3))) break;  // NaN ends it too
     ModelView v;
     v.scale = scale;
     v.to_view = view_map(width, height, scale, 1.0, 0.0, v.size);
