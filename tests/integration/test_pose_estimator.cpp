@@ -126,11 +126,8 @@ struct Result {
   int iterations = 0;
 };
 
-Result estimate(const Scenario& s) {
-  Result r;
-  PoseEstimator pose;
-  pose.reserve(static_cast<int>(s.matches.size()), 3, kGrid * kGrid, 0);
-  PointGrid grid;
+// The scenario's 640x480 frame keypoints, with `grid` built over them.
+FrameKeypoints frame_of(const Scenario& s, PointGrid& grid) {
   grid.reserve(static_cast<int>(s.frame_keypoints.size()), 640, 480, 4.f);
   grid.build(s.frame_keypoints.data(), static_cast<int>(s.frame_keypoints.size()), 640, 480, 4.f);
   FrameKeypoints frame;
@@ -139,6 +136,15 @@ Result estimate(const Scenario& s) {
   frame.grid = &grid;
   frame.width = 640;
   frame.height = 480;
+  return frame;
+}
+
+Result estimate(const Scenario& s) {
+  Result r;
+  PoseEstimator pose;
+  pose.reserve(static_cast<int>(s.matches.size()), 3, kGrid * kGrid, 0);
+  PointGrid grid;
+  const FrameKeypoints frame = frame_of(s, grid);
   Rng rng(7);
   bool truncated = false;
   r.iterations =
@@ -232,14 +238,7 @@ TEST(PoseSupport, TruePoseIsConfirmedAndAShiftedOneIsNot) {
   Scenario s;
   make(s, 0, 0, 0.3, 14);
   PointGrid grid;
-  grid.reserve(static_cast<int>(s.frame_keypoints.size()), 640, 480, 4.f);
-  grid.build(s.frame_keypoints.data(), static_cast<int>(s.frame_keypoints.size()), 640, 480, 4.f);
-  FrameKeypoints frame;
-  frame.keypoints = s.frame_keypoints.data();
-  frame.count = static_cast<int>(s.frame_keypoints.size());
-  frame.grid = &grid;
-  frame.width = 640;
-  frame.height = 480;
+  const FrameKeypoints frame = frame_of(s, grid);
   const ModelIndex& index = s.index.index();
   const PoseSupport at_truth = measure_pose_support(index, 0, frame, s.truth);
   int inside = 0;
