@@ -92,11 +92,11 @@ bool seen_at(const std::uint8_t* views, std::uint32_t i, int code) {
 
 // Calls visit(i, p) for each model keypoint i that the pose's scale shows
 // (seen_at) and that lands at p inside the frame under h, shifted by
-// `offset` scene pixels; returns the verification radius at that scale.
+// `offset` scene pixels, with the verification radius at that scale.
 template <class Visit>
-float for_each_shown_keypoint(const ModelIndex& index, const ModelInfo& info,
-                              const FrameKeypoints& frame, const Homography& h, Point2f offset,
-                              Visit&& visit) {
+void for_each_shown_keypoint(const ModelIndex& index, const ModelInfo& info,
+                             const FrameKeypoints& frame, const Homography& h, Point2f offset,
+                             Visit&& visit) {
   const Point2f* model_points = index.keypoints() + info.keypoint_begin;
   const std::uint8_t* views = index.keypoint_views() + 2 * std::size_t{info.keypoint_begin};
   const int code = pose_view_code(h, info);
@@ -111,7 +111,6 @@ float for_each_shown_keypoint(const ModelIndex& index, const ModelInfo& info,
       continue;
     visit(i, p, radius);
   }
-  return radius;
 }
 
 double chance_fraction(const ModelIndex& index, const ModelInfo& info, const FrameKeypoints& frame,
