@@ -2,7 +2,8 @@
 // the baseline ISA (SSE2) so that one binary runs on every x86-64 CPU; the
 // few loops that are most of a frame's keypoint time (blur and Hessian
 // response) are compiled a second time for AVX2 and chosen when the CPU
-// has it, as OpenCV's dispatcher does for its ORB baseline. Without FMA
+// has it, as OpenCV's dispatcher does for its ORB baseline; the triangle
+// patch check's lattice sampling has a hand-written AVX2 version (gathers). Without FMA
 // in the target no multiply-add is fused, so both versions compute every
 // pixel with the same operations in the same order: identical results
 // (tested). ARM builds have one version (NEON is the baseline there).

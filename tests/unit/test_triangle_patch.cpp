@@ -6,9 +6,14 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
 #include <opencv2/imgproc.hpp>
 
 #include "alloc_counter.h"
+#include "core/simd_dispatch.h"
 
 namespace kg {
 namespace {
@@ -114,6 +119,64 @@ TEST_F(TrianglePatchTest, UnjudgeableTrianglesAreNotMeasured) {
   EXPECT_FALSE(check(ModelAppearance{}, model, scene).measured);
   const cv::Mat flat(200, 200, CV_8U, cv::Scalar(128));
   EXPECT_FALSE(check(look_of(flat, 1.f), model, scene).measured);
+}
+
+// The AVX2 lattice sampler (chosen at run time on x86-64) gives what the
+// baseline one gives, bit for bit: random triangle pairs at every
+// resolution ratio the check averages over (1 to 3 samples a side, in
+// either image), many reaching past an image's border, in an appearance
+// whose rows are narrower than the frame's stride. On a CPU or build
+// without AVX2 both runs take the baseline path.
+TEST_F(TrianglePatchTest, VectorSamplingEqualsBaseline) {
+  cv::Mat small;
+  cv::resize(model_, small, cv::Size(), 0.45, 0.45, cv::INTER_AREA);
+  const ModelAppearance looks[2] = {
+      look_of(model_, 1.f),
+      look_of(small, static_cast<float>(small.cols) / static_cast<float>(model_.cols))};
+  // The frame as a window of a wider buffer: stride > width.
+  cv::Mat wide(frame_.rows, frame_.cols + 13, CV_8U, cv::Scalar(0));
+  frame_.copyTo(wide(cv::Rect(0, 0, frame_.cols, frame_.rows)));
+  const ImageView window(wide.data, frame_.cols, frame_.rows, wide.step);
+  cv::RNG rng(11);
+  const auto run = [&]() {
+    std::vector<TrianglePatch> out;
+    cv::RNG draw = rng;
+    for (int t = 0; t < 3000; ++t) {
+      Point2f model[3], scene[3];
+      const float size = draw.uniform(6.f, 40.f);
+      const float zoom = std::exp(draw.uniform(-1.4f, 1.4f));  // frame / model pixels
+      const Point2f m0{draw.uniform(0.f, 200.f), draw.uniform(0.f, 200.f)};
+      const Point2f s0{draw.uniform(0.f, 520.f), draw.uniform(0.f, 520.f)};
+      for (int i = 0; i < 3; ++i) {
+        const Point2f d{draw.uniform(-size, size), draw.uniform(-size, size)};
+        model[i] = {m0.x + d.x, m0.y + d.y};
+        scene[i] = {s0.x + zoom * (d.x + draw.uniform(-3.f, 3.f)),
+                    s0.y + zoom * (d.y + draw.uniform(-3.f, 3.f))};
+      }
+      out.push_back(triangle_patch_correlation(looks[t % 2], window, model, scene));
+    }
+    return out;
+  };
+  const SimdLevel chosen = simd_level();
+  std::printf("dispatched level: %s\n", simd_level_name(chosen));
+  const std::vector<TrianglePatch> dispatched = run();
+  set_simd_level(SimdLevel::kBaseline);
+  const std::vector<TrianglePatch> baseline = run();
+  set_simd_level(SimdLevel::kAvx2);
+  EXPECT_EQ(simd_level(), chosen);  // restored
+  ASSERT_EQ(dispatched.size(), baseline.size());
+  int measured = 0, mismatches = 0;
+  for (std::size_t i = 0; i < baseline.size(); ++i) {
+    measured += baseline[i].measured ? 1 : 0;
+    if (dispatched[i].measured != baseline[i].measured ||
+        std::memcmp(&dispatched[i].correlation, &baseline[i].correlation, sizeof(float)) != 0)
+      ++mismatches;
+  }
+  std::printf("%d of %zu triangle pairs measured\n", measured, baseline.size());
+  EXPECT_EQ(mismatches, 0);
+  // Enough of both kinds that the comparison means something.
+  EXPECT_GT(measured, 400);
+  EXPECT_LT(measured, 2700);
 }
 
 TEST_F(TrianglePatchTest, AllocatesNothing) {
