@@ -296,7 +296,8 @@ struct ViewParams {
   // is found). Signs are seen smaller than a model image of a few hundred
   // pixels, and there 1.42 costs 3 points at 1 sign and more false
   // detections, so 1 by default (docs/RESULTS.md, "Views larger than the
-  // model"). Format 6.7; older files read 1.
+  // model"). At most sqrt(RansacParams::max_scale_change): the pose check
+  // refuses the poses of larger views. Format 6.7; older files read 1.
   float max_scale = 1.f;
   // Largest simulated out-of-plane rotation, degrees (0: frontal only),
   // reached in tilt_levels steps equally spaced in t = 1 / cos(angle);

@@ -211,6 +211,13 @@ Status validate_params(const Params& p) {
     return bad("views.max_tilt", "must be in [0, 80] degrees");
   if (!(std::isfinite(p.views.max_scale) && p.views.max_scale >= 1.f && p.views.max_scale <= 4.f))
     return bad("views.max_scale", "must be in [1, 4] (1: no views larger than the model image)");
+  // A view s times larger than the model shows it at area scale s^2: above
+  // ransac.max_scale_change the pose check refuses every pose it could give.
+  if (static_cast<double>(p.views.max_scale) * p.views.max_scale >
+      p.ransac.max_scale_change * 1.002)
+    return bad("views.max_scale",
+               "must be at most sqrt(ransac.max_scale_change) (the pose check refuses the poses of "
+               "larger views)");
   if (p.views.tilt_levels < 0 || p.views.tilt_levels > 8)
     return bad("views.tilt_levels", "must be in 0..8");
   if (!(std::isfinite(p.views.merge_distance) && p.views.merge_distance >= 0.f &&

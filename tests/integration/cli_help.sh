@@ -38,7 +38,7 @@ run() {
 known_options() {
   case $1 in
     build) echo "-o --output --name --roi --detector --structure --vertex-descriptor --encoding
-                 --min-size --max-tilt --set --quiet" ;;
+                 --min-size --max-tilt --max-scale --set --quiet" ;;
     detect) echo "--index --json --draw" ;;
     demo) echo "--out --data" ;;
     eval) echo "--dataset --subsets --crops --size --centre --seed --set --methods --negatives

@@ -1770,6 +1770,21 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
     put_params(b, p);
     EXPECT_TRUE(rejected(b, "parameter views.max_scale must be in [1, 4]"));
   }
+  // Within [1, 4] but above sqrt(ransac.max_scale_change), alone or with
+  // a smaller max_scale_change.
+  p = paper_params();
+  p.views.max_scale = 3.f;
+  p.ransac.max_scale_change = 8.0;
+  b = bytes();
+  put_params(b, p);
+  EXPECT_TRUE(
+      rejected(b, "parameter views.max_scale must be at most sqrt(ransac.max_scale_change)"));
+  p.views.max_scale = 2.f;
+  p.ransac.max_scale_change = 3.0;
+  b = bytes();
+  put_params(b, p);
+  EXPECT_TRUE(
+      rejected(b, "parameter views.max_scale must be at most sqrt(ransac.max_scale_change)"));
   p = paper_params();
   p.descriptor.search_reference_models = -1;
   b = bytes();
