@@ -24,7 +24,7 @@ struct ModelView {
   cv::Size size;           // view image size
 };
 
-// The views of a width x height model for `params`, finest first: the
+// The views of a width x height model for `params`, in this order: the
 // frontal scale pyramid (scale 1, then each params.scale_step smaller until
 // the long edge reaches params.min_size), and for each tilt level the same
 // pyramid at longitudes 72 / t degrees apart, then the frontal views larger
