@@ -3,11 +3,13 @@
 // environment variable KG_DATA_DIR, when set, overrides the CMake cache
 // variable of the same name (default ../shared/data beside the checkout).
 //
-// A test that reads a data set starts with KG_REQUIRE_DATA("oxford"): when
-// the directory is missing the test is skipped, and ctest reports it as not
-// run, with the reason and the variable to set. Register such tests with
-// kg_add_test(... NEEDS_DATA <gtest filter>) in tests/CMakeLists.txt so they
-// carry the ctest label needs-data; .ci/run fails when any of them did not run.
+// A test that reads a data set starts with KG_REQUIRE_DATA("oxford") and is
+// registered with kg_add_test(... NEEDS_DATA <gtest filter> DATA_SET oxford)
+// in tests/CMakeLists.txt. CMake registers it only when the set is there at
+// configure time (otherwise configuring names it as not run, and why), with
+// the ctest label needs-data; .ci/run fails when any of them did not run. A
+// registered test whose set is missing when it runs (KG_DATA_DIR pointed
+// elsewhere since) fails with the reason: it is never silently skipped.
 #pragma once
 
 #include <cstdlib>
@@ -32,7 +34,7 @@ inline bool has_data(const std::string& set) {
   return std::filesystem::is_directory(data_dir(set), ec);
 }
 
-// The skip message; .ci/run looks for its first words.
+// The failure message; .ci/run looks for its first words.
 inline std::string missing_data(const std::string& set) {
   return "needs data: no directory " + data_dir(set) +
          "; set KG_DATA_DIR to the directory that holds " + set +
@@ -41,10 +43,10 @@ inline std::string missing_data(const std::string& set) {
 
 }  // namespace kg::test
 
-// Skips the calling test (a void function: the test body or SetUp) when the
-// data set is missing.
+// Fails and leaves the calling test (a void function: the test body or
+// SetUp) when the data set is missing.
 #define KG_REQUIRE_DATA(set)                       \
   if (!::kg::test::has_data(set)) {                \
-    GTEST_SKIP() << ::kg::test::missing_data(set); \
+    GTEST_FAIL() << ::kg::test::missing_data(set); \
   }                                                \
   static_assert(true, "a semicolon follows KG_REQUIRE_DATA")

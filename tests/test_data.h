@@ -1,6 +1,6 @@
 // Paths of the real images the tests use, and a loader. A missing file is
-// a test failure (ASSERT in the caller), never a skip; only a missing data
-// set (KG_REQUIRE_DATA, data_dir.h) skips a test.
+// a test failure (ASSERT in the caller), never a skip; a test that needs a
+// data set is not registered without it (KG_REQUIRE_DATA, data_dir.h).
 #pragma once
 
 #include <string>
