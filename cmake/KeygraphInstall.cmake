@@ -1,6 +1,8 @@
 # install(): static libraries, public headers, the CLI, an exported CMake
-# package (find_package(keygraph) -> keygraph::core, keygraph::build, the
-# frame sources) and a pkg-config file for the core.
+# package (find_package(keygraph) -> keygraph::core and the frame sources)
+# and a pkg-config file for the core. The desktop builder and the evaluation
+# are not installed: their C++ interfaces are internal (cv::Mat, model
+# records); `keygraph build` is the way to make an index.
 include(CMakePackageConfigHelpers)
 
 # Two install components, one Debian package each (cmake/KeygraphPackage.cmake):
@@ -8,9 +10,6 @@ include(CMakePackageConfigHelpers)
 #   tool  the keygraph command-line tool, with its own export file, so that
 #         the CMake package works whether or not the tool is installed
 set(_kg_targets keygraph_core)
-if(KG_BUILD_TOOLS)
-  list(APPEND _kg_targets keygraph_build)
-endif()
 # Frame sources (platform/): keygraph::platform, ::files, ::v4l2, ::libcamera.
 # Their headers go to <includedir>/keygraph/platform/ and are included as
 # "platform/..." (platform/CMakeLists.txt puts <includedir>/keygraph on their

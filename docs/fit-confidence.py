@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Fits the detection confidence model (src/core/confidence.h) and reports
+"""Fits the detection confidence model (src/core/pose/confidence.h) and reports
 precision against recall by confidence threshold.
 
   fit-confidence.py [--appearance] TUNE/synth-detections.csv [REPORT/synth-detections.csv]

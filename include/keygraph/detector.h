@@ -34,7 +34,7 @@ inline constexpr int kMaxDetections = 64;  // capacity of a DetectionList
 // Reaching one degrades detection (the stats say what was cut); it never
 // overflows. Detector::workspace_bytes() gives the memory they need (about
 // 30 MB for the defaults at 640x480, 16 MB of it the arc pool:
-// tests/integration/test_runtime_memory.cpp).
+// tests/core/test_runtime_memory.cpp).
 struct Limits {
   static constexpr int kMaxSide = 16384;  // the largest max_width, max_height
   int max_width = 640;                    // largest frame, pixels
@@ -85,7 +85,7 @@ struct Detection {
   double appearance = -1.0;
   // Estimated probability, in [0, 1], that the detection is right (the right
   // model, every corner within 10 px): a logistic model of the support
-  // above, fitted on the sign benchmark (core/confidence.h). Threshold it to
+  // above, fitted on the sign benchmark (core/pose/confidence.h). Threshold it to
   // trade detections for fewer false ones (docs/RESULTS.md, "Confidence").
   double confidence = 0.0;
   int ransac_iterations = 0;

@@ -40,10 +40,10 @@ struct ModelInfo {
 };
 
 // The quality report `keygraph build` stores with the models (format 6.1,
-// docs/FORMAT.md sections 12-14; measured by build/model_quality.h, rated
+// docs/FORMAT.md sections 12-14; measured by builder/model_quality.h, rated
 // and printed by `keygraph inspect`). Informational: detection never reads it.
 struct ViewQuality {
-  float scale = 1.f;            // uniform scale of the simulated view (build/model_views.h)
+  float scale = 1.f;            // uniform scale of the simulated view (builder/model_views.h)
   float tilt = 1.f;             // 1 / cos(tilt angle)
   float longitude = 0.f;        // direction of the tilt, degrees
   std::uint32_t keypoints = 0;  // keypoints the view's image showed inside the model
@@ -181,10 +181,10 @@ class ModelIndex {
     return vertex_descriptors_;
   }
 
-  // Search tree over the arcs (core/kdtree.h has the layout), in the
+  // Search tree over the arcs (core/index/kdtree.h has the layout), in the
   // encoding params().descriptor.encoding names: per tree slot a point of
   // kSearchDims components (the arc descriptor, then its scale attributes,
-  // core/arc_attributes.h) from the accessor of that encoding (the others
+  // core/description/arc_attributes.h) from the accessor of that encoding (the others
   // return nullptr), and the internal nodes (KdNode for float32, KdNodeInt
   // for int16 and int8).
   DescriptorEncoding descriptor_encoding() const {

@@ -182,7 +182,7 @@ struct DescriptorParams {
   // graf1 -> graf3 and box -> box_in_scene: 1.0 keeps 84 % and 76 % of true
   // vertex pairs and 35 % of unrelated ones; 0.7 keeps 70 % and 51 % against
   // 0.8 %, and the box in box_in_scene is then lost: a keygraph needs all
-  // its vertices similar (tests/unit/test_vertex_descriptor.cpp).
+  // its vertices similar (tests/core/test_vertex_descriptor.cpp).
   float vertex_threshold = 1.0f;
   // Storage and comparison of arc descriptors (see DescriptorEncoding).
   // int8 (not in the paper, which compares floats): 15 bytes per model arc
@@ -276,7 +276,7 @@ struct RansacParams {
 };
 
 // Not in the paper: simulated views of each model, rendered by the builder
-// (src/build/model_views.h): the model image at every scale down to the
+// (src/builder/model_views.h): the model image at every scale down to the
 // smallest sign to be found and at out-of-plane tilts, each with its own
 // keypoints, arcs and descriptors mapped back to model pixels. The paper's
 // own paradigm (exhaustive on the model side, fast on the scene side): the

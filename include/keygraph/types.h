@@ -43,7 +43,7 @@ using ArcDescriptorI8 = std::array<std::int8_t, kDescriptorSize>;
 
 // What the model index's search tree stores per arc: the descriptor, then
 // the arc's scale attributes ln(length / sigma) at its start and at its end
-// (core/arc_attributes.h), in the same encoding.
+// (core/description/arc_attributes.h), in the same encoding.
 inline constexpr int kArcAttributes = 2;
 inline constexpr int kSearchDims = kDescriptorSize + kArcAttributes;
 using ArcSearchPoint = std::array<float, kSearchDims>;

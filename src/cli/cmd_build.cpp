@@ -6,7 +6,7 @@
 // --name and --roi apply to the model image that follows them: --roi makes
 // the model that rectangle of the image (model pixel (0,0) is image pixel
 // (X,Y)); without --name the model is named after the file's stem.
-// Every build measures the model quality report (build/model_quality.h),
+// Every build measures the model quality report (builder/model_quality.h),
 // stores it in the index and prints it; --no-look-alikes skips rendering
 // each model as a scene. --draw-model DIR writes DIR/NAME.png per model:
 // its keypoints and strongest keygraphs.
@@ -20,18 +20,19 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "build/image_io.h"
-#include "build/model_builder.h"
-#include "build/model_quality.h"
-#include "build/model_set.h"
-#include "build/model_views.h"
-#include "build/parallel.h"
-#include "build/param_overrides.h"
-#include "build/progress.h"
+#include "builder/image_io.h"
+#include "builder/index_writer.h"
+#include "builder/model_builder.h"
+#include "builder/model_quality.h"
+#include "builder/model_set.h"
+#include "builder/model_views.h"
+#include "builder/parallel.h"
+#include "builder/param_overrides.h"
+#include "builder/progress.h"
 #include "cli/commands.h"
 #include "cli/device/options.h"
 #include "cli/device/quality_report.h"
-#include "core/param_names.h"
+#include "core/index/param_names.h"
 #include "platform/files/output_file.h"
 
 namespace kg::cli {

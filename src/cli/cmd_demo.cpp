@@ -5,9 +5,10 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "build/desktop_detect.h"
-#include "build/image_io.h"
-#include "build/model_builder.h"
+#include "builder/desktop_detect.h"
+#include "builder/image_io.h"
+#include "builder/index_writer.h"
+#include "builder/model_builder.h"
 #include "cli/commands.h"
 #include "cli/device/options.h"
 

@@ -2,8 +2,8 @@
 #include <chrono>
 #include <cstdio>
 
-#include "build/desktop_detect.h"
-#include "build/image_io.h"
+#include "builder/desktop_detect.h"
+#include "builder/image_io.h"
 #include "cli/commands.h"
 #include "cli/device/device_commands.h"
 #include "cli/device/json.h"

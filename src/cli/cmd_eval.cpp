@@ -11,16 +11,16 @@
 #include <cstdio>
 #include <sstream>
 
-#include "build/baselines.h"
-#include "build/oxford.h"
-#include "build/oxford_report.h"
-#include "build/param_overrides.h"
-#include "build/progress.h"
-#include "build/report_io.h"
-#include "build/synth_eval.h"
+#include "builder/param_overrides.h"
+#include "builder/progress.h"
 #include "cli/commands.h"
 #include "cli/device/options.h"
-#include "core/index_format.h"
+#include "core/index/index_format.h"
+#include "eval/baselines.h"
+#include "eval/oxford.h"
+#include "eval/oxford_report.h"
+#include "eval/report_io.h"
+#include "eval/synth_eval.h"
 #include "keygraph/detector.h"
 
 namespace kg::cli {

@@ -1,20 +1,20 @@
 // keygraph eval --truth: its options are the Options table below (keygraph eval --help).
 //
 // Detectors scored against a ground-truth manifest (docs/EVAL.md): the
-// table on stdout, the files of build/truth_report.h in --out. Every input
+// table on stdout, the files of eval/truth_report.h in --out. Every input
 // is checked before the first detection, and nothing is written unless the
 // whole run succeeds.
 #include <cstdio>
 #include <filesystem>
 
-#include "build/baselines.h"
-#include "build/param_overrides.h"
-#include "build/progress.h"
-#include "build/truth_eval.h"
-#include "build/truth_report.h"
+#include "builder/param_overrides.h"
+#include "builder/progress.h"
 #include "cli/commands.h"
 #include "cli/device/options.h"
-#include "core/index_format.h"
+#include "core/index/index_format.h"
+#include "eval/baselines.h"
+#include "eval/truth_eval.h"
+#include "eval/truth_report.h"
 
 namespace kg::cli {
 

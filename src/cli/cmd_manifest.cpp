@@ -1,16 +1,16 @@
 // keygraph manifest: its options are the Options table below (keygraph manifest --help).
 //
 // Ground-truth manifests for `keygraph eval --truth` from the real photo
-// sets of ../shared/data/real (build/real_sets.h, docs/EVAL.md). The
+// sets of ../shared/data/real (eval/real_sets.h, docs/EVAL.md). The
 // manifest refers to the images where they are; the sets with models also
 // get a models.json beside it (exit-sign-models.json, planar-pair-models.json).
 #include <cstdio>
 #include <filesystem>
 
-#include "build/real_sets.h"
-#include "build/report_io.h"
 #include "cli/commands.h"
 #include "cli/device/options.h"
+#include "eval/real_sets.h"
+#include "eval/report_io.h"
 
 namespace kg::cli {
 

@@ -3,7 +3,7 @@
 // Keypoint detector repeatability on the Oxford layout (img1 against
 // img2..img6 under the ground-truth homographies), keypoints per image,
 // scene triangles that can be correct keygraphs and detection time per
-// image on one thread (build/repeatability.h).
+// image on one thread (eval/repeatability.h).
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -12,13 +12,13 @@
 
 #include <opencv2/core/utility.hpp>
 
-#include "build/param_overrides.h"
-#include "build/repeatability.h"
-#include "build/repeatability_report.h"
-#include "build/report_io.h"
+#include "builder/param_overrides.h"
 #include "cli/commands.h"
 #include "cli/device/options.h"
-#include "core/index_format.h"
+#include "core/index/index_format.h"
+#include "eval/repeatability.h"
+#include "eval/repeatability_report.h"
+#include "eval/report_io.h"
 
 namespace kg::cli {
 

@@ -1,15 +1,15 @@
 // keygraph synth: its options are the Options table below (keygraph synth --help).
-// Writes the synthetic indoor-sign benchmark (src/build/synth_set.h): signs
+// Writes the synthetic indoor-sign benchmark (src/eval/synth/synth_set.h): signs
 // drawn by the project, composited into opencv-doc photos with their
 // ground truth in DIR/manifest.txt.
 #include <cstdio>
 #include <string>
 
-#include "build/progress.h"
-#include "build/sign_catalogue.h"
-#include "build/synth_set.h"
+#include "builder/progress.h"
 #include "cli/commands.h"
 #include "cli/device/options.h"
+#include "eval/synth/sign_catalogue.h"
+#include "eval/synth/synth_set.h"
 
 namespace kg::cli {
 

@@ -9,9 +9,9 @@
 
 #include <opencv2/core.hpp>
 
-#include "build/truth_eval.h"
 #include "cli/device/command_line.h"
 #include "cli/device/options.h"
+#include "eval/truth_eval.h"
 #include "keygraph/status.h"
 
 namespace kg::cli {

@@ -1,10 +1,10 @@
-// Image files for the desktop commands, through OpenCV (build/image_io.h).
+// Image files for the desktop commands, through OpenCV (builder/image_io.h).
 #include <filesystem>
 #include <string>
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "build/image_io.h"
+#include "builder/image_io.h"
 #include "cli/commands.h"
 #include "platform/files/held_stderr.h"
 #include "platform/files/output_file.h"

@@ -1,7 +1,7 @@
 // Time per 640x480 frame of keygraph detection with a 10-model index, of
 // each stage that can be called alone, and of OpenCV's ORB pipeline (2000
 // features, brute-force Hamming 2-NN against each model, Lowe ratio 0.8,
-// findHomography RANSAC per model: build/baselines.h) on the same frames,
+// findHomography RANSAC per model: eval/baselines.h) on the same frames,
 // all on one thread. After the benchmarks, a summary gives per frame the
 // models each pipeline found and the ratio ORB time / keygraph time.
 //
@@ -41,19 +41,19 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "build/baselines.h"
-#include "build/eval_index.h"
-#include "build/image_io.h"
-#include "build/model_builder.h"
-#include "build/param_overrides.h"
-#include "core/arc_attributes.h"
-#include "core/arc_descriptor.h"
-#include "core/blur.h"
-#include "core/delaunay.h"
-#include "core/hessian.h"
-#include "core/keygraph.h"
-#include "core/sampling.h"
-#include "core/selection.h"
+#include "builder/image_io.h"
+#include "builder/in_memory_index.h"
+#include "builder/model_builder.h"
+#include "builder/param_overrides.h"
+#include "core/description/arc_attributes.h"
+#include "core/description/arc_descriptor.h"
+#include "core/image/blur.h"
+#include "core/keygraphs/delaunay.h"
+#include "core/keygraphs/keygraph.h"
+#include "core/keypoints/hessian.h"
+#include "core/sampling/sampling.h"
+#include "core/selection/selection.h"
+#include "eval/baselines.h"
 #include "keygraph/detector.h"
 
 namespace kg {
@@ -98,21 +98,21 @@ struct Data {
   std::vector<std::string> model_names;
   Params params;
   Limits limits;
-  EvalIndex index;
-  EvalIndex box_only;  // the paper's setting: one object (box.png)
+  InMemoryIndex index;
+  InMemoryIndex box_only;  // the paper's setting: one object (box.png)
   // The 10 models without their appearances (views.appearance_size 0): the
   // cost of the photometric refinement is detect/ against this.
-  EvalIndex no_appearance;
+  InMemoryIndex no_appearance;
   // The 10 models searched in the frame and in the frame upsampled 2x
   // (keypoints.scene_upsample 3; the model side is the same).
-  EvalIndex upsampled;
+  InMemoryIndex upsampled;
   // The 10 models in the frontal configuration (frontal_params();
   // detect_frontal/): what the defaults cost against it.
-  EvalIndex frontal;
+  InMemoryIndex frontal;
   // The opt-in for signs seen at an angle (angled_params()): tilted views
   // to 60 degrees in 2 levels, the triangle check, circuit completion, 10
   // leaves; detect_angled/.
-  EvalIndex angled;
+  InMemoryIndex angled;
   std::vector<Frame> frames;
 };
 

@@ -2,8 +2,8 @@
 // detection of box in box_in_scene.png and of the graf crop in graf3.png
 // (native sizes) with an index of 1 (box alone), 2 (box and the graf crop),
 // 10, 50 and 200 models, the others 240x240 tiles of unrelated opencv-doc
-// photos (tests/opencv_scenes.h; the same models as the recall test,
-// tests/integration/test_search_recall.cpp). Counters per frame: the
+// photos (tests/support/opencv_scenes.h; the same models as the recall test,
+// tests/core/test_search_recall.cpp). Counters per frame: the
 // index's arcs, model arcs the scene arcs matched, keygraph
 // correspondences, the target's inliers, and whether it was found. The
 // Exact variants search the tree exactly (descriptor.max_search_leaves 0)
@@ -24,9 +24,9 @@
 #include <utility>
 #include <vector>
 
-#include "build/desktop_detect.h"
-#include "build/model_builder.h"
-#include "opencv_scenes.h"
+#include "builder/desktop_detect.h"
+#include "builder/model_builder.h"
+#include "support/opencv_scenes.h"
 
 namespace kg {
 namespace {

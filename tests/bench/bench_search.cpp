@@ -1,5 +1,5 @@
 // Query throughput of arc-descriptor search: the flat kd-tree of the model
-// index (core/kdtree.h, float descriptors), FLANN's exact single kd-tree and
+// index (core/index/kdtree.h, float descriptors), FLANN's exact single kd-tree and
 // brute force, for radius queries (r = 0.3, the similarity threshold) and
 // 8-nearest queries, over 10 k, 100 k and 1 M clustered unit descriptors.
 // One thread; every method answers the same queries exactly.
@@ -19,8 +19,8 @@
 #include <flann/flann.hpp>
 
 #include "bench/search_data.h"
-#include "core/kdtree.h"
-#include "core/rng.h"
+#include "core/index/kdtree.h"
+#include "core/support/rng.h"
 
 namespace kg {
 namespace {

@@ -1,7 +1,7 @@
 // Arc descriptors for the search-tree comparisons (tests/unit/
 // test_kdtree_flann.cpp, tests/bench/bench_search.cpp): unit-norm 6-D
 // vectors clustered like real ones around a few dense directions, as
-// tests/unit/test_kdtree.cpp makes them; the flat kd-tree over them; brute
+// tests/core/test_kdtree.cpp makes them; the flat kd-tree over them; brute
 // force; and the same points as a FLANN matrix.
 #pragma once
 
@@ -11,8 +11,8 @@
 #include <utility>
 #include <vector>
 
-#include "core/kdtree.h"
-#include "core/rng.h"
+#include "core/index/kdtree.h"
+#include "core/support/rng.h"
 #include "keygraph/types.h"
 
 namespace kg::test {

@@ -11,7 +11,7 @@
 // at the first CRC, which would leave the checks behind it unfuzzed. So the
 // custom mutator below repairs what a mutation broke -- the header's file
 // size field, every section CRC the table points to, then the header CRC
-// (layout: core/index_format.h, docs/FORMAT.md) -- for 7 mutations in 8; the
+// (layout: core/index/index_format.h, docs/FORMAT.md) -- for 7 mutations in 8; the
 // eighth stays as mutated, to fuzz the checksum checks themselves.
 //
 // At exit it prints how the inputs fared; .ci/run fails when most stopped at
@@ -33,8 +33,8 @@
 #include <string>
 #include <vector>
 
-#include "core/crc32.h"
-#include "core/index_format.h"
+#include "core/index/crc32.h"
+#include "core/index/index_format.h"
 #include "keygraph/detector.h"
 #include "keygraph/model_index.h"
 

@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "build/param_overrides.h"
+#include "builder/param_overrides.h"
 #include "cli/device/command_line.h"
-#include "core/index_format.h"
+#include "core/index/index_format.h"
 
 namespace {
 

@@ -1,5 +1,5 @@
 // libFuzzer target for the ground-truth manifest of eval --truth
-// (build/truth_manifest.h, docs/EVAL.md): each input is a manifest's text,
+// (eval/truth_manifest.h, docs/EVAL.md): each input is a manifest's text,
 // parsed line by line as read_truth_manifest() does. What a line accepts is
 // checked against the parser's promises -- four corners forming a simple
 // quadrilateral, a homography with h33 = 1, at least one non-empty model
@@ -18,8 +18,8 @@
 #include <string>
 #include <string_view>
 
-#include "build/quad_geometry.h"
-#include "build/truth_manifest.h"
+#include "eval/quad_geometry.h"
+#include "eval/truth_manifest.h"
 
 namespace {
 

@@ -22,7 +22,7 @@
 #include "platform/files/output_file.h"
 #include "platform/files/pgm.h"
 #include "platform/files/regular_file.h"
-#include "temp_dir.h"
+#include "support/temp_dir.h"
 
 namespace kg::platform {
 namespace {

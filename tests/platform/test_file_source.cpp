@@ -16,7 +16,7 @@
 
 #include "platform/files/file_source.h"
 #include "platform/files/pgm.h"
-#include "temp_dir.h"
+#include "support/temp_dir.h"
 
 #if KG_TEST_OPENCV
 #include <opencv2/core.hpp>

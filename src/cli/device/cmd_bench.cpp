@@ -18,7 +18,7 @@
 #include "cli/device/frame_output.h"
 #include "cli/device/json.h"
 #include "cli/device/options.h"
-#include "core/descriptor_encoding.h"
+#include "core/description/descriptor_encoding.h"
 #include "keygraph/detector.h"
 #include "platform/convert.h"
 #include "platform/files/file_source.h"

@@ -1,6 +1,6 @@
 // The model quality report as `keygraph build` and `keygraph inspect` print
 // it, from the report stored in the index (format 6.1 sections 12-14;
-// measured by build/model_quality.h): a star rating per model with the
+// measured by builder/model_quality.h): a star rating per model with the
 // reasons, a warning line per weak or confusable model, and a rating of the
 // index. No OpenCV: the device build's inspect uses it. Thresholds and how
 // they were chosen: docs/QUALITY.md.

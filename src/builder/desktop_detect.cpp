@@ -1,0 +1,55 @@
+#include "builder/desktop_detect.h"
+
+#include <algorithm>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+#include "builder/image_io.h"
+
+namespace kg {
+
+Status DesktopDetector::detect(const cv::Mat& gray, DetectionList& out) {
+  // Desktop frames come in any size: grow the core's workspace to fit.
+  const Limits& current = detector_.limits();
+  if (gray.cols > current.max_width || gray.rows > current.max_height) {
+    detector_ =
+        Detector(detector_.index(), current.for_frame(std::max(gray.cols, current.max_width),
+                                                      std::max(gray.rows, current.max_height)));
+  }
+  const Params& params = detector_.index().params();
+  if (params.descriptor.vertex_descriptor == VertexDescriptor::kSift) {
+    if (gray.empty() || gray.type() != CV_8UC1)
+      return {StatusCode::kInvalidArgument, "empty or malformed frame (8-bit gray expected)"};
+    // The keypoints the core's detect(frame) would find (for Hessian), found
+    // here so that they can be described.
+    extractor_.extract(gray, params.keypoints, limits_.max_keypoints, keypoints_);
+    const int count = static_cast<int>(keypoints_.size());
+    sift_.describe(gray, keypoints_.data(), count, vertex_descriptors_);
+    return detector_.detect(view_of(gray), keypoints_.data(), count, vertex_descriptors_.data(),
+                            out);
+  }
+  if (params.keypoints.detector == KeypointDetector::kHessian)
+    return detector_.detect(view_of(gray), out);
+  extractor_.extract(gray, params.keypoints, limits_.max_keypoints, keypoints_);
+  return detector_.detect(view_of(gray), keypoints_.data(), static_cast<int>(keypoints_.size()),
+                          out);
+}
+
+cv::Mat draw_detections(const cv::Mat& gray, const DetectionList& detections) {
+  cv::Mat canvas;
+  cv::cvtColor(gray, canvas, cv::COLOR_GRAY2BGR);
+  const cv::Scalar colours[] = {{0, 220, 0}, {0, 160, 255}, {255, 80, 0}, {200, 0, 200}};
+  int i = 0;
+  for (const Detection& d : detections) {
+    const cv::Scalar c = colours[i++ % 4];
+    std::vector<cv::Point> quad;
+    for (const Point2f& p : d.corners) quad.emplace_back(cvRound(p.x), cvRound(p.y));
+    cv::polylines(canvas, quad, true, c, 2, cv::LINE_AA);
+    cv::putText(canvas, std::string(d.model_name), quad[0] + cv::Point(4, 18),
+                cv::FONT_HERSHEY_SIMPLEX, 0.6, c, 2, cv::LINE_AA);
+  }
+  return canvas;
+}
+
+}  // namespace kg

@@ -1,0 +1,36 @@
+// Detection on a desktop image: the core detector, with OpenCV computing
+// the keypoints when the index was built with a detector the core lacks,
+// and the keypoints' SIFT descriptors when the index has vertex descriptors.
+#pragma once
+
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "builder/keypoints.h"
+#include "builder/sift_descriptors.h"
+#include "keygraph/detector.h"
+
+namespace kg {
+
+class DesktopDetector {
+ public:
+  explicit DesktopDetector(const ModelIndex& index, const Limits& limits = Limits{})
+      : detector_(index, limits), limits_(limits) {}
+  Status detect(const cv::Mat& gray, DetectionList& out);
+  const DetectStats& stats() const { return detector_.stats(); }
+  Detector& core() { return detector_; }
+
+ private:
+  Detector detector_;
+  Limits limits_;
+  KeypointExtractor extractor_;
+  std::vector<Keypoint> keypoints_;
+  SiftDescriber sift_;
+  std::vector<std::uint8_t> vertex_descriptors_;
+};
+
+// Draws each detection's outline and name onto a BGR copy of `gray`.
+cv::Mat draw_detections(const cv::Mat& gray, const DetectionList& detections);
+
+}  // namespace kg

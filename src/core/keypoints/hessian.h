@@ -1,0 +1,59 @@
+// Determinant-of-Hessian keypoint detector over scales (the blob part of
+// Hessian-Affine without the affine adaptation): scale-normalised
+// det(H) = sigma^4 (Lxx Lyy - Lxy^2) on a Gaussian scale space, local maxima
+// in a 3x3x3 neighbourhood of (x, y, scale) above a threshold, refined to
+// sub-pixel position by a quadratic fit. The keypoint is the blob centre,
+// which for these symmetric regions is the region centroid.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/image/plane.h"
+#include "core/support/workspace.h"
+#include "keygraph/image.h"
+#include "keygraph/params.h"
+#include "keygraph/types.h"
+
+namespace kg {
+
+class HessianDetector {
+ public:
+  explicit HessianDetector(std::pmr::memory_resource* memory = std::pmr::get_default_resource());
+
+  // Sizes every buffer for images up to max_width x max_height, at most
+  // max_keypoints output keypoints and max_candidates extremum candidates
+  // per scale level; after this, detect() within those bounds allocates
+  // nothing, and candidates beyond max_candidates are dropped (the weakest
+  // rows last: scan order) instead of stored.
+  void reserve(int max_width, int max_height, const KeypointParams& params, int max_keypoints,
+               int max_candidates);
+
+  // Clears `out` and fills it with at most `max_keypoints` keypoints, the
+  // strongest first (ties broken by position so the result is
+  // deterministic). Uses params.hessian_threshold, hessian_octaves and
+  // hessian_levels. Buffers are kept between calls and reused. Returns
+  // false when candidates were dropped (reserve()).
+  bool detect(ImageView image, const KeypointParams& params, int max_keypoints,
+              WorkVector<Keypoint>& out);
+  // The same into a std::vector (desktop and tests).
+  void detect(ImageView image, const KeypointParams& params, int max_keypoints,
+              std::vector<Keypoint>& out);
+
+ private:
+  // Only the planes in use at once are kept: two Gaussian levels (blurring
+  // ping-pongs between them), the next octave's first level, and the three
+  // response levels the 3x3x3 test reads (a ring).
+  std::array<Plane<float>, 2> levels_;
+  std::array<Plane<float>, 3> responses_;
+  Plane<float> scratch_;           // blur row buffers
+  Plane<float> next_octave_;       // halved level: first level of the next octave
+  WorkVector<std::uint8_t> mask_;  // candidate flags of one row
+  // Extremum candidates, (x, y) pairs, of the two levels last computed.
+  std::array<WorkVector<std::int32_t>, 2> candidates_;
+  std::size_t max_candidate_ints_ = static_cast<std::size_t>(-1);  // 2 per candidate
+  WorkVector<Keypoint> copy_;  // the std::vector overload's result, before the copy
+};
+
+}  // namespace kg

@@ -1,0 +1,464 @@
+#include "core/pose/appearance_align.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace kg {
+
+namespace {
+
+constexpr int kParams = 8;                   // homography parameters (h33 fixed)
+constexpr int kMaxIterations = 10;           // Gauss-Newton steps per level
+constexpr double kConverged = 0.1;           // largest corner step, level pixels
+constexpr double kMinInside = 0.7;           // share of the level that must be in the frame
+constexpr int kMinHalfLongEdge = 16;         // smaller half levels carry too little
+constexpr std::size_t kMinScorePixels = 64;  // fewer make a correlation meaningless
+constexpr double kMinVariance = 1.0;         // grey levels squared: flat below
+// Frame pixels per appearance pixel below which the half level is scored.
+constexpr double kScoreOnHalfBelow = 0.6;
+constexpr int kMaxSubsamples = 2;  // per axis, where the frame is finer than the level
+constexpr double kSelected = 0.3;  // share of the pixels the Gauss-Newton steps use
+constexpr std::size_t kMinSelected = 200;
+constexpr double kTukey = 4.685;           // Tukey's biweight constant (95 % efficiency)
+constexpr double kMinResidualScale = 2.0;  // grey levels: the noise floor of the residuals
+
+void multiply(const double a[9], const double b[9], double out[9]) {
+  double r[9];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      r[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
+  std::copy(r, r + 9, out);
+}
+
+bool invert(const double m[9], double out[9]) {
+  const double c0 = m[4] * m[8] - m[5] * m[7];
+  const double c1 = m[5] * m[6] - m[3] * m[8];
+  const double c2 = m[3] * m[7] - m[4] * m[6];
+  const double det = m[0] * c0 + m[1] * c1 + m[2] * c2;
+  if (!(std::fabs(det) > 1e-300) || !std::isfinite(det)) return false;
+  const double d = 1.0 / det;
+  out[0] = c0 * d;
+  out[1] = (m[2] * m[7] - m[1] * m[8]) * d;
+  out[2] = (m[1] * m[5] - m[2] * m[4]) * d;
+  out[3] = c1 * d;
+  out[4] = (m[0] * m[8] - m[2] * m[6]) * d;
+  out[5] = (m[2] * m[3] - m[0] * m[5]) * d;
+  out[6] = c2 * d;
+  out[7] = (m[1] * m[6] - m[0] * m[7]) * d;
+  out[8] = (m[0] * m[4] - m[1] * m[3]) * d;
+  return true;
+}
+
+// The level's normalised coordinates (centred, half the long edge = 1,
+// which keeps the normal equations well conditioned) -> model pixels.
+void level_to_model(int width, int height, float scale_x, float scale_y, double out[9]) {
+  const double half_long = 0.5 * std::max(width, height);
+  const double sx = scale_x, sy = scale_y;
+  out[0] = half_long / sx;
+  out[1] = 0.0;
+  out[2] = (0.5 * (width - 1) + 0.5) / sx - 0.5;
+  out[3] = 0.0;
+  out[4] = half_long / sy;
+  out[5] = (0.5 * (height - 1) + 0.5) / sy - 0.5;
+  out[6] = 0.0;
+  out[7] = 0.0;
+  out[8] = 1.0;
+}
+
+// The frame point of a level's normalised point (x, y) under g.
+void project(const double g[9], double xn, double yn, double& x, double& y) {
+  const double z = 1.0 / (g[6] * xn + g[7] * yn + g[8]);
+  x = (g[0] * xn + g[1] * yn + g[2]) * z;
+  y = (g[3] * xn + g[4] * yn + g[5]) * z;
+}
+
+float bilinear(ImageView f, double x, double y) {
+  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+  const auto fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
+  const std::uint8_t* r0 = f.row(y0) + x0;
+  const std::uint8_t* r1 = r0 + f.stride;
+  const float top = r0[0] + fx * static_cast<float>(r0[1] - r0[0]);
+  const float bottom = r1[0] + fx * static_cast<float>(r1[1] - r1[0]);
+  return top + fy * (bottom - top);
+}
+
+// Cholesky solve of the 8x8 normal equations (a is overwritten).
+bool solve8(double a[kParams][kParams], const double b[kParams], double x[kParams]) {
+  for (int j = 0; j < kParams; ++j) {
+    double d = a[j][j];
+    for (int k = 0; k < j; ++k) d -= a[j][k] * a[j][k];
+    if (!(d > 1e-12)) return false;
+    a[j][j] = std::sqrt(d);
+    for (int i = j + 1; i < kParams; ++i) {
+      double s = a[i][j];
+      for (int k = 0; k < j; ++k) s -= a[i][k] * a[j][k];
+      a[i][j] = s / a[j][j];
+    }
+  }
+  double y[kParams];
+  for (int i = 0; i < kParams; ++i) {
+    double s = b[i];
+    for (int k = 0; k < i; ++k) s -= a[i][k] * y[k];
+    y[i] = s / a[i][i];
+  }
+  for (int i = kParams - 1; i >= 0; --i) {
+    double s = y[i];
+    for (int k = i + 1; k < kParams; ++k) s -= a[k][i] * x[k];
+    x[i] = s / a[i][i];
+  }
+  return true;
+}
+
+}  // namespace
+
+AppearanceAligner::AppearanceAligner(std::pmr::memory_resource* memory)
+    : full_(memory),
+      half_(memory),
+      steepest_(memory),
+      warped_(memory),
+      valid_(memory),
+      magnitude_(memory),
+      selected_(memory),
+      interior_(memory) {}
+
+void AppearanceAligner::reserve(int max_pixels) {
+  const auto n = static_cast<std::size_t>(std::max(0, max_pixels));
+  // The Gauss-Newton steps use at most this many pixels (refine_level).
+  const std::size_t selected = std::max(
+      kMinSelected, static_cast<std::size_t>(std::ceil(kSelected * static_cast<double>(n))));
+  full_.reserve(n);
+  half_.reserve(n / 4 + 1);
+  steepest_.reserve(selected * kParams);
+  warped_.reserve(n);
+  valid_.reserve(n);
+  magnitude_.reserve(n);
+  selected_.reserve(selected);
+  interior_.reserve(n);
+}
+
+void AppearanceAligner::warp_level(const Level& level, ImageView frame, const double g[9],
+                                   const std::uint32_t* pixels, std::size_t count) {
+  const int w = level.width;
+  const double half_long = 0.5 * std::max(w, level.height);
+  const double cx = 0.5 * (w - 1), cy = 0.5 * (level.height - 1);
+  // Frame pixels per level pixel at the centre: where it exceeds one, each
+  // level pixel averages a grid of samples (the appearance is area-averaged).
+  const double wanted = std::ceil(footprint(level, g) - 0.25);
+  // NaN or huge for a degenerate pose: one sample (which then fails the
+  // bounds test) rather than a float-to-int conversion out of range.
+  const int sub =
+      std::isfinite(wanted)
+          ? static_cast<int>(std::clamp(wanted, 1.0, static_cast<double>(kMaxSubsamples)))
+          : 1;
+  const double max_x = frame.width - 1.001, max_y = frame.height - 1.001;
+  const double step = 1.0 / (sub * half_long);
+  const double first = (0.5 / sub - 0.5) / half_long;
+  const float weight = 1.f / static_cast<float>(sub * sub);
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::uint32_t i = pixels[k];
+    const double xn0 =
+        (static_cast<int>(i % static_cast<std::uint32_t>(w)) - cx) / half_long + first;
+    const double yn0 =
+        (static_cast<int>(i / static_cast<std::uint32_t>(w)) - cy) / half_long + first;
+    float sum = 0.f;
+    bool inside = true;
+    for (int sy = 0; sy < sub && inside; ++sy) {
+      for (int sx = 0; sx < sub; ++sx) {
+        double x, y;
+        project(g, xn0 + sx * step, yn0 + sy * step, x, y);
+        if (!(x >= 0.0 && y >= 0.0 && x < max_x && y < max_y)) {
+          inside = false;
+          break;
+        }
+        sum += bilinear(frame, x, y);
+      }
+    }
+    valid_[i] = inside ? 1 : 0;
+    warped_[i] = inside ? sum * weight : 0.f;
+  }
+}
+
+bool AppearanceAligner::correlation(const Level& level, ImageView frame, const double g[9],
+                                    double& ncc) {
+  const int w = level.width, h = level.height;
+  if (w < 3 || h < 3) return false;
+  interior_.clear();
+  for (int v = 1; v + 1 < h; ++v)
+    for (int u = 1; u + 1 < w; ++u) interior_.push_back(static_cast<std::uint32_t>(v * w + u));
+  if (interior_.size() < kMinScorePixels) return false;
+  warp_level(level, frame, g, interior_.data(), interior_.size());
+  double n = 0, st = 0, si = 0, stt = 0, sii = 0, sti = 0;
+  for (const std::uint32_t i : interior_) {
+    if (!valid_[i]) continue;
+    const double t = level.values[i], s = warped_[i];
+    n += 1;
+    st += t;
+    si += s;
+    stt += t * t;
+    sii += s * s;
+    sti += t * s;
+  }
+  if (n < kMinInside * static_cast<double>(interior_.size())) return false;
+  const double vt = stt - st * st / n, vi = sii - si * si / n;
+  // A flat appearance cannot be compared with anything; a flat frame where
+  // the model should be is no match.
+  if (!(vt > kMinVariance * n)) return false;
+  ncc = vi > kMinVariance * n ? (sti - st * si / n) / std::sqrt(vt * vi) : 0.0;
+  return std::isfinite(ncc);
+}
+
+double AppearanceAligner::footprint(const Level& level, const double g[9]) {
+  const double step = 1.0 / (0.5 * std::max(level.width, level.height));
+  double ox, oy, ux, uy, vx, vy;
+  project(g, 0.0, 0.0, ox, oy);
+  project(g, step, 0.0, ux, uy);
+  project(g, 0.0, step, vx, vy);
+  return std::sqrt(std::fabs((ux - ox) * (vy - oy) - (uy - oy) * (vx - ox)));
+}
+
+int AppearanceAligner::refine_level(const Level& level, ImageView frame, double g[9]) {
+  const int w = level.width, h = level.height;
+  const float* t = level.values;
+  const double half_long = 0.5 * std::max(w, h);
+  const double cx = 0.5 * (w - 1), cy = 0.5 * (h - 1);
+  const auto gradient = [&](std::uint32_t i, double& gx, double& gy) {
+    gx = 0.5 * (t[i + 1] - t[i - 1]) * half_long;
+    gy = 0.5 * (t[i + w] - t[i - w]) * half_long;
+  };
+
+  // Only the pixels with the strongest gradients move the pose (a sign is
+  // mostly flat colour): the kSelected share of the interior, ranked by
+  // gradient magnitude.
+  magnitude_.clear();
+  for (int v = 1; v + 1 < h; ++v)
+    for (int u = 1; u + 1 < w; ++u) {
+      double gx, gy;
+      gradient(static_cast<std::uint32_t>(v * w + u), gx, gy);
+      magnitude_.push_back(static_cast<float>(gx * gx + gy * gy));
+    }
+  if (magnitude_.size() < 16) return 0;
+  const std::size_t keep =
+      std::max(std::min(kMinSelected, magnitude_.size()),
+               static_cast<std::size_t>(kSelected * static_cast<double>(magnitude_.size())));
+  std::nth_element(magnitude_.begin(),
+                   magnitude_.begin() + static_cast<std::ptrdiff_t>(magnitude_.size() - keep),
+                   magnitude_.end());
+  const float threshold = std::max(magnitude_[magnitude_.size() - keep], 1e-6f);
+  selected_.clear();
+  for (int v = 1; v + 1 < h; ++v)
+    for (int u = 1; u + 1 < w; ++u) {
+      const auto i = static_cast<std::uint32_t>(v * w + u);
+      double gx, gy;
+      gradient(i, gx, gy);
+      if (gx * gx + gy * gy >= threshold && selected_.size() < keep) selected_.push_back(i);
+    }
+  const std::size_t n = selected_.size();
+  if (n < 16) return 0;
+
+  // Steepest-descent images of the inverse compositional step: the
+  // appearance's gradient times the warp's Jacobian at the identity.
+  steepest_.resize(n * kParams);
+  double t_sum = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::uint32_t i = selected_[k];
+    double gx, gy;
+    gradient(i, gx, gy);
+    const double x = (static_cast<int>(i % static_cast<std::uint32_t>(w)) - cx) / half_long;
+    const double y = (static_cast<int>(i / static_cast<std::uint32_t>(w)) - cy) / half_long;
+    float* sd = &steepest_[k * kParams];
+    sd[0] = static_cast<float>(gx * x);
+    sd[1] = static_cast<float>(gy * x);
+    sd[2] = static_cast<float>(gx * y);
+    sd[3] = static_cast<float>(gy * y);
+    sd[4] = static_cast<float>(gx);
+    sd[5] = static_cast<float>(gy);
+    sd[6] = static_cast<float>(-(gx * x * x + gy * x * y));
+    sd[7] = static_cast<float>(-(gx * x * y + gy * y * y));
+    t_sum += t[i];
+  }
+  // Project gain and bias out: each steepest-descent image is made
+  // orthogonal to the constant image and to the appearance itself, so a
+  // brighter or lower-contrast frame moves no parameter.
+  const double t_mean = t_sum / static_cast<double>(n);
+  double t_norm = 0;
+  for (const std::uint32_t i : selected_) t_norm += (t[i] - t_mean) * (t[i] - t_mean);
+  if (!(t_norm > 1e-6)) return 0;
+  t_norm = std::sqrt(t_norm);
+  for (int j = 0; j < kParams; ++j) {
+    double mean = 0, along = 0;
+    for (std::size_t k = 0; k < n; ++k) mean += steepest_[k * kParams + j];
+    mean /= static_cast<double>(n);
+    for (std::size_t k = 0; k < n; ++k)
+      along += (steepest_[k * kParams + j] - mean) * (t[selected_[k]] - t_mean) / t_norm;
+    for (std::size_t k = 0; k < n; ++k)
+      steepest_[k * kParams + j] = static_cast<float>(steepest_[k * kParams + j] - mean -
+                                                      along * (t[selected_[k]] - t_mean) / t_norm);
+  }
+  int iterations = 0;
+  for (; iterations < kMaxIterations; ++iterations) {
+    warp_level(level, frame, g, selected_.data(), n);
+    double count = 0, si = 0, st = 0, sii = 0, stt = 0;
+    for (const std::uint32_t i : selected_) {
+      if (!valid_[i]) continue;
+      count += 1;
+      si += warped_[i];
+      sii += static_cast<double>(warped_[i]) * warped_[i];
+      st += t[i];
+      stt += static_cast<double>(t[i]) * t[i];
+    }
+    if (count < kMinInside * static_cast<double>(n)) break;
+    const double mi = si / count, mt = st / count;
+    const double vi = sii / count - mi * mi, vt = stt / count - mt * mt;
+    if (!(vi > kMinVariance && vt > kMinVariance)) break;
+    const double gain = std::sqrt(vt / vi);
+    // Robust scale of the residuals (median absolute value): occluders,
+    // glare and the background at the model's border give residuals far
+    // beyond it, which Tukey's weights then ignore.
+    magnitude_.clear();
+    for (const std::uint32_t i : selected_) {
+      if (!valid_[i]) continue;
+      magnitude_.push_back(static_cast<float>(std::fabs(gain * (warped_[i] - mi) - (t[i] - mt))));
+    }
+    const auto middle = magnitude_.begin() + static_cast<std::ptrdiff_t>(magnitude_.size() / 2);
+    std::nth_element(magnitude_.begin(), middle, magnitude_.end());
+    const double sigma = std::max(1.4826 * static_cast<double>(*middle), kMinResidualScale);
+    const double cutoff = kTukey * sigma;
+    double b[kParams] = {};
+    double a[kParams][kParams] = {};
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::uint32_t i = selected_[k];
+      if (!valid_[i]) continue;
+      const double e = gain * (warped_[i] - mi) - (t[i] - mt);
+      if (std::fabs(e) >= cutoff) continue;
+      const double r = 1.0 - (e / cutoff) * (e / cutoff);
+      const double weight = r * r;
+      const float* sd = &steepest_[k * kParams];
+      for (int j = 0; j < kParams; ++j) {
+        b[j] += weight * sd[j] * e;
+        for (int l = 0; l <= j; ++l) a[j][l] += weight * static_cast<double>(sd[j]) * sd[l];
+      }
+    }
+    for (int j = 0; j < kParams; ++j)
+      for (int l = j + 1; l < kParams; ++l) a[j][l] = a[l][j];
+    double dp[kParams];
+    if (!solve8(a, b, dp)) break;
+    const double step[9] = {1.0 + dp[0], dp[2], dp[4], dp[1], 1.0 + dp[3],
+                            dp[5],       dp[6], dp[7], 1.0};
+    double inverse[9];
+    if (!invert(step, inverse)) break;
+    multiply(g, inverse, g);
+    // Stop when the step moves no corner of the level by more than
+    // kConverged of its pixels.
+    double largest = 0;
+    for (const double sx : {-1.0, 1.0})
+      for (const double sy : {-1.0, 1.0}) {
+        const double x = sx * cx / half_long, y = sy * cy / half_long;
+        const double z = step[6] * x + step[7] * y + step[8];
+        const double dx = (step[0] * x + step[1] * y + step[2]) / z - x;
+        const double dy = (step[3] * x + step[4] * y + step[5]) / z - y;
+        largest = std::max(largest, std::hypot(dx, dy) * half_long);
+      }
+    if (!std::isfinite(largest)) break;
+    if (largest < kConverged) {
+      ++iterations;
+      break;
+    }
+  }
+  return iterations;
+}
+
+bool AppearanceAligner::prepare(const AppearanceImage& appearance, ImageView frame) {
+  const int w = appearance.width, hgt = appearance.height;
+  const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(hgt);
+  if (appearance.pixels == nullptr || w < 3 || hgt < 3 || !(appearance.scale_x > 0.f) ||
+      !(appearance.scale_y > 0.f) || n > full_.capacity() || frame.width < 2 || frame.height < 2)
+    return false;
+  // The appearance lightly smoothed ([1 2 1] / 4 each way), matching the
+  // blur of the frame it is compared with.
+  full_.resize(n);
+  warped_.resize(n);
+  valid_.resize(n);
+  for (int v = 0; v < hgt; ++v) {
+    const std::uint8_t* r = appearance.pixels + static_cast<std::size_t>(v) * w;
+    for (int u = 0; u < w; ++u) {
+      const int l = std::max(u - 1, 0), rr = std::min(u + 1, w - 1);
+      warped_[static_cast<std::size_t>(v) * w + u] = 0.25f * (r[l] + 2.f * r[u] + r[rr]);
+    }
+  }
+  for (int v = 0; v < hgt; ++v) {
+    const int up = std::max(v - 1, 0), down = std::min(v + 1, hgt - 1);
+    for (int u = 0; u < w; ++u)
+      full_[static_cast<std::size_t>(v) * w + u] =
+          0.25f * (warped_[static_cast<std::size_t>(up) * w + u] +
+                   2.f * warped_[static_cast<std::size_t>(v) * w + u] +
+                   warped_[static_cast<std::size_t>(down) * w + u]);
+  }
+  return true;
+}
+
+AppearanceFit AppearanceAligner::align(const AppearanceImage& appearance, ImageView frame,
+                                       Homography& h) {
+  AppearanceFit fit;
+  if (!prepare(appearance, frame)) return fit;
+  const int w = appearance.width, hgt = appearance.height;
+  const Level full{full_.data(), w, hgt, appearance.scale_x, appearance.scale_y};
+  Level half{};
+  if (std::max(w, hgt) / 2 >= kMinHalfLongEdge && std::min(w, hgt) / 2 >= kMinHalfLongEdge / 2) {
+    half.width = w / 2;
+    half.height = hgt / 2;
+    half.scale_x = appearance.scale_x * 0.5f;
+    half.scale_y = appearance.scale_y * 0.5f;
+    half_.resize(static_cast<std::size_t>(half.width) * half.height);
+    for (int v = 0; v < half.height; ++v)
+      for (int u = 0; u < half.width; ++u) {
+        const float* r0 = &full_[static_cast<std::size_t>(2 * v) * w + 2 * u];
+        half_[static_cast<std::size_t>(v) * half.width + u] =
+            0.25f * (r0[0] + r0[1] + r0[w] + r0[w + 1]);
+      }
+    half.values = half_.data();
+  }
+
+  double to_model[9], from_model[9], g[9];
+  level_to_model(w, hgt, full.scale_x, full.scale_y, to_model);
+  if (!invert(to_model, from_model)) return fit;
+  multiply(h.data(), to_model, g);
+  double half_to_model[9] = {}, half_from_model[9] = {};
+  if (half.values != nullptr) {
+    level_to_model(half.width, half.height, half.scale_x, half.scale_y, half_to_model);
+    if (!invert(half_to_model, half_from_model)) half.values = nullptr;
+  }
+  // The correlation is scored on the level closest to the frame's
+  // resolution: a sign smaller in the frame than its appearance would
+  // otherwise be marked down for the detail the frame cannot show.
+  const bool score_half = half.values != nullptr && footprint(full, g) < kScoreOnHalfBelow;
+  const Level& score_level = score_half ? half : full;
+  const auto score = [&](const double* hom, double& ncc) {
+    double gs[9];
+    multiply(hom, score_half ? half_to_model : to_model, gs);
+    return correlation(score_level, frame, gs, ncc);
+  };
+  fit.measured = score(h.data(), fit.ncc_before);
+  if (!fit.measured) return fit;
+  fit.ncc = fit.ncc_before;
+
+  double refined[9];
+  std::copy(h.begin(), h.end(), refined);
+  if (half.values != nullptr) {
+    multiply(refined, half_to_model, g);
+    fit.iterations += refine_level(half, frame, g);
+    multiply(g, half_from_model, refined);
+  }
+  multiply(refined, to_model, g);
+  fit.iterations += refine_level(full, frame, g);
+  multiply(g, from_model, refined);
+  if (!(std::fabs(refined[8]) > 1e-12)) return fit;
+  for (double& v : refined) v /= refined[8];
+  double ncc = -1.0;
+  if (!score(refined, ncc) || !(ncc > fit.ncc_before)) return fit;
+  for (int i = 0; i < 9; ++i) h[static_cast<std::size_t>(i)] = refined[i];
+  fit.aligned = true;
+  fit.ncc = ncc;
+  return fit;
+}
+
+}  // namespace kg

@@ -1,0 +1,275 @@
+#include "eval/synth/synth_set.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <system_error>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "eval/report_io.h"
+#include "eval/synth/sign_catalogue.h"
+
+namespace kg {
+
+namespace fs = std::filesystem;
+
+const std::vector<std::string>& synth_background_names() {
+  // Photographs (no drawings, charts or calibration targets) of at least
+  // 380 pixels a side.
+  static const std::vector<std::string> names = {
+      "aero1.jpg",  "aero3.jpg",     "apple.jpg",        "baboon.jpg",       "basketball1.png",
+      "board.jpg",  "building.jpg",  "butterfly.jpg",    "box_in_scene.png", "fruits.jpg",
+      "graf1.png",  "home.jpg",      "left.jpg",         "leuvenA.jpg",      "messi5.jpg",
+      "orange.jpg", "pca_test1.jpg", "rubberwhale1.png", "smarties.png",     "squirrel_cls.jpg",
+      "stuff.jpg",  "aloeL.jpg",     "ela_original.jpg"};
+  return names;
+}
+
+namespace {
+
+std::string two_digits(int i) {
+  char buf[16];
+  std::snprintf(buf, sizeof(buf), "%02d", i);
+  return buf;
+}
+
+std::string four_digits(int i) {
+  char buf[16];
+  std::snprintf(buf, sizeof(buf), "%04d", i);
+  return buf;
+}
+
+// Independent random state per frame: frame i is the same whatever the count.
+Rng frame_rng(std::uint64_t seed, int i) {
+  Rng mix(seed ^ (0xa0761d6478bd642fULL * static_cast<std::uint64_t>(i + 1)));
+  return Rng(mix.next());
+}
+
+}  // namespace
+
+Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
+                        SynthSetImages& images, const ProgressFn& progress) {
+  if (options.signs < 1 || options.signs > sign_catalogue_size())
+    return {StatusCode::kInvalidArgument, "the catalogue has " +
+                                              std::to_string(sign_catalogue_size()) +
+                                              " signs; asked for " + std::to_string(options.signs)};
+  if (options.frames < 1 || options.frames > 100000)
+    return {StatusCode::kInvalidArgument, "frames must be in 1..100000"};
+  if (!(options.sign_free_fraction >= 0 && options.sign_free_fraction <= 1))
+    return {StatusCode::kInvalidArgument, "sign-free fraction must be in [0, 1]"};
+  if (options.frame.width < 64 || options.frame.height < 64)
+    return {StatusCode::kInvalidArgument, "frames must be at least 64x64"};
+  std::vector<cv::Mat> photos;
+  std::vector<std::string> photo_names;
+  for (const std::string& name : synth_background_names()) {
+    const std::string path = options.backgrounds + "/" + name;
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) continue;  // (imread would warn on stderr)
+    const cv::Mat m = cv::imread(path, cv::IMREAD_COLOR);
+    if (m.empty()) continue;
+    photos.push_back(m);
+    photo_names.push_back(name);
+  }
+  if (photos.size() < 2)
+    return {StatusCode::kNotFound, options.backgrounds +
+                                       ": fewer than 2 of opencv-doc's photos found (install "
+                                       "Debian's opencv-doc package)"};
+  manifest = SynthManifest{};
+  manifest.seed = options.seed;
+  manifest.width = options.frame.width;
+  manifest.height = options.frame.height;
+  images = SynthSetImages{};
+  for (int i = 0; i < options.signs; ++i) {
+    SignImage s = render_sign(i, options.seed);
+    SynthSign entry;
+    entry.id = i;
+    entry.name = s.name;
+    entry.file = "signs/" + two_digits(i) + "-" + s.name + ".png";
+    entry.width = s.image.cols;
+    entry.height = s.image.rows;
+    manifest.signs.push_back(entry);
+    images.signs.push_back(s.image);
+  }
+  // Which frames show which sign: every sign equally often, in shuffled order.
+  const int sign_free = static_cast<int>(std::lround(options.frames * options.sign_free_fraction));
+  Rng order_rng(options.seed ^ 0x5eed5eed5eedULL);
+  std::vector<int> content(static_cast<std::size_t>(options.frames), -1);
+  for (int i = 0; i < options.frames - sign_free; ++i)
+    content[static_cast<std::size_t>(i)] = i % options.signs;
+  for (int i = options.frames - 1; i > 0; --i)
+    std::swap(content[static_cast<std::size_t>(i)],
+              content[order_rng.uniform(static_cast<std::uint32_t>(i + 1))]);
+  const cv::Size size(options.frame.width, options.frame.height);
+  for (int i = 0; i < options.frames; ++i) {
+    Rng rng = frame_rng(options.seed, i);
+    const std::size_t b = rng.uniform(static_cast<std::uint32_t>(photos.size()));
+    std::size_t o = rng.uniform(static_cast<std::uint32_t>(photos.size() - 1));
+    if (o >= b) ++o;  // the occluder comes from another photo
+    const cv::Mat background = background_view(photos[b], size, rng);
+    const int sign = content[static_cast<std::size_t>(i)];
+    SynthFrameEntry entry;
+    entry.file = "frames/" + four_digits(i) + ".png";
+    entry.background = photo_names[b];
+    const cv::Mat none;
+    images.frames.push_back(
+        render_frame(background, sign >= 0 ? images.signs[static_cast<std::size_t>(sign)] : none,
+                     sign, photos[o], options.frame, rng, entry.info));
+    manifest.frames.push_back(entry);
+    if (progress) progress(i + 1, options.frames, {});
+  }
+  return Status::ok();
+}
+
+Status write_synth_set(const SynthSetOptions& options, const ProgressFn& progress) {
+  std::error_code ec;
+  if (options.directory.empty()) return {StatusCode::kInvalidArgument, "no output directory"};
+  const fs::path target(options.directory);
+  if (fs::exists(target, ec) && !(fs::is_directory(target, ec) && fs::is_empty(target, ec)))
+    return {StatusCode::kInvalidArgument, options.directory + " exists and is not empty"};
+  SynthManifest manifest;
+  SynthSetImages images;
+  Status s = render_synth_set(options, manifest, images, progress);
+  if (!s) return s;
+  const fs::path tmp = target.parent_path() / (".tmp-" + target.filename().string());
+  fs::remove_all(tmp, ec);
+  const auto fail = [&](const std::string& what) {
+    fs::remove_all(tmp, ec);
+    return Status{StatusCode::kIoError, what};
+  };
+  if (!fs::create_directories(tmp / "signs", ec) || !fs::create_directories(tmp / "frames", ec))
+    return fail("cannot create " + tmp.string());
+  for (std::size_t i = 0; i < images.signs.size(); ++i) {
+    if (!cv::imwrite((tmp / manifest.signs[i].file).string(), images.signs[i]))
+      return fail("cannot write " + manifest.signs[i].file);
+  }
+  for (std::size_t i = 0; i < images.frames.size(); ++i) {
+    if (!cv::imwrite((tmp / manifest.frames[i].file).string(), images.frames[i]))
+      return fail("cannot write " + manifest.frames[i].file);
+  }
+  if (s = write_text_file((tmp / "manifest.txt").string(), manifest_text(manifest)); !s)
+    return fail(s.message());
+  if (fs::exists(target, ec)) fs::remove(target, ec);  // empty directory
+  fs::rename(tmp, target, ec);
+  if (ec) return fail("cannot rename " + tmp.string() + " to " + options.directory);
+  return Status::ok();
+}
+
+std::string manifest_text(const SynthManifest& m) {
+  std::ostringstream out;
+  out.precision(17);  // round trip
+  out << "keygraph-synth 1\n# " << m.signs.size() << " signs, " << m.frames.size()
+      << " frames; see src/eval/synth/synth_set.h for the fields\n";
+  out << "seed " << m.seed << "\nframe-size " << m.width << ' ' << m.height << '\n';
+  for (const SynthSign& s : m.signs)
+    out << "sign " << s.id << ' ' << s.name << ' ' << s.file << ' ' << s.width << ' ' << s.height
+        << '\n';
+  for (const SynthFrameEntry& f : m.frames) {
+    const SynthFrameInfo& i = f.info;
+    out << "frame " << f.file << " background " << f.background << " sign " << i.sign;
+    if (i.sign >= 0) {
+      out << " corners";
+      for (const Point2f& c : i.corners) out << ' ' << c.x << ' ' << c.y;
+      out << " homography";
+      for (const double v : i.homography) out << ' ' << v;
+    }
+    out << " occluded " << i.occluded << " blur " << i.blur_sigma << " motion " << i.motion_blur
+        << " noise " << i.noise_sigma << " gain " << i.gain << " offset " << i.offset << '\n';
+  }
+  return out.str();
+}
+
+Status parse_manifest(const std::string& text, SynthManifest& out) {
+  out = SynthManifest{};
+  std::istringstream in(text);
+  std::string line;
+  int number = 0;
+  bool header = false;
+  const auto bad = [&number](const std::string& why) {
+    return Status{StatusCode::kCorruptData, "manifest line " + std::to_string(number) + ": " + why};
+  };
+  while (std::getline(in, line)) {
+    ++number;
+    std::istringstream words(line);
+    std::string key;
+    if (!(words >> key) || key[0] == '#') continue;
+    if (!header) {
+      int version = 0;
+      if (key != "keygraph-synth" || !(words >> version) || version != 1)
+        return bad("expected 'keygraph-synth 1'");
+      header = true;
+      continue;
+    }
+    if (key == "seed") {
+      if (!(words >> out.seed)) return bad("bad seed");
+    } else if (key == "frame-size") {
+      if (!(words >> out.width >> out.height) || out.width < 1 || out.height < 1)
+        return bad("bad frame size");
+    } else if (key == "sign") {
+      SynthSign s;
+      if (!(words >> s.id >> s.name >> s.file >> s.width >> s.height) ||
+          s.id != static_cast<int>(out.signs.size()) || s.width < 1 || s.height < 1)
+        return bad("bad sign record (ids must count from 0)");
+      out.signs.push_back(s);
+    } else if (key == "frame") {
+      SynthFrameEntry f;
+      if (!(words >> f.file)) return bad("frame without a file");
+      for (std::string field; words >> field;) {
+        SynthFrameInfo& i = f.info;
+        bool ok = true;
+        if (field == "background") {
+          ok = static_cast<bool>(words >> f.background);
+        } else if (field == "sign") {
+          ok = static_cast<bool>(words >> i.sign) && i.sign >= -1 &&
+               i.sign < static_cast<int>(out.signs.size());
+        } else if (field == "corners") {
+          for (Point2f& c : i.corners) ok = ok && static_cast<bool>(words >> c.x >> c.y);
+        } else if (field == "homography") {
+          for (double& v : i.homography)
+            ok = ok && static_cast<bool>(words >> v) && std::isfinite(v);
+        } else if (field == "occluded") {
+          ok = static_cast<bool>(words >> i.occluded);
+        } else if (field == "blur") {
+          ok = static_cast<bool>(words >> i.blur_sigma);
+        } else if (field == "motion") {
+          ok = static_cast<bool>(words >> i.motion_blur);
+        } else if (field == "noise") {
+          ok = static_cast<bool>(words >> i.noise_sigma);
+        } else if (field == "gain") {
+          ok = static_cast<bool>(words >> i.gain);
+        } else if (field == "offset") {
+          ok = static_cast<bool>(words >> i.offset);
+        } else {
+          return bad("unknown field '" + field + "'");
+        }
+        if (!ok) return bad("bad value for " + field);
+      }
+      if (f.info.sign >= 0 && f.info.homography[8] == 0)
+        return bad("frame with a sign but no homography");
+      out.frames.push_back(f);
+    } else {
+      return bad("unknown record '" + key + "'");
+    }
+  }
+  if (!header)
+    return {StatusCode::kCorruptData, "manifest: empty or not a keygraph-synth manifest"};
+  if (out.signs.empty()) return {StatusCode::kCorruptData, "manifest: no signs"};
+  if (out.frames.empty()) return {StatusCode::kCorruptData, "manifest: no frames"};
+  return Status::ok();
+}
+
+Status read_manifest(const std::string& directory, SynthManifest& out) {
+  const std::string path = directory + "/manifest.txt";
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return {StatusCode::kNotFound, path + ": no such file (not a keygraph synth directory)"};
+  std::ostringstream text;
+  text << in.rdbuf();
+  Status s = parse_manifest(text.str(), out);
+  if (!s) return {s.code(), path + ": " + s.message()};
+  return Status::ok();
+}
+
+}  // namespace kg

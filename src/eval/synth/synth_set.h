@@ -1,0 +1,78 @@
+// The synthetic indoor-sign benchmark on disk: sign images, frames and a
+// plain-text manifest with each frame's ground truth.
+//
+//   DIR/manifest.txt
+//   DIR/signs/NN-name.png      the signs (models), BGR
+//   DIR/frames/NNNN.png        640x480 BGR frames
+//
+// manifest.txt, whitespace-separated, one record per line ('#' starts a
+// comment line):
+//   keygraph-synth 1
+//   seed S
+//   frame-size W H
+//   sign ID NAME FILE WIDTH HEIGHT
+//   frame FILE background NAME sign ID corners X0 Y0 X1 Y1 X2 Y2 X3 Y3
+//         homography H0..H8 occluded F blur SIGMA motion N noise SIGMA gain G offset O
+// A sign-free frame has sign -1 and no corners or homography. Corners are
+// the sign's corner pixel centres (clockwise from top-left) in the frame;
+// the homography maps sign pixels to frame pixels (row-major).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "builder/progress.h"
+#include "eval/synth/synth_frame.h"
+#include "keygraph/status.h"
+
+namespace kg {
+
+struct SynthSetOptions {
+  std::string directory;    // created; must not exist or be empty
+  std::string backgrounds;  // directory with opencv-doc's photos
+  std::uint64_t seed = 1;
+  int signs = 50;  // first N of the catalogue
+  int frames = 300;
+  double sign_free_fraction = 0.2;
+  SynthFrameOptions frame;
+};
+
+// The opencv-doc photos used as backgrounds (those present are used).
+const std::vector<std::string>& synth_background_names();
+
+struct SynthSign {
+  int id = 0;
+  std::string name, file;  // file relative to the set's directory
+  int width = 0, height = 0;
+};
+
+struct SynthFrameEntry {
+  std::string file, background;
+  SynthFrameInfo info;
+};
+
+struct SynthManifest {
+  std::uint64_t seed = 0;
+  int width = 0, height = 0;
+  std::vector<SynthSign> signs;
+  std::vector<SynthFrameEntry> frames;
+};
+
+// Renders the set in memory (no files): the signs and the frames.
+struct SynthSetImages {
+  std::vector<cv::Mat> signs, frames;
+};
+Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
+                        SynthSetImages& images, const ProgressFn& progress = {});
+
+// Renders and writes the set into options.directory, through a temporary
+// directory renamed into place (never half-written).
+Status write_synth_set(const SynthSetOptions& options, const ProgressFn& progress = {});
+
+std::string manifest_text(const SynthManifest& manifest);
+// Parses manifest text; errors name the line.
+Status parse_manifest(const std::string& text, SynthManifest& out);
+Status read_manifest(const std::string& directory, SynthManifest& out);
+
+}  // namespace kg

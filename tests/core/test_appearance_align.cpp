@@ -1,0 +1,218 @@
+// Photometric pose refinement (core/pose/appearance_align.h) on a real image:
+// box.png rendered into a real background under a known homography; the
+// aligner must bring a pose several pixels off back to the truth, under a
+// lighting change too, tell the right appearance from another one, and
+// allocate nothing once reserved.
+#include "core/pose/appearance_align.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+#include "support/alloc_counter.h"
+#include "support/test_data.h"
+
+namespace kg {
+namespace {
+
+constexpr int kAppearanceSize = 128;
+
+struct Scene {
+  cv::Mat model;       // the model image (model pixels)
+  cv::Mat appearance;  // model resampled by area to a 128 px long edge
+  float scale_x = 0.f, scale_y = 0.f;
+  cv::Mat frame;       // blurred frame holding the model
+  Homography truth{};  // model pixels -> frame pixels
+};
+
+Homography from_corners(const cv::Mat& model, const std::vector<cv::Point2f>& frame_corners) {
+  const float w = static_cast<float>(model.cols - 1), h = static_cast<float>(model.rows - 1);
+  const std::vector<cv::Point2f> src = {{0.f, 0.f}, {w, 0.f}, {w, h}, {0.f, h}};
+  const cv::Mat m = cv::getPerspectiveTransform(src, frame_corners);
+  Homography out{};
+  for (int i = 0; i < 9; ++i)
+    out[static_cast<std::size_t>(i)] = m.at<double>(i / 3, i % 3) / m.at<double>(2, 2);
+  return out;
+}
+
+cv::Mat to_mat(const Homography& h) {
+  cv::Mat m(3, 3, CV_64F);
+  for (int i = 0; i < 9; ++i) m.at<double>(i / 3, i % 3) = h[static_cast<std::size_t>(i)];
+  return m;
+}
+
+Scene make_scene(const std::vector<cv::Point2f>& corners) {
+  Scene s;
+  s.model = test::load_gray(test::opencv_data("box.png"));
+  cv::Mat background = test::load_gray(test::opencv_data("building.jpg"));
+  if (s.model.empty() || background.empty()) return s;
+  // As the index stores it: resampled by area to a given size, so each
+  // axis has its own scale.
+  const double factor = static_cast<double>(kAppearanceSize) / std::max(s.model.cols, s.model.rows);
+  const cv::Size size(static_cast<int>(std::lround(s.model.cols * factor)),
+                      static_cast<int>(std::lround(s.model.rows * factor)));
+  cv::resize(s.model, s.appearance, size, 0, 0, cv::INTER_AREA);
+  s.scale_x = static_cast<float>(s.appearance.cols) / static_cast<float>(s.model.cols);
+  s.scale_y = static_cast<float>(s.appearance.rows) / static_cast<float>(s.model.rows);
+  cv::resize(background, background, cv::Size(640, 480), 0, 0, cv::INTER_AREA);
+  s.truth = from_corners(s.model, corners);
+  cv::Mat frame = background.clone();
+  cv::warpPerspective(s.model, frame, to_mat(s.truth), frame.size(), cv::INTER_LINEAR,
+                      cv::BORDER_TRANSPARENT);
+  cv::GaussianBlur(frame, s.frame, cv::Size(0, 0), 1.0);
+  return s;
+}
+
+AppearanceImage image_of(const Scene& s) {
+  return {s.appearance.data, s.appearance.cols, s.appearance.rows, s.scale_x, s.scale_y};
+}
+
+double max_corner_error(const Scene& s, const Homography& h) {
+  const float w = static_cast<float>(s.model.cols - 1), hh = static_cast<float>(s.model.rows - 1);
+  const Point2f corners[4] = {{0.f, 0.f}, {w, 0.f}, {w, hh}, {0.f, hh}};
+  double worst = 0.0;
+  for (const Point2f& c : corners) {
+    const Point2f a = kg::apply(h, c), b = kg::apply(s.truth, c);
+    worst = std::max(worst, std::hypot(double{a.x - b.x}, double{a.y - b.y}));
+  }
+  return worst;
+}
+
+// The truth with each frame corner moved by `offsets`.
+Homography perturbed(const Scene& s, const std::vector<cv::Point2f>& corners,
+                     const std::vector<cv::Point2f>& offsets) {
+  std::vector<cv::Point2f> moved = corners;
+  for (std::size_t i = 0; i < moved.size(); ++i) moved[i] += offsets[i];
+  return from_corners(s.model, moved);
+}
+
+const std::vector<cv::Point2f> kCorners = {
+    {180.f, 120.f}, {430.f, 150.f}, {420.f, 330.f}, {170.f, 310.f}};
+const std::vector<cv::Point2f> kOffsets = {{6.f, -5.f}, {-7.f, 4.f}, {5.f, 7.f}, {-4.f, -6.f}};
+
+TEST(AppearanceAlign, BringsAPoseSeveralPixelsOffToSubPixel) {
+  const Scene s = make_scene(kCorners);
+  ASSERT_FALSE(s.frame.empty()) << "box.png or building.jpg missing";
+  Homography h = perturbed(s, kCorners, kOffsets);
+  ASSERT_GT(max_corner_error(s, h), 6.0);
+  AppearanceAligner aligner;
+  aligner.reserve(kAppearanceSize * kAppearanceSize);
+  const AppearanceFit fit = aligner.align(image_of(s), test::view(s.frame), h);
+  EXPECT_TRUE(fit.measured);
+  EXPECT_TRUE(fit.aligned);
+  EXPECT_LT(max_corner_error(s, h), 0.5);
+  EXPECT_GT(fit.ncc, 0.95);
+  EXPECT_GT(fit.ncc, fit.ncc_before);
+}
+
+TEST(AppearanceAlign, IgnoresGainAndBias) {
+  Scene s = make_scene(kCorners);
+  ASSERT_FALSE(s.frame.empty());
+  s.frame.convertTo(s.frame, CV_8U, 0.45, 70.0);  // darker, low contrast, lifted
+  Homography h = perturbed(s, kCorners, kOffsets);
+  AppearanceAligner aligner;
+  aligner.reserve(kAppearanceSize * kAppearanceSize);
+  const AppearanceFit fit = aligner.align(image_of(s), test::view(s.frame), h);
+  EXPECT_TRUE(fit.aligned);
+  EXPECT_LT(max_corner_error(s, h), 0.6);
+  EXPECT_GT(fit.ncc, 0.9);
+}
+
+TEST(AppearanceAlign, AnotherImageAtTheSamePoseCorrelatesPoorly) {
+  const Scene s = make_scene(kCorners);
+  ASSERT_FALSE(s.frame.empty());
+  // Another object's appearance of the same size: the right pose cannot
+  // make it look like the frame.
+  cv::Mat other = test::load_gray(test::opencv_data("graf1.png"));
+  ASSERT_FALSE(other.empty());
+  cv::resize(other, other, s.appearance.size(), 0, 0, cv::INTER_AREA);
+  AppearanceAligner aligner;
+  aligner.reserve(kAppearanceSize * kAppearanceSize);
+  Homography right = s.truth, wrong = s.truth;
+  const AppearanceFit fit_right = aligner.align(image_of(s), test::view(s.frame), right);
+  const AppearanceFit fit_wrong = aligner.align(
+      {other.data, other.cols, other.rows, s.scale_x, s.scale_y}, test::view(s.frame), wrong);
+  ASSERT_TRUE(fit_right.measured);
+  ASSERT_TRUE(fit_wrong.measured);
+  EXPECT_GT(fit_right.ncc, 0.95);
+  EXPECT_LT(fit_wrong.ncc, 0.4);
+}
+
+TEST(AppearanceAlign, LeavesAPoseMostlyOutsideTheFrameAlone) {
+  const std::vector<cv::Point2f> corners = {
+      {-300.f, 100.f}, {-50.f, 120.f}, {-60.f, 300.f}, {-310.f, 290.f}};
+  const Scene s = make_scene(kCorners);
+  ASSERT_FALSE(s.frame.empty());
+  Homography h = from_corners(s.model, corners);
+  const Homography before = h;
+  AppearanceAligner aligner;
+  aligner.reserve(kAppearanceSize * kAppearanceSize);
+  const AppearanceFit fit = aligner.align(image_of(s), test::view(s.frame), h);
+  EXPECT_FALSE(fit.measured);
+  EXPECT_FALSE(fit.aligned);
+  EXPECT_EQ(h, before);
+}
+
+TEST(AppearanceAlign, RefusesAnAppearanceLargerThanReserved) {
+  const Scene s = make_scene(kCorners);
+  ASSERT_FALSE(s.frame.empty());
+  Homography h = perturbed(s, kCorners, kOffsets);
+  const Homography before = h;
+  AppearanceAligner aligner;
+  aligner.reserve(64 * 64);
+  const AppearanceFit fit = aligner.align(image_of(s), test::view(s.frame), h);
+  EXPECT_FALSE(fit.measured);
+  EXPECT_FALSE(fit.aligned);
+  EXPECT_EQ(h, before);
+}
+
+// A model 60 px wide in the frame, half its appearance's size: scored at
+// the half level, it still correlates like itself.
+TEST(AppearanceAlign, ASmallInstanceIsScoredAtItsOwnResolution) {
+  const std::vector<cv::Point2f> corners = {
+      {300.f, 200.f}, {360.f, 206.f}, {358.f, 247.f}, {298.f, 242.f}};
+  const Scene s = make_scene(corners);
+  ASSERT_FALSE(s.frame.empty());
+  Homography h = s.truth;
+  AppearanceAligner aligner;
+  aligner.reserve(kAppearanceSize * kAppearanceSize);
+  const AppearanceFit fit = aligner.align(image_of(s), test::view(s.frame), h);
+  ASSERT_TRUE(fit.measured);
+  EXPECT_GT(fit.ncc, 0.85);
+  EXPECT_LT(max_corner_error(s, h), 1.0);
+}
+
+TEST(AppearanceAlign, ADegeneratePoseIsNotMeasured) {
+  const Scene s = make_scene(kCorners);
+  ASSERT_FALSE(s.frame.empty());
+  AppearanceAligner aligner;
+  aligner.reserve(kAppearanceSize * kAppearanceSize);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const Homography& bad : {Homography{nan, 0, 0, 0, 1, 0, 0, 0, 1},
+                                Homography{1, 0, inf, 0, 1, 0, 0, 0, 1}, Homography{}}) {
+    Homography h = bad;
+    const AppearanceFit fit = aligner.align(image_of(s), test::view(s.frame), h);
+    EXPECT_FALSE(fit.measured);
+    EXPECT_FALSE(fit.aligned);
+  }
+}
+
+TEST(AppearanceAlign, AllocatesNothingOnceReserved) {
+  const Scene s = make_scene(kCorners);
+  ASSERT_FALSE(s.frame.empty());
+  AppearanceAligner aligner;
+  aligner.reserve(kAppearanceSize * kAppearanceSize);
+  Homography h = perturbed(s, kCorners, kOffsets);
+  test::AllocationCounter counter;
+  const AppearanceFit fit = aligner.align(image_of(s), test::view(s.frame), h);
+  EXPECT_EQ(counter.count(), 0);
+  EXPECT_TRUE(fit.aligned);
+}
+
+}  // namespace
+}  // namespace kg

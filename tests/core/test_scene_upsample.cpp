@@ -1,0 +1,249 @@
+// KeypointParams::scene_upsample: the 2x upsampler's pixels and pose map,
+// and a small box found only with the frame upsampled, its pose mapped back
+// to frame pixels within a few pixels of an independent reference.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+#include "builder/desktop_detect.h"
+#include "core/image/upsample.h"
+#include "core/index/index_format.h"
+#include "core/pose/confidence.h"
+#include "support/opencv_scenes.h"
+#include "support/test_data.h"
+
+namespace kg {
+namespace {
+
+TEST(Upsample2x, WeightsAndBorders) {
+  // One row of 0, 16, 32 and a second of 160s: each output pixel is 9/16
+  // of its source pixel, 3/16 of each neighbour (borders replicated) and
+  // 1/16 of the diagonal one.
+  const std::uint8_t src[] = {0, 16, 32, 160, 160, 160};
+  Plane<std::uint8_t> dst;
+  upsample2x(ImageView(src, 3, 2), dst);
+  ASSERT_EQ(dst.width(), 6);
+  ASSERT_EQ(dst.height(), 4);
+  // Row 0 lies a quarter pixel above source row 0: the replicated border.
+  const int row0[] = {0, 4, 12, 20, 28, 32};
+  for (int x = 0; x < 6; ++x) EXPECT_EQ(dst.at(x, 0), row0[x]) << x;
+  // Row 1: 3/4 of source row 0, 1/4 of row 1 (160).
+  for (int x = 0; x < 6; ++x) EXPECT_EQ(dst.at(x, 1), (3 * row0[x] + 160 + 2) / 4) << x;
+  for (int x = 0; x < 6; ++x) EXPECT_EQ(dst.at(x, 3), 160) << x;
+}
+
+TEST(Upsample2x, HomographyMapsBackToFramePixels) {
+  // Frame pixel x lies at upsampled 2x + 0.5: a pose into upsampled pixels,
+  // mapped back, sends each model point where the pose sends it, halved.
+  const Homography up = {1.7, 0.2, 31.0, -0.1, 1.9, 12.5, 1e-4, -2e-4, 1.0};
+  const Homography frame = homography_from_upsampled(up);
+  for (const Point2f p : {Point2f{0.f, 0.f}, Point2f{100.f, 40.f}, Point2f{-20.f, 300.f}}) {
+    const Point2f u = apply(up, p), f = apply(frame, p);
+    EXPECT_NEAR(f.x, from_upsampled(u.x), 1e-3);
+    EXPECT_NEAR(f.y, from_upsampled(u.y), 1e-3);
+    EXPECT_NEAR(to_upsampled(f.x), u.x, 2e-3);
+  }
+}
+
+TEST(SceneUpsampleParam, RangeAndOlderFiles) {
+  Params p;
+  EXPECT_TRUE(format::validate_params(p));
+  for (int bad : {0, 4, -1}) {
+    p.keypoints.scene_upsample = bad;
+    const Status s = format::validate_params(p);
+    EXPECT_FALSE(s) << bad;
+    EXPECT_NE(s.message().find("scene_upsample"), std::string::npos) << s.message();
+  }
+  // A block written before the parameter holds 0 there: read as off.
+  p.keypoints.scene_upsample = 0;
+  std::uint8_t block[format::kParamsSize];
+  format::serialize_params(p, block);
+  Params read;
+  read.keypoints.scene_upsample = 2;
+  ASSERT_TRUE(format::parse_params(block, sizeof block, read));
+  EXPECT_EQ(read.keypoints.scene_upsample, 1);
+  p.keypoints.scene_upsample = 2;
+  format::serialize_params(p, block);
+  ASSERT_TRUE(format::parse_params(block, sizeof block, read));
+  EXPECT_EQ(read.keypoints.scene_upsample, 2);
+}
+
+// box_in_scene.png resized by `scale` (area averaging), and the SIFT
+// reference pose of box.png in the full-size scene mapped into it.
+struct SmallScene {
+  cv::Mat image;
+  Homography truth{};
+};
+SmallScene small_box_scene(const cv::Mat& box, double scale) {
+  const cv::Mat full = test::load_gray(test::opencv_data("box_in_scene.png"));
+  SmallScene out;
+  if (full.empty()) return out;
+  cv::resize(full, out.image, cv::Size(), scale, scale, cv::INTER_AREA);
+  const Homography h = test::sift_reference(box, full);
+  // Pixel centres: x' = (x + 0.5) s - 0.5, taken exactly per axis.
+  const double sx = static_cast<double>(out.image.cols) / full.cols;
+  const double sy = static_cast<double>(out.image.rows) / full.rows;
+  for (int c = 0; c < 3; ++c) {
+    out.truth[c] = sx * h[c] + (0.5 * sx - 0.5) * h[6 + c];
+    out.truth[3 + c] = sy * h[3 + c] + (0.5 * sy - 0.5) * h[6 + c];
+    out.truth[6 + c] = h[6 + c];
+  }
+  return out;
+}
+
+class SceneUpsample : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    box_ = new cv::Mat(test::load_gray(test::opencv_data("box.png")));
+    ASSERT_FALSE(box_->empty());
+    off_ = new test::InMemoryIndex;
+    on_ = new test::InMemoryIndex;
+    Params params;
+    ASSERT_TRUE(test::build_in_memory({{"box", *box_}}, params, *off_));
+    params.keypoints.scene_upsample = 2;
+    ASSERT_TRUE(test::build_in_memory({{"box", *box_}}, params, *on_));
+    both_ = new test::InMemoryIndex;
+    params.keypoints.scene_upsample = 3;
+    ASSERT_TRUE(test::build_in_memory({{"box", *box_}}, params, *both_));
+  }
+  static void TearDownTestSuite() {
+    delete both_;
+    delete on_;
+    delete off_;
+    delete box_;
+  }
+  static cv::Mat* box_;
+  static test::InMemoryIndex* off_;
+  static test::InMemoryIndex* on_;
+  static test::InMemoryIndex* both_;  // scene_upsample 3: the frame and the upsampled frame
+};
+cv::Mat* SceneUpsample::box_ = nullptr;
+test::InMemoryIndex* SceneUpsample::off_ = nullptr;
+test::InMemoryIndex* SceneUpsample::on_ = nullptr;
+test::InMemoryIndex* SceneUpsample::both_ = nullptr;
+
+TEST_F(SceneUpsample, ParameterIsStored) {
+  EXPECT_EQ(off_->index.params().keypoints.scene_upsample, 1);
+  EXPECT_EQ(on_->index.params().keypoints.scene_upsample, 2);
+}
+
+// At 0.35 of its size the box is about 70 px wide in a 179x134 frame: too
+// few keypoints at the frame's own resolution, found on the upsampled one.
+TEST_F(SceneUpsample, SmallBoxFoundOnlyUpsampled) {
+  const SmallScene scene = small_box_scene(*box_, 0.35);
+  ASSERT_FALSE(scene.image.empty());
+  DetectionList off, on;
+  DesktopDetector plain(off_->index), upsampled(on_->index);
+  ASSERT_TRUE(plain.detect(scene.image, off).is_ok());
+  ASSERT_TRUE(upsampled.detect(scene.image, on).is_ok());
+  EXPECT_TRUE(off.empty()) << "found without upsampling: re-measure what the option buys";
+  ASSERT_EQ(on.size(), 1u);
+  const double err = test::max_corner_error(on[0], scene.truth, on_->index.model(0));
+  EXPECT_LT(err, 3.0) << "against SIFT + RANSAC on the full-size scene";
+  std::printf("box at 0.35 (%dx%d frame): upsampled, max corner error %.2f px, %d inliers\n",
+              scene.image.cols, scene.image.rows, err, on[0].inliers);
+}
+
+// Where both find the box, the poses agree: the map back to frame pixels
+// has no offset.
+TEST_F(SceneUpsample, SamePoseAsWithoutWhereBothFind) {
+  const SmallScene scene = small_box_scene(*box_, 0.6);
+  ASSERT_FALSE(scene.image.empty());
+  DetectionList off, on;
+  DesktopDetector plain(off_->index), upsampled(on_->index);
+  ASSERT_TRUE(plain.detect(scene.image, off).is_ok());
+  ASSERT_TRUE(upsampled.detect(scene.image, on).is_ok());
+  ASSERT_EQ(off.size(), 1u);
+  ASSERT_EQ(on.size(), 1u);
+  EXPECT_GT(on[0].inliers, off[0].inliers);
+  const ModelInfo& model = on_->index.model(0);
+  EXPECT_LT(test::max_corner_error(on[0], scene.truth, model), 3.0);
+  EXPECT_LT(test::max_corner_error(off[0], scene.truth, model), 3.0);
+  // The confidence is that of the support as reported, in frame pixels
+  // (its model weighs the reprojection error, which the map halves).
+  EXPECT_GT(on[0].rms_error, 0.0);
+  EXPECT_DOUBLE_EQ(on[0].confidence, detection_confidence(on[0]));
+  // Sampled keypoints are reported in frame pixels too.
+  Detector core(on_->index);
+  ASSERT_TRUE(core.detect(test::view(scene.image), on).is_ok());
+  ASSERT_FALSE(core.last_keypoints().empty());
+  for (const Keypoint& k : core.last_keypoints()) {
+    EXPECT_GE(k.x, -0.5f);
+    EXPECT_LE(k.x, static_cast<float>(scene.image.cols) - 0.5f);
+    EXPECT_GE(k.y, -0.5f);
+    EXPECT_LE(k.y, static_cast<float>(scene.image.rows) - 0.5f);
+  }
+}
+
+// Caller keypoints (in frame pixels) go through the same map: the box
+// found from keypoints the core's own Hessian found in the frame.
+TEST_F(SceneUpsample, CallerKeypointsAreMappedToo) {
+  const SmallScene scene = small_box_scene(*box_, 0.6);
+  ASSERT_FALSE(scene.image.empty());
+  Detector core(on_->index);
+  DetectionList found;
+  ASSERT_TRUE(core.detect(test::view(scene.image), found).is_ok());
+  ASSERT_EQ(found.size(), 1u);
+  const std::vector<Keypoint> sampled(core.last_keypoints().begin(), core.last_keypoints().end());
+  DetectionList again;
+  ASSERT_TRUE(
+      core.detect(test::view(scene.image), sampled.data(), static_cast<int>(sampled.size()), again)
+          .is_ok());
+  ASSERT_EQ(again.size(), 1u);
+  EXPECT_LT(test::max_corner_error(again[0], scene.truth, on_->index.model(0)), 3.0);
+}
+
+// Both passes (3): the small box as upsampled finds it, and where both
+// passes find the box, one detection of it.
+TEST_F(SceneUpsample, BothPassesKeepOneDetectionPerInstance) {
+  for (const double scale : {0.35, 0.6}) {
+    const SmallScene scene = small_box_scene(*box_, scale);
+    ASSERT_FALSE(scene.image.empty());
+    DetectionList found;
+    DesktopDetector detector(both_->index);
+    ASSERT_TRUE(detector.detect(scene.image, found).is_ok());
+    ASSERT_EQ(found.size(), 1u) << "scale " << scale;
+    EXPECT_LT(test::max_corner_error(found[0], scene.truth, both_->index.model(0)), 3.0)
+        << "scale " << scale;
+  }
+}
+
+// Both passes together keep to Limits::max_detections: two boxes side by
+// side are both found with the default limits, one with max_detections 1.
+TEST_F(SceneUpsample, BothPassesKeepToMaxDetections) {
+  const SmallScene scene = small_box_scene(*box_, 0.6);
+  ASSERT_FALSE(scene.image.empty());
+  cv::Mat two;
+  cv::hconcat(scene.image, scene.image, two);
+  DetectionList found;
+  Detector all(both_->index, Limits{}.for_frame(two.cols, two.rows));
+  ASSERT_TRUE(all.detect(test::view(two), found).is_ok());
+  EXPECT_EQ(found.size(), 2u);
+  Limits one = Limits{}.for_frame(two.cols, two.rows);
+  one.max_detections = 1;
+  Detector first(both_->index, one);
+  ASSERT_TRUE(first.detect(test::view(two), found).is_ok());
+  EXPECT_EQ(found.size(), 1u);
+  EXPECT_TRUE(first.stats().truncated_detections);
+}
+
+// The upsampled frame must fit the largest side: larger limits are refused
+// with a status, not a failed allocation.
+TEST_F(SceneUpsample, LimitsBeyondHalfTheLargestSideAreRefused) {
+  const Limits wide = Limits{}.for_frame(Limits::kMaxSide / 2 + 1, 64);
+  EXPECT_EQ(Detector::workspace_bytes(on_->index, wide), 0u);
+  Detector detector(on_->index, wide);
+  EXPECT_FALSE(detector.status());
+  EXPECT_NE(detector.status().message().find("upsampled 2x"), std::string::npos)
+      << detector.status().message();
+  EXPECT_GT(Detector::workspace_bytes(off_->index, wide), 0u) << "refused without upsampling";
+}
+
+}  // namespace
+}  // namespace kg
