@@ -47,6 +47,7 @@
 #include "builder/param_overrides.h"
 #include "core/description/arc_attributes.h"
 #include "core/description/arc_descriptor.h"
+#include "core/description/arc_types.h"
 #include "core/image/blur.h"
 #include "core/keygraphs/delaunay.h"
 #include "core/keygraphs/keygraph.h"

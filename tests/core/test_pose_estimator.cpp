@@ -12,6 +12,7 @@
 
 #include "builder/in_memory_index.h"
 #include "builder/model_builder.h"
+#include "core/description/arc_types.h"
 #include "core/pose/point_grid.h"
 #include "core/pose/pose.h"
 #include "core/pose/ransac.h"

@@ -25,6 +25,7 @@
 #include "builder/model_builder.h"
 #include "core/description/arc_attributes.h"
 #include "core/description/arc_descriptor.h"
+#include "core/description/arc_types.h"
 #include "core/image/blur.h"
 #include "core/keygraphs/delaunay.h"
 #include "core/keygraphs/keygraph.h"

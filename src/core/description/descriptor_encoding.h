@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "core/description/arc_types.h"
 #include "core/index/param_names.h"
 #include "keygraph/params.h"
 #include "keygraph/types.h"

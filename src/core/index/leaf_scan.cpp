@@ -1,4 +1,5 @@
 #include "core/index/leaf_scan.h"
+#include "core/description/arc_types.h"
 
 #if defined(__ARM_NEON) || defined(__ARM_NEON__)
 #include <arm_neon.h>

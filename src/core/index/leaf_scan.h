@@ -8,6 +8,7 @@
 
 #include <cstdint>
 
+#include "core/description/arc_types.h"
 #include "keygraph/types.h"
 
 namespace kg {

@@ -7,8 +7,10 @@
 
 #include "core/description/arc_attributes.h"
 #include "core/description/arc_descriptor.h"
+#include "core/description/arc_types.h"
 #include "core/description/descriptor_encoding.h"
 #include "core/description/vertex_descriptor.h"
+#include "core/index/index_internals.h"
 #include "core/pose/homography.h"
 #include "core/sampling/sampling.h"
 #include "core/selection/arc_keys.h"
@@ -82,22 +84,25 @@ ArcSearch::ArcSearch(const ModelIndex& index, int max_leaves) {
   const int depth = index.tree_depth();
   switch (encoding_) {
     case DescriptorEncoding::kFloat32:
-      points_f32_ = index.tree_points_f32();
-      f32_ = ArcTreeView(index.tree_points_f32(), nullptr, n, index.tree_nodes_f32(), depth,
-                         index.leaf_bounds_f32());
+      points_f32_ = IndexInternals::tree_points_f32(index);
+      f32_ = ArcTreeView(IndexInternals::tree_points_f32(index), nullptr, n,
+                         IndexInternals::tree_nodes_f32(index), depth,
+                         IndexInternals::leaf_bounds_f32(index));
       break;
     case DescriptorEncoding::kInt16:
-      points_i16_ = index.tree_points_i16();
-      i16_ = ArcTreeView16(index.tree_points_i16(), nullptr, n, index.tree_nodes_int(), depth,
-                           index.leaf_bounds_i16());
+      points_i16_ = IndexInternals::tree_points_i16(index);
+      i16_ = ArcTreeView16(IndexInternals::tree_points_i16(index), nullptr, n,
+                           IndexInternals::tree_nodes_int(index), depth,
+                           IndexInternals::leaf_bounds_i16(index));
       if (!scaled_radius2(radius, encoding_, std::numeric_limits<ArcTreeView16::Dist>::max(),
                           radius2_scaled_))
         radius2_scaled_ = 0;  // unreachable: validate_params checked the scaled radius
       break;
     case DescriptorEncoding::kInt8:
-      points_i8_ = index.tree_points_i8();
-      i8_ = ArcTreeView8(index.tree_points_i8(), nullptr, n, index.tree_nodes_int(), depth,
-                         index.leaf_bounds_i8());
+      points_i8_ = IndexInternals::tree_points_i8(index);
+      i8_ = ArcTreeView8(IndexInternals::tree_points_i8(index), nullptr, n,
+                         IndexInternals::tree_nodes_int(index), depth,
+                         IndexInternals::leaf_bounds_i8(index));
       if (!scaled_radius2(radius, encoding_, std::numeric_limits<ArcTreeView8::Dist>::max(),
                           radius2_scaled_))
         radius2_scaled_ = 0;
@@ -293,7 +298,7 @@ Selector::ArcList Selector::lookup(const SelectionInput& in, int e, const Limits
   pool_used_ += n;
   std::uint64_t* keys = pool_.data() + begin_[e];
   const std::uint32_t* slots = found_.data();
-  for (std::uint32_t i = 0; i < n; ++i) in.index->prefetch_arc(slots[i]);
+  for (std::uint32_t i = 0; i < n; ++i) IndexInternals::prefetch_arc(*in.index, slots[i]);
   for (std::uint32_t i = 0; i < n; ++i) {
     const ModelArc arc = in.index->arc(slots[i]);
     keys[i] = arc_key(arc.from, arc.to);

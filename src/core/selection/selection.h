@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/description/arc_types.h"
 #include "core/index/kdtree.h"
 #include "core/keygraphs/delaunay.h"
 #include "core/keygraphs/keygraph.h"
