@@ -76,6 +76,10 @@ struct DetectStats {
   long long completion_clockwise = 0;
   long long completion_plausible = 0;
   long long completion_closed = 0;
+  // The keytuple join's first cut (a semi-join on the keypoints that can
+  // close a circuit): model arcs it received from the searches, and kept.
+  long long join_arcs_in = 0;
+  long long join_arcs_kept = 0;
   bool truncated_keypoints = false;
   bool truncated_arc_matches = false;
   bool truncated_correspondences = false;

@@ -11,7 +11,7 @@
 #include <limits>
 
 #include "core/description/arc_types.h"
-#include "core/index/param_names.h"
+#include "core/params/param_names.h"
 #include "keygraph/params.h"
 #include "keygraph/types.h"
 
