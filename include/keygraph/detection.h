@@ -44,7 +44,7 @@ struct Detection {
   // Estimated probability, in [0, 1], that the detection is right (the right
   // model, every corner within 10 px): a logistic model of the support
   // above, fitted on the sign benchmark (core/pose/confidence.h). Threshold it to
-  // trade detections for fewer false ones (docs/RESULTS.md, "Confidence").
+  // trade detections for fewer false ones (docs/RESULTS.md, "Detection confidence").
   double confidence = 0.0;
   int ransac_iterations = 0;
 };

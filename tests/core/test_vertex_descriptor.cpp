@@ -124,7 +124,8 @@ void report(const char* name, const PairDistances& d) {
                 100.0 * d.fraction_true_below(t), 100.0 * d.fraction_random_below(t));
 }
 
-// Measured with the default threshold 1.0 (params.h): graf 84 % true, 35 %
+// Measured with the default threshold 1.0 (docs/RESULTS.md, "Why each
+// default"): graf 84 % true, 35 %
 // random; box 76 % true, 35 % random. The bounds leave room for small
 // numeric differences across OpenCV builds.
 TEST(SiftVertexPairs, GrafTruePairsBelowThresholdRandomAbove) {

@@ -1,7 +1,7 @@
 // A detection's confidence: the estimated probability that it is right (the
 // right model, every corner within 10 px of the truth), from the support
 // the pose estimator measured. A logistic model, fitted offline on the sign
-// benchmark's tuning frames (docs/RESULTS.md, "Confidence"), so that a user
+// benchmark's tuning frames (docs/RESULTS.md, "Detection confidence"), so that a user
 // can threshold one number instead of four.
 #pragma once
 
