@@ -11,6 +11,12 @@
 
 namespace kg {
 
+// Copies `bytes` (a serialised index) into 64-byte aligned storage, which
+// `storage` then owns, and views it as `out` (ModelIndex::view's alignment
+// rule); `out` is valid while `storage` lives.
+Status view_aligned_copy(const std::vector<std::uint8_t>& bytes,
+                         std::unique_ptr<std::uint8_t[]>& storage, ModelIndex& out);
+
 class InMemoryIndex {
  public:
   Status build(const std::vector<BuiltModel>& models, const Params& params);

@@ -22,17 +22,6 @@ namespace kg {
 
 namespace {
 
-template <class T>
-constexpr DescriptorEncoding encoding_of() {
-  if constexpr (std::is_same_v<T, std::int16_t>) {
-    return DescriptorEncoding::kInt16;
-  } else if constexpr (std::is_same_v<T, std::int8_t>) {
-    return DescriptorEncoding::kInt8;
-  } else {
-    return DescriptorEncoding::kFloat32;
-  }
-}
-
 // The search tree over `descriptors` in the domain of T: quantised (int16,
 // int8) or as computed (float), the arcs permuted into tree order.
 template <class T>

@@ -21,6 +21,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "builder/image_io.h"
+#include "builder/in_memory_index.h"
 #include "builder/index_writer.h"
 #include "builder/model_builder.h"
 #include "builder/model_quality.h"
@@ -289,13 +290,9 @@ int cmd_build(const Args& args) {
   std::vector<std::uint8_t> bytes;
   if (Status s = serialize_index(models, options.params, bytes, &quality); !s)
     return fail("build: " + s.message());
-  const std::unique_ptr<std::uint8_t[]> storage(new std::uint8_t[bytes.size() + 64]);
-  std::uint8_t* aligned =
-      storage.get() + (64 - reinterpret_cast<std::uintptr_t>(storage.get()) % 64) % 64;
-  std::copy(bytes.begin(), bytes.end(), aligned);
+  std::unique_ptr<std::uint8_t[]> storage;
   ModelIndex index;
-  if (Status s = ModelIndex::view(aligned, bytes.size(), index); !s)
-    return fail("build: " + s.message());
+  if (Status s = view_aligned_copy(bytes, storage, index); !s) return fail("build: " + s.message());
   print_quality_report(index, false, stdout);
   if (!draw_dir.empty()) {
     if (Status s = draw_models(draw_dir, models, grays); !s) return fail("build: " + s.message());

@@ -18,10 +18,10 @@
 
 #include <flann/flann.hpp>
 
-#include "bench/search_data.h"
 #include "core/description/arc_types.h"
 #include "core/index/kdtree.h"
 #include "core/support/rng.h"
+#include "support/search_data.h"
 
 namespace kg {
 namespace {
@@ -172,7 +172,7 @@ int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::AddCustomContext("descriptors",
-                              "6-D unit, 20 clusters (tests/bench/search_data.h); 1024 queries "
+                              "6-D unit, 20 clusters (tests/support/search_data.h); 1024 queries "
                               "from the same clusters; radius 0.3, k 8; exact search");
   const struct {
     const char* name;

@@ -17,6 +17,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "builder/desktop_detect.h"
+#include "builder/in_memory_index.h"
 #include "builder/index_writer.h"
 #include "builder/model_builder.h"
 #include "builder/model_quality.h"
@@ -50,11 +51,7 @@ void build_all(const std::vector<std::string>& names, const std::vector<cv::Mat>
   std::vector<std::uint8_t> bytes;
   s = serialize_index(out.models, params, bytes, &out.quality);
   ASSERT_TRUE(s) << s.message();
-  out.storage.reset(new std::uint8_t[bytes.size() + 64]);
-  std::uint8_t* aligned =
-      out.storage.get() + (64 - reinterpret_cast<std::uintptr_t>(out.storage.get()) % 64) % 64;
-  std::memcpy(aligned, bytes.data(), bytes.size());
-  s = ModelIndex::view(aligned, bytes.size(), out.index);
+  s = view_aligned_copy(bytes, out.storage, out.index);
   ASSERT_TRUE(s) << s.message();
   ASSERT_TRUE(out.index.has_quality());
 }

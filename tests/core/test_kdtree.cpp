@@ -21,28 +21,10 @@
 #include "core/index/leaf_scan.h"
 #include "core/support/rng.h"
 #include "support/alloc_counter.h"
+#include "support/search_data.h"
 
 namespace kg {
 namespace {
-
-// Unit-norm descriptors clustered like real ones (a few dense directions).
-std::vector<ArcDescriptor> random_descriptors(Rng& rng, std::uint32_t n) {
-  std::vector<ArcDescriptor> centres(20);
-  for (auto& c : centres) {
-    for (float& v : c) v = static_cast<float>(rng.uniform01() * 2.0 - 1.0);
-  }
-  std::vector<ArcDescriptor> out(n);
-  for (auto& d : out) {
-    const ArcDescriptor& c = centres[rng.uniform(static_cast<std::uint32_t>(centres.size()))];
-    float norm = 0.f;
-    for (int i = 0; i < kDescriptorSize; ++i) {
-      d[i] = c[i] + static_cast<float>(rng.uniform01() - 0.5) * 0.6f;
-      norm += d[i] * d[i];
-    }
-    for (float& v : d) v /= std::sqrt(norm);
-  }
-  return out;
-}
 
 // Descriptors in the domain of T: as computed for float, quantised otherwise.
 template <class T>
@@ -73,17 +55,6 @@ KdPoint<T, kSearchDims> with_attributes(Rng& rng, const ArcDescriptor& d) {
     return p;
   } else {
     return quantise<T>(p);
-  }
-}
-
-template <class T>
-constexpr DescriptorEncoding encoding_of() {
-  if constexpr (std::is_same_v<T, std::int16_t>) {
-    return DescriptorEncoding::kInt16;
-  } else if constexpr (std::is_same_v<T, std::int8_t>) {
-    return DescriptorEncoding::kInt8;
-  } else {
-    return DescriptorEncoding::kFloat32;
   }
 }
 
@@ -135,7 +106,7 @@ TYPED_TEST(KdTreeTyped, LayoutIsCompleteAndAPermutation) {
   using T = TypeParam;
   Rng rng(1);
   for (std::uint32_t n : {0u, 1u, 7u, 8u, 9u, 100u, 1000u, 4097u}) {
-    const auto data = encode_all<T>(random_descriptors(rng, n));
+    const auto data = encode_all<T>(test::clustered_descriptors(rng, n));
     const Tree<T> t = make_tree<T>(data);
     EXPECT_EQ(t.nodes.size(), (std::size_t{1} << kdtree_depth(n)) - 1);
     std::vector<std::uint32_t> sorted = t.ids;
@@ -176,11 +147,11 @@ TYPED_TEST(KdTreeTyped, RadiusSearchEqualsBruteForce) {
   using T = TypeParam;
   Rng rng(2);
   for (std::uint32_t n : {1u, 50u, 3000u, 20000u}) {
-    const auto data = encode_all<T>(random_descriptors(rng, n));
+    const auto data = encode_all<T>(test::clustered_descriptors(rng, n));
     const Tree<T> t = make_tree<T>(data);
     std::vector<std::uint32_t> out(n + 1);
     for (int q = 0; q < 100; ++q) {
-      const KdPoint<T> query = encode<T>(random_descriptors(rng, 1)[0]);
+      const KdPoint<T> query = encode<T>(test::clustered_descriptors(rng, 1)[0]);
       for (float r : {0.1f, 0.3f, 0.5f}) {
         const auto r2 = radius2_of<T>(r);
         std::vector<std::uint32_t> expected, expected_slots;
@@ -213,7 +184,8 @@ TYPED_TEST(KdTreeTyped, RadiusAndBoxSearchEqualsBruteForce) {
   auto attributed = [&](const ArcDescriptor& d) { return with_attributes<T>(rng, d); };
   for (std::uint32_t n : {1u, 70u, 5000u, 20000u}) {
     std::vector<Point> data;
-    for (const ArcDescriptor& d : random_descriptors(rng, n)) data.push_back(attributed(d));
+    for (const ArcDescriptor& d : test::clustered_descriptors(rng, n))
+      data.push_back(attributed(d));
     std::vector<Point> points;
     std::vector<std::uint32_t> ids;
     std::vector<typename KdTraits<T>::Node> nodes;
@@ -228,7 +200,7 @@ TYPED_TEST(KdTreeTyped, RadiusAndBoxSearchEqualsBruteForce) {
     std::vector<std::uint32_t> out(n + 1);
     std::size_t boxed = 0, unboxed = 0;
     for (int q = 0; q < 60; ++q) {
-      const Point query = attributed(random_descriptors(rng, 1)[0]);
+      const Point query = attributed(test::clustered_descriptors(rng, 1)[0]);
       const auto r2 = radius2_of<T>(0.4f);
       const auto box = static_cast<Dist>(
           std::is_same_v<T, float> ? 0.05 : 0.05 * encoding_scale(encoding_of<T>()));
@@ -266,7 +238,7 @@ TYPED_TEST(KdTreeTyped, LeafBoundsExactAndApproximateSearch) {
   auto attributed = [&](const ArcDescriptor& d) { return with_attributes<T>(rng, d); };
   const std::uint32_t n = 20000;
   std::vector<Point> data;
-  for (const ArcDescriptor& d : random_descriptors(rng, n)) data.push_back(attributed(d));
+  for (const ArcDescriptor& d : test::clustered_descriptors(rng, n)) data.push_back(attributed(d));
   std::vector<Point> points, bounds;
   std::vector<std::uint32_t> ids;
   std::vector<typename KdTraits<T>::Node> nodes;
@@ -289,7 +261,7 @@ TYPED_TEST(KdTreeTyped, LeafBoundsExactAndApproximateSearch) {
   };
   std::size_t exact_total = 0, approximate_total = 0;
   for (int q = 0; q < 60; ++q) {
-    const Point query = attributed(random_descriptors(rng, 1)[0]);
+    const Point query = attributed(test::clustered_descriptors(rng, 1)[0]);
     const auto exact = sorted(a, plain.radius_search(query, r2, box, a.data(), cap));
     ASSERT_EQ(sorted(b, bounded.radius_search(query, r2, box, b.data(), cap)), exact) << q;
     const int all_leaves = 1 << depth;
@@ -312,7 +284,7 @@ TYPED_TEST(KdTreeTyped, LeafBoundsExactAndApproximateSearch) {
   std::printf("approximate search, 8 leaves: %zu of %zu exact matches\n", approximate_total,
               exact_total);
   EXPECT_LT(approximate_total, exact_total);  // approximate indeed
-  const Point query = attributed(random_descriptors(rng, 1)[0]);
+  const Point query = attributed(test::clustered_descriptors(rng, 1)[0]);
   const test::AllocationCounter allocations;
   EXPECT_GE(bounded.radius_search_approximate(query, r2, box, 32, b.data(), cap), 0u);
   EXPECT_EQ(allocations.count(), 0);
@@ -328,7 +300,7 @@ TEST(KdTree, ApproximateSearchDropsCellsBeyondItsQueue) {
   Rng rng(21);
   const std::uint32_t n = 1u << 20;
   std::vector<Point> data;
-  for (const ArcDescriptor& d : random_descriptors(rng, n))
+  for (const ArcDescriptor& d : test::clustered_descriptors(rng, n))
     data.push_back(with_attributes<T>(rng, d));
   std::vector<Point> points;
   std::vector<std::uint32_t> ids;
@@ -339,7 +311,7 @@ TEST(KdTree, ApproximateSearchDropsCellsBeyondItsQueue) {
   const auto r2 = radius2_of<T>(1.9f);  // unit descriptors: nearly every cell may match
   const auto box = std::numeric_limits<typename KdTraits<T>::Dist>::max();
   std::vector<std::uint32_t> a(n), b(n);
-  const Point q = with_attributes<T>(rng, random_descriptors(rng, 1)[0]);
+  const Point q = with_attributes<T>(rng, test::clustered_descriptors(rng, 1)[0]);
   const std::uint32_t all = tree.radius_search(q, r2, box, a.data(), n);
   ASSERT_GT(all, n / 2);
   const std::uint32_t some = tree.radius_search_approximate(q, r2, box, 1 << depth, b.data(), n);
@@ -354,10 +326,10 @@ TYPED_TEST(KdTreeTyped, KnnEqualsBruteForce) {
   using T = TypeParam;
   using Dist = typename KdTraits<T>::Dist;
   Rng rng(4);
-  const auto data = encode_all<T>(random_descriptors(rng, 5000));
+  const auto data = encode_all<T>(test::clustered_descriptors(rng, 5000));
   const Tree<T> t = make_tree<T>(data);
   for (int q = 0; q < 200; ++q) {
-    const KdPoint<T> query = encode<T>(random_descriptors(rng, 1)[0]);
+    const KdPoint<T> query = encode<T>(test::clustered_descriptors(rng, 1)[0]);
     // Closest first, ties by id: integer distances tie often.
     std::vector<std::pair<Dist, std::uint32_t>> all;
     for (std::uint32_t i = 0; i < data.size(); ++i)
@@ -374,7 +346,7 @@ TYPED_TEST(KdTreeTyped, KnnEqualsBruteForce) {
     }
   }
   // Fewer points than k.
-  const auto few = encode_all<T>(random_descriptors(rng, 3));
+  const auto few = encode_all<T>(test::clustered_descriptors(rng, 3));
   const Tree<T> small = make_tree<T>(few);
   std::uint32_t ids[64];
   Dist d2[64];
@@ -385,7 +357,7 @@ TYPED_TEST(KdTreeTyped, KnnEqualsBruteForce) {
 TYPED_TEST(KdTreeTyped, RadiusSearchReportsTruncation) {
   using T = TypeParam;
   Rng rng(3);
-  const auto data = encode_all<T>(random_descriptors(rng, 2000));
+  const auto data = encode_all<T>(test::clustered_descriptors(rng, 2000));
   const Tree<T> t = make_tree<T>(data);
   std::uint32_t out[5] = {0, 0, 0, 0, 0};
   // Radius 2 covers every unit vector.
@@ -398,8 +370,8 @@ TYPED_TEST(KdTreeTyped, RadiusSearchReportsTruncation) {
 TYPED_TEST(KdTreeTyped, DeterministicBuild) {
   using T = TypeParam;
   Rng a(9), b(9);
-  const Tree<T> t1 = make_tree<T>(encode_all<T>(random_descriptors(a, 3000)));
-  const Tree<T> t2 = make_tree<T>(encode_all<T>(random_descriptors(b, 3000)));
+  const Tree<T> t1 = make_tree<T>(encode_all<T>(test::clustered_descriptors(a, 3000)));
+  const Tree<T> t2 = make_tree<T>(encode_all<T>(test::clustered_descriptors(b, 3000)));
   EXPECT_EQ(t1.ids, t2.ids);
   ASSERT_EQ(t1.nodes.size(), t2.nodes.size());
   for (std::size_t i = 0; i < t1.nodes.size(); ++i) {
@@ -412,9 +384,9 @@ TYPED_TEST(KdTreeTyped, QueriesAllocateNothing) {
   using T = TypeParam;
   using Dist = typename KdTraits<T>::Dist;
   Rng rng(5);
-  const auto data = encode_all<T>(random_descriptors(rng, 20000));
+  const auto data = encode_all<T>(test::clustered_descriptors(rng, 20000));
   const Tree<T> t = make_tree<T>(data);
-  const auto queries = encode_all<T>(random_descriptors(rng, 50));
+  const auto queries = encode_all<T>(test::clustered_descriptors(rng, 50));
   std::vector<std::uint32_t> out(1000);
   std::uint32_t ids[64];
   Dist d2[64];
@@ -607,7 +579,7 @@ TEST(DescriptorEncoding, ScaledRadiusIsExactCeiling) {
 TEST(DescriptorEncoding, QuantisedSearchAgreesWithFloat) {
   Rng rng(7);
   // Queries from the same clusters as the data.
-  auto data = random_descriptors(rng, 20200);
+  auto data = test::clustered_descriptors(rng, 20200);
   const std::vector<ArcDescriptor> queries(data.end() - 200, data.end());
   data.resize(20000);
   const Tree<float> f = make_tree<float>(data);

@@ -14,6 +14,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "builder/in_memory_index.h"
 #include "builder/index_writer.h"
 #include "builder/model_builder.h"
 #include "keygraph/detector.h"
@@ -24,7 +25,7 @@ namespace kg {
 namespace {
 
 struct Fixture {
-  std::vector<std::uint8_t> storage;
+  std::unique_ptr<std::uint8_t[]> storage;
   ModelIndex index;
   cv::Mat box_scene;  // box_in_scene.png, 512 x 384
   cv::Mat aero;       // aero1.jpg, 640 x 480
@@ -40,11 +41,7 @@ const Fixture& fixture() {
     if (box.empty() || !build_model(box, "box", params, models[0])) return out;
     std::vector<std::uint8_t> bytes;
     if (!serialize_index(models, params, bytes)) return out;
-    out->storage.resize(bytes.size() + 64);
-    const auto addr = reinterpret_cast<std::uintptr_t>(out->storage.data());
-    std::uint8_t* aligned = out->storage.data() + (64 - addr % 64) % 64;
-    std::memcpy(aligned, bytes.data(), bytes.size());
-    if (!ModelIndex::view(aligned, bytes.size(), out->index)) return out;
+    if (!view_aligned_copy(bytes, out->storage, out->index)) return out;
     out->box_scene = test::load_gray(test::opencv_data("box_in_scene.png"));
     out->aero = test::load_gray(test::opencv_data("aero1.jpg"));
     return out;

@@ -19,6 +19,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "builder/in_memory_index.h"
 #include "builder/index_writer.h"
 #include "builder/keypoints.h"
 #include "builder/model_builder.h"
@@ -265,11 +266,7 @@ void build_sift_index(const cv::Mat& model, const Params& params, SiftIndex& out
   BuiltModel built;
   ASSERT_TRUE(build_model(model, "box", params, built));
   ASSERT_TRUE(serialize_index({built}, params, out.bytes));
-  out.storage.reset(new std::uint8_t[out.bytes.size() + 64]);
-  const auto addr = reinterpret_cast<std::uintptr_t>(out.storage.get());
-  std::uint8_t* aligned = out.storage.get() + ((64 - addr % 64) % 64);
-  std::memcpy(aligned, out.bytes.data(), out.bytes.size());
-  const Status s = ModelIndex::view(aligned, out.bytes.size(), out.index);
+  const Status s = view_aligned_copy(out.bytes, out.storage, out.index);
   ASSERT_TRUE(s) << s.message();
 }
 

@@ -21,6 +21,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "builder/in_memory_index.h"
 #include "builder/index_writer.h"
 #include "builder/model_builder.h"
 #include "builder/parallel.h"
@@ -105,12 +106,8 @@ inline Status view_in_memory(const std::vector<BuiltModel>& models, const Params
                              InMemoryIndex& out) {
   std::vector<std::uint8_t> bytes;
   if (Status s = serialize_index(models, params, bytes); !s) return s;
-  out.storage.reset(new std::uint8_t[bytes.size() + 64]);
-  const auto addr = reinterpret_cast<std::uintptr_t>(out.storage.get());
-  std::uint8_t* aligned = out.storage.get() + ((64 - addr % 64) % 64);
-  std::memcpy(aligned, bytes.data(), bytes.size());
   out.bytes = bytes.size();
-  return ModelIndex::view(aligned, bytes.size(), out.index);
+  return view_aligned_copy(bytes, out.storage, out.index);
 }
 
 inline Status build_in_memory(const std::vector<std::pair<std::string, cv::Mat>>& images,

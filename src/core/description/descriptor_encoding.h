@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 
 #include "core/description/arc_types.h"
 #include "core/params/param_names.h"
@@ -18,6 +19,18 @@
 namespace kg {
 
 // Components are multiplied by this before rounding (1 for float32).
+// The encoding whose components have type T (int16_t, int8_t, else float).
+template <class T>
+inline constexpr DescriptorEncoding encoding_of() {
+  if constexpr (std::is_same_v<T, std::int16_t>) {
+    return DescriptorEncoding::kInt16;
+  } else if constexpr (std::is_same_v<T, std::int8_t>) {
+    return DescriptorEncoding::kInt8;
+  } else {
+    return DescriptorEncoding::kFloat32;
+  }
+}
+
 inline constexpr std::int32_t encoding_scale(DescriptorEncoding e) {
   return e == DescriptorEncoding::kInt16 ? 32767 : e == DescriptorEncoding::kInt8 ? 127 : 1;
 }
