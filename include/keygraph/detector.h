@@ -153,6 +153,9 @@ class Detector {
   // first: kInvalidArgument for a value out of range or a model id not in
   // the index, and the options in effect stay as they were.
   Status set_options(const DetectOptions& options);
+  // The check set_options() and the constructor make: every value in range
+  // and every model id in `index`.
+  static Status check_options(const ModelIndex& index, const DetectOptions& options);
   // The options in effect; their `models` is nullptr (searches_model()
   // says which models are searched).
   const DetectOptions& options() const;

@@ -218,6 +218,10 @@ Status Detector::set_options(const DetectOptions& options) {
   return Status::ok();
 }
 
+Status Detector::check_options(const ModelIndex& index, const DetectOptions& options) {
+  return FramePipeline::check_options(index, options);
+}
+
 const DetectOptions& Detector::options() const {
   static const DetectOptions none{};
   return pipeline_ != nullptr ? pipeline_->options() : none;
