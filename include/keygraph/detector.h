@@ -65,6 +65,13 @@ struct Limits {
   int max_arc_pool = 1 << 21;
   int max_correspondences = 20000;  // keygraph correspondences per frame
   int max_detections = 16;          // at most kMaxDetections
+  // Threads a detect() uses, counting the caller's (1..64): threads - 1
+  // workers are started with the detector and joined with it, each with its
+  // own share of the workspace (mostly the join's buffers). The
+  // detections are the same for any count, bit for bit. More than one
+  // helps with circuit completion on (the default): the look-ups, joins
+  // and arc descriptors run on every thread; the rest runs on the caller.
+  int threads = 1;
   // The same limits for frames up to width x height.
   Limits for_frame(int width, int height) const {
     Limits l = *this;

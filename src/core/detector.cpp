@@ -21,12 +21,12 @@ Status check_limits(const Limits& l) {
                   l.max_height <= Limits::kMaxSide && l.max_keypoints >= 1 &&
                   l.max_scene_keypoints >= 1 && l.max_arc_matches >= 1 && l.max_arc_pool >= 1 &&
                   l.max_correspondences >= 1 && l.max_detections >= 1 &&
-                  l.max_detections <= kMaxDetections;
+                  l.max_detections <= kMaxDetections && l.threads >= 1 && l.threads <= 64;
   if (ok) return Status::ok();
   return {StatusCode::kInvalidArgument,
           "detector limits out of range (frame 1..16384 px a side, every count >= 1, "
           "max_detections <= " +
-              std::to_string(kMaxDetections) + ")"};
+              std::to_string(kMaxDetections) + ", threads <= 64)"};
 }
 
 // check_limits(), and the upsampled frame within the largest side too (a

@@ -22,6 +22,7 @@
 #include "core/index/arc_search.h"
 #include "core/keygraphs/delaunay.h"
 #include "core/keygraphs/keygraph.h"
+#include "core/support/worker_pool.h"
 #include "core/support/workspace.h"
 #include "keygraph/image.h"
 #include "keygraph/params.h"
@@ -35,7 +36,12 @@ class SceneArcs {
   // Sizes the buffers for frames up to max_width x max_height blurred with
   // `blur_sigma` and triangulations of up to max_points keypoints:
   // blur() and describe() then allocate nothing.
-  void reserve(int max_width, int max_height, int max_points, float blur_sigma);
+  // With threads > 1, describe() runs on `workers` (set_workers()), each
+  // with its own profile buffers. With fill false (Detector::
+  // workspace_bytes' measuring pass) only counts: nothing is written.
+  void reserve(int max_width, int max_height, int max_points, float blur_sigma, int threads = 1,
+               bool fill = true);
+  void set_workers(WorkerPool* workers) { workers_ = workers; }
 
   // The frame blurred by params.blur_sigma (the profiles' image; also the
   // triangle check's and the pose's).
@@ -62,20 +68,31 @@ class SceneArcs {
   // Describes half-edge e although its opposite was chosen (see above).
   void describe_now(int e);
 
+  // The chosen half-edges in the order describe() reached them.
+  const WorkVector<int>& chosen_order() const { return order_; }
   // Arcs with a descriptor since describe() (DetectStats::arcs_described).
   int described_count() const { return described_count_; }
 
  private:
-  // Describes half-edge e and stores its query; false when it has none.
-  bool describe_edge(int e);
+  // Per thread: a profile and its fixed-point sums.
+  struct Scratch {
+    explicit Scratch(std::pmr::memory_resource* memory) : profile(memory), sums(memory) {}
+    WorkVector<float> profile;
+    WorkVector<std::int32_t> sums;
+  };
+  std::pmr::memory_resource* memory_;
+  WorkVector<Scratch> scratch_;
+  WorkerPool* workers_ = nullptr;
+  // Describes half-edge e with a thread's scratch and stores its query;
+  // false when it has none.
+  bool describe_edge(int e, Scratch& scratch);
 
   Plane<std::uint8_t> blurred_;
   Plane<float> blur_scratch_;
   WorkVector<std::uint8_t> chosen_;
+  WorkVector<int> order_;
   WorkVector<std::uint8_t> described_;
   WorkVector<ArcSearch::Query> queries_;
-  WorkVector<float> profile_;
-  WorkVector<std::int32_t> sums_;  // fixed-point profiles
   int described_count_ = 0;
   // describe()'s inputs, for describe_now().
   const ArcSearch* search_ = nullptr;

@@ -92,6 +92,8 @@ FramePipeline::FramePipeline(const ModelIndex& index, const Limits& limits,
       limits_(work_limits(limits, index.params())),
       params_(with_options(index.params(), options)),
       options_(options),
+      // The measuring pass starts no threads.
+      workers_(fill ? limits.threads : 1),
       search_(index, ArcSearch::leaves_for(params_.descriptor,
                                            static_cast<std::uint64_t>(index.model_count()))),
       model_searched_(memory),
@@ -136,8 +138,10 @@ FramePipeline::FramePipeline(const ModelIndex& index, const Limits& limits,
   scene_scales_.reserve(scene);
   triangulation_.reserve(l.max_scene_keypoints);
   keygraphs_.reserve(3 * scene);  // edges, faces (2n) or internal edges (3n)
-  arcs_.reserve(l.max_width, l.max_height, l.max_scene_keypoints, params.descriptor.blur_sigma);
-  selector_.reserve(l, index.keypoint_count(), completes_circuits(params));
+  arcs_.reserve(l.max_width, l.max_height, l.max_scene_keypoints, params.descriptor.blur_sigma,
+                l.threads, fill);
+  if (workers_.threads() > 1) arcs_.set_workers(&workers_);
+  selector_.reserve(l, index.keypoint_count(), completes_circuits(params), fill);
   if (completes_circuits(params)) adjacency_.build(index, fill);
   matches_.reserve(correspondences);
   grouped_.reserve(correspondences);
@@ -379,6 +383,7 @@ void FramePipeline::select_correspondences() {
     in.scene_inverse_norms = scene_inverse_norms_.data();
   }
   if (completes_circuits(params_)) in.adjacency = &adjacency_;
+  if (workers_.threads() > 1) in.workers = &workers_;
   selector_.select(in, limits_, matches_, stats_);
   stats_.arcs_described = arcs_.described_count();
   stats_.patch_rejections =

@@ -28,6 +28,7 @@
 #include "core/sampling/sampling.h"
 #include "core/selection/arc_adjacency.h"
 #include "core/selection/selection.h"
+#include "core/support/worker_pool.h"
 #include "core/support/workspace.h"
 #include "keygraph/detector.h"
 
@@ -91,6 +92,7 @@ class FramePipeline {
   Params params_;         // the index's, with options_ applied
   DetectOptions options_;
   DetectStats stats_;
+  WorkerPool workers_;  // Limits::threads, started with the pipeline
   ArcSearch search_;
   WorkVector<std::uint8_t> model_searched_;  // per model: 1 when searched
   bool filter_models_ = false;               // DetectOptions::models was given

@@ -1,6 +1,7 @@
 #include "core/selection/selection.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <type_traits>
@@ -53,8 +54,120 @@ bool plausible_local_map(const Point2f* m, const Point2f* s, int k, const Params
 
 }  // namespace
 
+Selector::JoinScratch::JoinScratch(std::pmr::memory_resource* memory)
+    : found(memory),
+      sort_scratch(memory),
+      kept{WorkVector<std::uint64_t>(memory), WorkVector<std::uint64_t>(memory),
+           WorkVector<std::uint64_t>(memory), WorkVector<std::uint64_t>(memory)},
+      flags(memory),
+      triples(memory),
+      chain_head(memory),
+      chain_next(memory),
+      joined(memory),
+      out(memory) {}
+
+void Selector::JoinScratch::clear_counts() {
+  completion_tried = completion_clockwise = completion_plausible = completion_closed = 0;
+  semi_join_in = semi_join_kept = vertex_rejections = 0;
+  truncated_completion = false;
+}
+
+Selector::Selector(std::pmr::memory_resource* memory)
+    : memory_(memory),
+      state_(memory),
+      begin_(memory),
+      count_(memory),
+      total_(memory),
+      pool_(memory),
+      scratch_(memory),
+      chunks_(memory) {}
+
+namespace {
+
+// Keygraph runs per thread in the parallel join: enough that a thread
+// finishing early takes another (the work of a run follows the objects in
+// the frame), few enough that claiming them costs nothing.
+constexpr int kChunksPerThread = 8;
+
+}  // namespace
+
+void Selector::reserve(const Limits& limits, std::uint32_t model_keypoints, bool completion,
+                       bool fill) {
+  const auto half_edges = 6 * static_cast<std::size_t>(std::max(0, limits.max_scene_keypoints));
+  state_.reserve(half_edges);
+  begin_.reserve(half_edges);
+  count_.reserve(half_edges);
+  if (completion) total_.reserve(half_edges);
+  pool_limit_ = static_cast<std::size_t>(std::max(0, limits.max_arc_pool));
+  pool_.reserve(pool_limit_);
+  const auto per_query = static_cast<std::size_t>(std::max(0, limits.max_arc_matches));
+  // Threads other than the caller's join with circuit completion only.
+  const int threads = completion ? std::max(1, limits.threads) : 1;
+  scratch_.reserve(static_cast<std::size_t>(threads));
+  scratch_.clear();
+  for (int t = 0; t < threads; ++t) {
+    // The measuring pass (fill false) must not write into its placeholder
+    // memory: a scratch on the stack stands in for each, its buffers
+    // counted all the same.
+    JoinScratch stand_in(memory_);
+    JoinScratch& s = fill ? scratch_.emplace_back(memory_) : stand_in;
+    s.found.reserve(per_query);
+    s.sort_scratch.reserve(per_query);
+    for (WorkVector<std::uint64_t>& kept : s.kept) kept.reserve(per_query);
+    s.flags.reserve(model_keypoints);
+    if (completion) {
+      s.triples.reserve(3 * per_query);  // a circuit is found by up to 3 passes before dedupe
+      s.chain_head.reserve(2 * static_cast<std::size_t>(model_keypoints));
+      s.chain_next.reserve(2 * per_query);
+      s.joined.reserve(per_query);
+    }
+    if (threads > 1)
+      s.out.reserve(static_cast<std::size_t>(std::max(0, limits.max_correspondences)));
+  }
+  if (threads > 1) chunks_.reserve(static_cast<std::size_t>(threads * kChunksPerThread));
+}
+
+void Selector::prepare(JoinScratch& s, const SelectionInput& in, const Limits& limits,
+                       bool completion) {
+  // Within what reserve() sized (the Detector's limits and index), this
+  // never allocates.
+  const auto per_query = static_cast<std::size_t>(std::max(0, limits.max_arc_matches));
+  if (s.found.size() < per_query) s.found.resize(per_query);
+  if (s.sort_scratch.size() < per_query) s.sort_scratch.resize(per_query);
+  for (WorkVector<std::uint64_t>& kept : s.kept)
+    if (kept.size() < per_query) kept.resize(per_query);
+  // All clear between keygraphs (candidate_lists() clears what it flags).
+  s.flags.assign(in.index->keypoint_count(), 0);
+  if (completion) {
+    if (s.triples.size() < 3 * per_query) s.triples.resize(3 * per_query);
+    if (s.chain_next.size() < 2 * per_query) s.chain_next.resize(2 * per_query);
+    if (s.joined.size() < per_query) s.joined.resize(per_query);
+    // All zero between passes: set once per index size.
+    const std::size_t heads = 2 * static_cast<std::size_t>(in.index->keypoint_count());
+    if (s.chain_head.size() != heads) s.chain_head.assign(heads, 0);
+  }
+  s.out.clear();
+  s.clear_counts();
+}
+
+std::uint32_t Selector::search_into(const SelectionInput& in, int e, JoinScratch& s,
+                                    std::uint64_t* at, std::uint32_t capacity,
+                                    std::uint32_t& total) const {
+  const ArcSearch::Query& query = in.arcs->query(e);
+  const auto cap = static_cast<std::uint32_t>(s.found.size());
+  total = in.search->search(query, s.found.data(), cap);
+  const std::uint32_t n = std::min({total, cap, capacity});
+  const std::uint32_t* slots = s.found.data();
+  for (std::uint32_t i = 0; i < n; ++i) IndexInternals::prefetch_arc(*in.index, slots[i]);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const ModelArc arc = in.index->arc(slots[i]);
+    at[i] = arc_key(arc.from, arc.to);
+  }
+  return n;
+}
+
 Selector::ArcList Selector::lookup(const SelectionInput& in, int e, const Limits& limits,
-                                   DetectStats& stats) {
+                                   DetectStats& stats, JoinScratch& s) {
   if (state_[e] != kUnseen) return {begin_[e], count_[e], state_[e] == kReversed};
   state_[e] = kLooked;
   begin_[e] = static_cast<std::uint32_t>(pool_used_);
@@ -78,37 +191,106 @@ Selector::ArcList Selector::lookup(const SelectionInput& in, int e, const Limits
   SceneArcs& arcs = *in.arcs;
   if (!arcs.chosen(e)) arcs.describe_now(e);
   if (!arcs.described(e)) return {begin_[e], 0, false};
-  const ArcSearch::Query& query = arcs.query(e);
-  const auto cap = static_cast<std::uint32_t>(limits.max_arc_matches);
-  found_.resize(cap);
-  const std::uint32_t total = in.search->search(query, found_.data(), cap);
-  stats.arc_matches += total;
-  std::uint32_t n = std::min(total, cap);
   const std::size_t room = pool_limit_ - std::min(pool_limit_, pool_used_);
-  if (n > room) n = static_cast<std::uint32_t>(room);
-  if (n < total) stats.truncated_arc_matches = true;
+  const auto cap = static_cast<std::uint32_t>(std::max(0, limits.max_arc_matches));
   // Within the reserved pool (room), so the resize never allocates.
-  if (pool_.size() < pool_used_ + n) pool_.resize(pool_used_ + n);
+  const std::size_t most = std::min<std::size_t>(cap, room);
+  if (pool_.size() < pool_used_ + most) pool_.resize(pool_used_ + most);
+  std::uint32_t total = 0;
+  const std::uint32_t n =
+      search_into(in, e, s, pool_.data() + pool_used_, static_cast<std::uint32_t>(most), total);
+  stats.arc_matches += total;
+  if (n < total) stats.truncated_arc_matches = true;
   pool_used_ += n;
-  std::uint64_t* keys = pool_.data() + begin_[e];
-  const std::uint32_t* slots = found_.data();
-  for (std::uint32_t i = 0; i < n; ++i) IndexInternals::prefetch_arc(*in.index, slots[i]);
-  for (std::uint32_t i = 0; i < n; ++i) {
-    const ModelArc arc = in.index->arc(slots[i]);
-    keys[i] = arc_key(arc.from, arc.to);
-  }
   count_[e] = n;
   return {begin_[e], n, false};
 }
 
-bool Selector::candidate_lists(const ArcList* lists, int k) {
+void Selector::search_chosen(const SelectionInput& in, const Limits& limits, DetectStats& stats) {
+  const int* order = in.arcs->chosen_order().data();
+  const int n = static_cast<int>(in.arcs->chosen_order().size());
+  const auto cap = static_cast<std::uint32_t>(std::max(0, limits.max_arc_matches));
+  if (pool_.size() < pool_limit_) pool_.resize(pool_limit_);  // reserved: no allocation
+  // Every thread searches a share of the chosen arcs and takes its room in
+  // the pool as it goes. Lists are read by (begin, count), so where each
+  // lands does not matter; only a frame whose arcs overflow the pool
+  // depends on the order, and is searched again on one thread, in order,
+  // as the look-ups on demand would have filled it.
+  std::atomic<std::size_t> next{0};
+  std::atomic<bool> overflow{false};
+  constexpr int kBlock = 16;
+  auto search_block = [&](int block, int worker) {
+    JoinScratch& s = scratch_[static_cast<std::size_t>(worker)];
+    const int end = std::min(n, (block + 1) * kBlock);
+    for (int i = block * kBlock; i < end; ++i) {
+      const int e = order[i];
+      state_[e] = kLooked;
+      count_[e] = 0;
+      total_[e] = 0;
+      if (!in.arcs->described(e) || overflow.load(std::memory_order_relaxed)) continue;
+      std::uint32_t total = 0;
+      const std::uint32_t found = search_into(in, e, s, s.sort_scratch.data(), cap, total);
+      const std::size_t at = next.fetch_add(found, std::memory_order_relaxed);
+      if (at + found > pool_limit_) {
+        overflow.store(true, std::memory_order_relaxed);
+        continue;
+      }
+      std::copy_n(s.sort_scratch.data(), found, pool_.data() + at);
+      begin_[e] = static_cast<std::uint32_t>(at);
+      count_[e] = found;
+      total_[e] = total;
+    }
+  };
+  const int blocks = (n + kBlock - 1) / kBlock;
+  if (in.workers != nullptr) {
+    in.workers->run(blocks, search_block);
+  } else {
+    for (int b = 0; b < blocks; ++b) search_block(b, 0);
+  }
+  if (overflow.load()) {
+    // In order, each arc's list cut to the pool's room left.
+    pool_used_ = 0;
+    JoinScratch& s = scratch_[0];
+    for (int i = 0; i < n; ++i) {
+      const int e = order[i];
+      begin_[e] = static_cast<std::uint32_t>(pool_used_);
+      count_[e] = total_[e] = 0;
+      if (!in.arcs->described(e)) continue;
+      const std::size_t room = pool_limit_ - pool_used_;
+      std::uint32_t total = 0;
+      const std::uint32_t found =
+          search_into(in, e, s, pool_.data() + pool_used_,
+                      static_cast<std::uint32_t>(std::min<std::size_t>(cap, room)), total);
+      count_[e] = found;
+      total_[e] = total;
+      pool_used_ += found;
+    }
+  } else {
+    pool_used_ = next.load();
+  }
+  for (int i = 0; i < n; ++i) {
+    const int e = order[i];
+    stats.arc_matches += total_[e];
+    if (count_[e] < total_[e]) stats.truncated_arc_matches = true;
+  }
+}
+
+Selector::ArcList Selector::list_of(const SelectionInput& in, int e) const {
+  if (state_[e] == kLooked) return {begin_[e], count_[e], false};
+  const int opposite = in.triangulation->halfedges()[e];
+  if (opposite >= 0 && state_[opposite] == kLooked)
+    return {begin_[opposite], count_[opposite], true};
+  return {};
+}
+
+bool Selector::candidate_lists(const ArcList* lists, int k, JoinScratch& js) {
   // A semi-join: list i is cut to the arcs u -> v where u is the target of
   // an arc kept in list i - 1 (of the whole last list, for list 0) and v
   // the source of one in list i + 1 (whole; of kept list 0, for the last).
   // Flags per model keypoint say which lists it leaves (bit i) and enters
   // (bit 4 + i); each pass clears what it no longer needs, so the flags are
   // all clear again on return.
-  std::uint8_t* const flags = flags_.data();
+  std::uint8_t* const flags = js.flags.data();
   const int last = k - 1;
   auto leaves = [](int i) { return static_cast<std::uint8_t>(1u << i); };
   auto enters = [](int i) { return static_cast<std::uint8_t>(16u << i); };
@@ -121,7 +303,7 @@ bool Selector::candidate_lists(const ArcList* lists, int k) {
     keys[i] = pool_.data() + lists[i].begin;
     count[i] = lists[i].count;
     shift[i] = lists[i].reversed ? 32 : 0;
-    semi_join_in_ += count[i];
+    js.semi_join_in += count[i];
   }
   auto arc = [](std::uint64_t key, int s) { return (key >> s) | (key << ((64 - s) & 63)); };
   auto clear = [flags](const std::uint64_t* list, std::uint32_t n) {
@@ -152,7 +334,7 @@ bool Selector::candidate_lists(const ArcList* lists, int k) {
     const std::uint64_t* list = keys[i];
     const std::uint32_t total = count[i];
     const int s = shift[i];
-    std::uint64_t* const out = kept_[i].data();
+    std::uint64_t* const out = js.kept[i].data();
     // Branch-free: most arcs are dropped. Only list 0's sources and the
     // middle lists' targets keep their flags: those loops skip the store.
     const auto cut = [&](auto clear_from, auto clear_to) {
@@ -173,12 +355,12 @@ bool Selector::candidate_lists(const ArcList* lists, int k) {
     const std::uint32_t n = i == 0      ? (i == last ? cut(No{}, Yes{}) : cut(No{}, No{}))
                             : i == last ? cut(Yes{}, Yes{})
                                         : cut(Yes{}, No{});
-    kept_count_[i] = n;
-    semi_join_kept_ += n;
+    js.kept_count[i] = n;
+    js.semi_join_kept += n;
     if (n == 0) {
       // No circuit: clear the later lists' bits and the kept lists' marks.
       for (int j = i + 1; j <= last; ++j) clear(keys[j], count[j]);
-      for (int j = 0; j < i; ++j) clear(kept_[j].data(), kept_count_[j]);
+      for (int j = 0; j < i; ++j) clear(js.kept[j].data(), js.kept_count[j]);
       return false;
     }
     // What the next lists test of this one.
@@ -190,31 +372,31 @@ bool Selector::candidate_lists(const ArcList* lists, int k) {
       }
     }
   }
-  for (int j = 0; j < last; ++j) clear(kept_[j].data(), kept_count_[j]);
+  for (int j = 0; j < last; ++j) clear(js.kept[j].data(), js.kept_count[j]);
   for (int i = 0; i <= last; ++i) {
-    sort_arc_keys(kept_[i].data(), sort_scratch_.data(), kept_count_[i], id_bits_);
+    sort_arc_keys(js.kept[i].data(), js.sort_scratch.data(), js.kept_count[i], id_bits_);
     // Views store one keypoint pair once per view that describes it
     // differently; a pair found twice would select its circuits twice.
-    std::uint64_t* sorted = kept_[i].data();
-    kept_count_[i] =
-        static_cast<std::uint32_t>(std::unique(sorted, sorted + kept_count_[i]) - sorted);
+    std::uint64_t* sorted = js.kept[i].data();
+    js.kept_count[i] =
+        static_cast<std::uint32_t>(std::unique(sorted, sorted + js.kept_count[i]) - sorted);
   }
   return true;
 }
 
 template <class Plausible>
 bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g,
-                                const ArcList* lists, std::uint32_t capacity,
+                                const ArcList* lists, std::uint32_t capacity, JoinScratch& js,
                                 Plausible&& plausible) {
   // Each pair of consecutive lists (a -> b, b -> c) is joined on b by a
   // semi-join (flag bit 0: sources of the second list, bit 1: targets kept
   // of the first), as candidate_lists() does for all three; the closing arc
   // c -> a is then looked up in the model and compared with the scene arc.
-  std::uint8_t* const flags = flags_.data();
+  std::uint8_t* const flags = js.flags.data();
   const Point2f* model_points = in.index->keypoints();
   const int* opposite = in.triangulation->halfedges().data();
   auto arc = [](std::uint64_t key, int s) { return (key >> s) | (key << ((64 - s) & 63)); };
-  triple_count_ = 0;
+  js.triple_count = 0;
   bool room = true;
   for (int p = 0; p < 3 && room; ++p) {
     const ArcList& first = lists[p];
@@ -234,7 +416,7 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
     const std::uint64_t* b_keys = pool_.data() + second.begin;
     const int sa = first.reversed ? 32 : 0, sb = second.reversed ? 32 : 0;
     for (std::uint32_t x = 0; x < second.count; ++x) flags[key_from(arc(b_keys[x], sb))] |= 1;
-    std::uint64_t* const ka = kept_[0].data();
+    std::uint64_t* const ka = js.kept[0].data();
     std::uint32_t na = 0;
     for (std::uint32_t x = 0; x < first.count; ++x) {
       const std::uint64_t a = arc(a_keys[x], sa);
@@ -244,7 +426,7 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
     for (std::uint32_t x = 0; x < second.count; ++x) flags[key_from(arc(b_keys[x], sb))] = 0;
     if (na == 0) continue;
     for (std::uint32_t x = 0; x < na; ++x) flags[key_to(ka[x])] |= 2;
-    std::uint64_t* const kb = kept_[1].data();
+    std::uint64_t* const kb = js.kept[1].data();
     std::uint32_t nb = 0;
     for (std::uint32_t x = 0; x < second.count; ++x) {
       const std::uint64_t b = arc(b_keys[x], sb);
@@ -257,8 +439,8 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
     // differently): linear in the kept arcs, where sorting both lists
     // by w took a quarter of the completion. The triples come out in
     // another order; they are sorted below.
-    std::uint32_t* const head = chain_head_.data();
-    std::uint32_t* const next_a = chain_next_.data();
+    std::uint32_t* const head = js.chain_head.data();
+    std::uint32_t* const next_a = js.chain_next.data();
     std::uint32_t* const next_b = next_a + na;
     auto absent = [](const std::uint64_t* keys, const std::uint32_t* next, std::uint32_t entry,
                      std::uint64_t key) {
@@ -277,7 +459,7 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
       const std::uint32_t w = key_to(ka[y]);
       std::uint32_t& first_a = head[2 * std::size_t{w}];
       if (!absent(ka, next_a, first_a, ka[y])) continue;
-      if (first_a == 0) joined_[joined++] = w;
+      if (first_a == 0) js.joined[joined++] = w;
       next_a[y] = first_a;
       first_a = y + 1;
     }
@@ -298,27 +480,27 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
         for (const std::uint64_t* e = begin[i]; e != end[i] && !similar; ++e)
           similar = in.search->matches(query, static_cast<std::uint32_t>(*e));
         if (!similar) continue;
-        ++completion_closed_;
-        if (triple_count_ == capacity) {
+        ++js.completion_closed;
+        if (js.triple_count == capacity) {
           room = false;
           break;
         }
-        triples_[triple_count_++] = batch[i];
+        js.triples[js.triple_count++] = batch[i];
       }
       pending = 0;
     };
     // Scene arc c -> a against model arcs t -> u (flipped: a -> c, u -> t).
     auto close = [&](std::uint32_t u, std::uint32_t w, std::uint32_t t) {
       if (t == u) return;
-      ++completion_tried_;
+      ++js.completion_tried;
       std::array<std::uint32_t, 3> v;
       v[p] = u;
       v[(p + 1) % 3] = w;
       v[(p + 2) % 3] = t;
       if (!(orient(model_points[v[0]], model_points[v[1]], model_points[v[2]]) > 0.f)) return;
-      ++completion_clockwise_;
+      ++js.completion_clockwise;
       if (!plausible(v.data())) return;
-      ++completion_plausible_;
+      ++js.completion_plausible;
       batch[pending] = v;
       row[pending] = flip ? u : t;
       target[pending] = flip ? t : u;
@@ -328,7 +510,7 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
     // when flipped: within a w, the outer loop runs over the arcs that fix
     // that row, so its look-ups after the first hit the cache.
     for (std::uint32_t j = 0; j < joined && room; ++j) {
-      const std::uint32_t w = joined_[j];
+      const std::uint32_t w = js.joined[j];
       const std::uint32_t first_a = head[2 * std::size_t{w}];
       const std::uint32_t first_b = head[2 * std::size_t{w} + 1];
       if (flip) {
@@ -341,68 +523,24 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
             close(key_from(ka[ea - 1]), w, key_to(kb[eb - 1]));
       }
     }
-    for (std::uint32_t j = 0; j < joined; ++j) head[2 * std::size_t{joined_[j]}] = 0;
+    for (std::uint32_t j = 0; j < joined; ++j) head[2 * std::size_t{js.joined[j]}] = 0;
     for (std::uint32_t x = 0; x < nb; ++x) head[2 * std::size_t{key_from(kb[x])} + 1] = 0;
     if (pending > 0 && room) flush();
   }
   // A circuit all three lists hold is found by every pass.
-  std::sort(triples_.begin(), triples_.begin() + triple_count_);
-  triple_count_ = static_cast<std::uint32_t>(
-      std::unique(triples_.begin(), triples_.begin() + triple_count_) - triples_.begin());
+  std::sort(js.triples.begin(), js.triples.begin() + js.triple_count);
+  js.triple_count = static_cast<std::uint32_t>(
+      std::unique(js.triples.begin(), js.triples.begin() + js.triple_count) - js.triples.begin());
   return room;
 }
 
-void Selector::reserve(const Limits& limits, std::uint32_t model_keypoints, bool completion) {
-  const auto half_edges = 6 * static_cast<std::size_t>(std::max(0, limits.max_scene_keypoints));
-  state_.reserve(half_edges);
-  begin_.reserve(half_edges);
-  count_.reserve(half_edges);
-  pool_limit_ = static_cast<std::size_t>(std::max(0, limits.max_arc_pool));
-  pool_.reserve(pool_limit_);
-  found_.reserve(static_cast<std::size_t>(std::max(0, limits.max_arc_matches)));
+template <class Lists>
+bool Selector::join(const SelectionInput& in, const Limits& limits, const SceneKeygraph* first,
+                    const SceneKeygraph* last, JoinScratch& js, WorkVector<KeygraphMatch>& out,
+                    Lists&& list_for) {
   const auto per_query = static_cast<std::size_t>(std::max(0, limits.max_arc_matches));
-  sort_scratch_.reserve(per_query);
-  for (WorkVector<std::uint64_t>& kept : kept_) kept.reserve(per_query);
-  flags_.reserve(model_keypoints);
-  if (completion) {
-    triples_.reserve(3 * per_query);  // a circuit is found by up to 3 passes before dedupe
-    chain_head_.reserve(2 * static_cast<std::size_t>(model_keypoints));
-    chain_next_.reserve(2 * per_query);
-    joined_.reserve(per_query);
-  }
-}
-
-void Selector::select(const SelectionInput& in, const Limits& limits,
-                      WorkVector<KeygraphMatch>& matches, DetectStats& stats) {
-  matches.clear();
-  const std::size_t edges = in.triangulation->triangles().size();
-  state_.assign(edges, kUnseen);
-  begin_.resize(edges);
-  count_.resize(edges);
-  pool_used_ = 0;
-  id_bits_ = id_bits(in.index->keypoint_count());
-  // Within what reserve() sized (the Detector's limits and index), this
-  // never allocates.
-  const auto per_query = static_cast<std::size_t>(std::max(0, limits.max_arc_matches));
-  if (sort_scratch_.size() < per_query) sort_scratch_.resize(per_query);
-  for (WorkVector<std::uint64_t>& kept : kept_)
-    if (kept.size() < per_query) kept.resize(per_query);
-  // All clear between keygraphs (candidate_lists() clears what it flags).
-  flags_.assign(in.index->keypoint_count(), 0);
   const bool completion =
       in.adjacency != nullptr && in.params->graph.structure == Structure::kCircuit3;
-  if (in.adjacency != nullptr) {
-    if (triples_.size() < 3 * per_query) triples_.resize(3 * per_query);
-    if (chain_next_.size() < 2 * per_query) chain_next_.resize(2 * per_query);
-    if (joined_.size() < per_query) joined_.resize(per_query);
-    // All zero between passes: set once per index size.
-    const std::size_t heads = 2 * static_cast<std::size_t>(in.index->keypoint_count());
-    if (chain_head_.size() != heads) chain_head_.assign(heads, 0);
-  }
-  semi_join_in_ = 0;
-  semi_join_kept_ = 0;
-  completion_tried_ = completion_clockwise_ = 0;
-  completion_plausible_ = completion_closed_ = 0;
   const Structure structure = in.params->graph.structure;
   const int k = vertex_count(structure);
   // An arc keygraph has one arc; a circuit has as many arcs as vertices.
@@ -417,10 +555,10 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   constexpr auto kRow = static_cast<std::size_t>(kVertexDescriptorSize);
   auto similar_vertices = [&](const std::uint32_t* model, const SceneKeygraph& g) {
     for (int i = 0; i < k; ++i) {
-      const auto s = static_cast<std::size_t>(tri[g.edges[i]]);
+      const auto v = static_cast<std::size_t>(tri[g.edges[i]]);
       if (vertex_distance2(in.model_descriptors + model[i] * kRow, in.model_inverse_norms[model[i]],
-                           in.scene_descriptors + s * kRow,
-                           in.scene_inverse_norms[s]) > vertex_max2)
+                           in.scene_descriptors + v * kRow,
+                           in.scene_inverse_norms[v]) > vertex_max2)
         return false;
     }
     return true;
@@ -435,19 +573,19 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     int model = -1;
     float min_area = 0.f;
   };
-  Owner last;
-  std::uint32_t last_begin = 0, last_count = 0;
+  Owner owner;
+  std::uint32_t owner_begin = 0, owner_count = 0;
   auto owner_of = [&](std::uint32_t keypoint) {
-    if (keypoint - last_begin < last_count) return last;
-    last.model = in.index->model_of_keypoint(keypoint);
-    const ModelInfo info = in.index->model(last.model);
-    last_begin = info.keypoint_begin;
-    last_count = info.keypoint_count;
-    last.min_area =
+    if (keypoint - owner_begin < owner_count) return owner;
+    owner.model = in.index->model_of_keypoint(keypoint);
+    const ModelInfo info = in.index->model(owner.model);
+    owner_begin = info.keypoint_begin;
+    owner_count = info.keypoint_count;
+    owner.min_area =
         params.views.min_size > 0.f
             ? static_cast<float>(0.5 * smallest_area_scale(params, info.width, info.height))
             : symmetric_min_area;
-    return last;
+    return owner;
   };
   auto plausible = [&](const std::uint32_t* model, const SceneKeygraph& g) {
     Point2f mp[kMaxVertices], sp[kMaxVertices];
@@ -464,24 +602,22 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     const int model_id = owner_of(model[0]).model;
     if (in.model_searched != nullptr && in.model_searched[model_id] == 0) return true;
     if (check_vertices && !similar_vertices(model, g)) {
-      ++stats.vertex_rejections;
+      ++js.vertex_rejections;
       return true;
     }
-    if (matches.size() >= cap) {
-      stats.truncated_correspondences = true;
-      return false;
-    }
+    if (out.size() >= cap) return false;
     KeygraphMatch m;
     m.model_id = model_id;
     for (int i = 0; i < k; ++i) {
       m.model_vertices[i] = model[i];
       m.scene_vertices[i] = tri[g.edges[i]];
     }
-    matches.push_back(m);
+    out.push_back(m);
     return true;
   };
 
-  for (const SceneKeygraph& g : *in.keygraphs) {
+  for (const SceneKeygraph* gi = first; gi != last; ++gi) {
+    const SceneKeygraph& g = *gi;
     ArcList lists[kMaxVertices];
     bool room = true;
     if (completion) {
@@ -489,31 +625,31 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
       // can make a circuit.
       int found = 0;
       for (int i = 0; i < 3; ++i) {
-        lists[i] = lookup(in, g.edges[i], limits, stats);
+        lists[i] = list_for(g.edges[i]);
         found += lists[i].count > 0 ? 1 : 0;
       }
       if (found < 2) continue;
       const bool all =
-          complete_circuit(in, g, lists, static_cast<std::uint32_t>(3 * per_query),
+          complete_circuit(in, g, lists, static_cast<std::uint32_t>(3 * per_query), js,
                            [&](const std::uint32_t* model) { return plausible(model, g); });
-      if (!all) stats.truncated_correspondences = true;
-      for (std::uint32_t x = 0; x < triple_count_ && room; ++x)
-        room = emit(triples_[x].data(), g, true);
-      if (!room) break;
+      if (!all) js.truncated_completion = true;
+      for (std::uint32_t x = 0; x < js.triple_count && room; ++x)
+        room = emit(js.triples[x].data(), g, true);
+      if (!room) return false;
       continue;
     }
     bool empty = false;
     for (int i = 0; i < looked_up_arcs && !empty; ++i) {
-      lists[i] = lookup(in, g.edges[i], limits, stats);
+      lists[i] = list_for(g.edges[i]);
       empty = lists[i].count == 0;
     }
     if (empty) continue;
     if (k == 2) {
       // Each keypoint pair once (views may store it several times).
-      std::uint64_t* keys = kept_[0].data();
+      std::uint64_t* keys = js.kept[0].data();
       const std::uint32_t count = std::min(lists[0].count, static_cast<std::uint32_t>(per_query));
       std::copy_n(pool_.data() + lists[0].begin, count, keys);
-      sort_arc_keys(keys, sort_scratch_.data(), count, id_bits_);
+      sort_arc_keys(keys, js.sort_scratch.data(), count, id_bits_);
       const auto unique = static_cast<std::uint32_t>(std::unique(keys, keys + count) - keys);
       for (std::uint32_t x = 0; x < unique && room; ++x) {
         const std::uint64_t key = keys[x];
@@ -521,16 +657,16 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
         if (lists[0].reversed) std::swap(v[0], v[1]);
         room = emit(v, g);
       }
-      if (!room) break;
+      if (!room) return false;
       continue;
     }
     // Only the few arcs whose ends are candidates of both their vertices
     // can close a circuit: join those, sorted by (from, to).
-    const bool joinable = candidate_lists(lists, k);
+    const bool joinable = candidate_lists(lists, k, js);
     if (!joinable) continue;
-    const std::uint64_t* r[kMaxVertices] = {kept_[0].data(), kept_[1].data(), kept_[2].data(),
-                                            kept_[3].data()};
-    const std::uint32_t* n = kept_count_;
+    const std::uint64_t* r[kMaxVertices] = {js.kept[0].data(), js.kept[1].data(), js.kept[2].data(),
+                                            js.kept[3].data()};
+    const std::uint32_t* n = js.kept_count;
     for (std::uint32_t i0 = 0; i0 < n[0] && room; ++i0) {
       std::uint32_t v[kMaxVertices] = {key_from(r[0][i0]), key_to(r[0][i0]), 0, 0};
       // Join (a_m, b_m) with the similar arcs leaving b_m.
@@ -559,15 +695,113 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
         }
       }
     }
-    if (!room) break;
+    if (!room) return false;
   }
+  return true;
+}
+
+void Selector::select(const SelectionInput& in, const Limits& limits,
+                      WorkVector<KeygraphMatch>& matches, DetectStats& stats) {
+  matches.clear();
+  const std::size_t edges = in.triangulation->triangles().size();
+  state_.assign(edges, kUnseen);
+  begin_.resize(edges);
+  count_.resize(edges);
+  pool_used_ = 0;
+  id_bits_ = id_bits(in.index->keypoint_count());
+  const bool completion =
+      in.adjacency != nullptr && in.params->graph.structure == Structure::kCircuit3;
+  const SceneKeygraph* keygraphs = in.keygraphs->data();
+  const SceneKeygraph* keygraphs_end = keygraphs + in.keygraphs->size();
+  const int threads = completion && in.workers != nullptr
+                          ? std::min(in.workers->threads(), static_cast<int>(scratch_.size()))
+                          : 1;
+  for (int t = 0; t < threads; ++t)
+    prepare(scratch_[static_cast<std::size_t>(t)], in, limits, completion);
+  bool full = false;
+  if (!completion) {
+    // Look-ups on demand, in keygraph order: one thread.
+    JoinScratch& s = scratch_[0];
+    full = !join(in, limits, keygraphs, keygraphs_end, s, matches,
+                 [&](int e) { return lookup(in, e, limits, stats, s); });
+  } else {
+    total_.resize(edges);
+    search_chosen(in, limits, stats);
+    auto listed = [&](int e) { return list_of(in, e); };
+    if (threads == 1) {
+      full = !join(in, limits, keygraphs, keygraphs_end, scratch_[0], matches, listed);
+      chunks_.clear();
+    } else {
+      // Runs of keygraphs, each joined by whichever thread takes it into
+      // that thread's output; then concatenated in keygraph order up to
+      // max_correspondences: what one thread would have selected. A thread
+      // whose output filled holds, in order, every correspondence of its
+      // runs that the cut can need (the runs before hold at least as many).
+      const auto count = static_cast<std::size_t>(keygraphs_end - keygraphs);
+      const std::size_t runs =
+          std::min(count, static_cast<std::size_t>(threads) * kChunksPerThread);
+      chunks_.assign(runs, Chunk{});
+      auto join_run = [&](int run, int worker) {
+        JoinScratch& s = scratch_[static_cast<std::size_t>(worker)];
+        Chunk& c = chunks_[static_cast<std::size_t>(run)];
+        c.worker = worker;
+        c.begin = static_cast<std::uint32_t>(s.out.size());
+        s.truncated_completion = false;
+        const std::size_t from = count * static_cast<std::size_t>(run) / runs;
+        const std::size_t to = count * static_cast<std::size_t>(run + 1) / runs;
+        c.full = !join(in, limits, keygraphs + from, keygraphs + to, s, s.out, listed);
+        c.end = static_cast<std::uint32_t>(s.out.size());
+        c.truncated_completion = s.truncated_completion;
+      };
+      in.workers->run(static_cast<int>(runs), join_run);
+      // One thread would have stopped at the first correspondence past the
+      // cap: there is one when a run filled its thread's output, or when
+      // the runs hold more than the cap together.
+      const auto cap = static_cast<std::size_t>(limits.max_correspondences);
+      std::size_t available = 0;
+      for (const Chunk& c : chunks_) {
+        if (matches.size() < cap && c.truncated_completion) stats.truncated_correspondences = true;
+        const WorkVector<KeygraphMatch>& from = scratch_[static_cast<std::size_t>(c.worker)].out;
+        for (std::uint32_t i = c.begin; i < c.end && matches.size() < cap; ++i)
+          matches.push_back(from[i]);
+        available += c.end - c.begin;
+        full = full || c.full;
+        if (c.full) break;
+      }
+      full = full || available > cap;
+    }
+  }
+  if (full) stats.truncated_correspondences = true;
   stats.correspondences = static_cast<int>(matches.size());
-  stats.completion_tried = static_cast<long long>(completion_tried_);
-  stats.completion_clockwise = static_cast<long long>(completion_clockwise_);
-  stats.completion_plausible = static_cast<long long>(completion_plausible_);
-  stats.completion_closed = static_cast<long long>(completion_closed_);
-  stats.join_arcs_in = static_cast<long long>(semi_join_in_);
-  stats.join_arcs_kept = static_cast<long long>(semi_join_kept_);
+  // The counts of this select() (with scene_upsample 3, the last pass's).
+  long long tried = 0, clockwise = 0, plausible = 0, closed = 0, in_join = 0, kept = 0;
+  for (int t = 0; t < threads; ++t) {
+    const JoinScratch& js = scratch_[static_cast<std::size_t>(t)];
+    tried += static_cast<long long>(js.completion_tried);
+    clockwise += static_cast<long long>(js.completion_clockwise);
+    plausible += static_cast<long long>(js.completion_plausible);
+    closed += static_cast<long long>(js.completion_closed);
+    in_join += static_cast<long long>(js.semi_join_in);
+    kept += static_cast<long long>(js.semi_join_kept);
+    stats.vertex_rejections += static_cast<long long>(js.vertex_rejections);
+    if (threads == 1 && js.truncated_completion) stats.truncated_correspondences = true;
+  }
+  stats.completion_tried = tried;
+  stats.completion_clockwise = clockwise;
+  stats.completion_plausible = plausible;
+  stats.completion_closed = closed;
+  stats.join_arcs_in = in_join;
+  stats.join_arcs_kept = kept;
+}
+
+bool Selector::join_state_clear() const {
+  for (const JoinScratch& s : scratch_) {
+    for (std::uint8_t f : s.flags)
+      if (f != 0) return false;
+    for (std::uint32_t h : s.chain_head)
+      if (h != 0) return false;
+  }
+  return true;
 }
 
 }  // namespace kg

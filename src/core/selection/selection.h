@@ -26,6 +26,7 @@
 #include "core/keygraphs/delaunay.h"
 #include "core/keygraphs/keygraph.h"
 #include "core/selection/arc_adjacency.h"
+#include "core/support/worker_pool.h"
 #include "keygraph/detector.h"
 #include "keygraph/image.h"
 #include "keygraph/model_index.h"
@@ -59,35 +60,29 @@ struct SelectionInput {
   // from two joined arc lists when the model arc closing it matches the
   // third scene arc, looked up here and compared directly.
   const ArcAdjacency* adjacency = nullptr;
+  // Threads for the look-ups and joins (with circuit completion); nullptr:
+  // the caller's only.
+  WorkerPool* workers = nullptr;
 };
 
 class Selector {
  public:
-  explicit Selector(std::pmr::memory_resource* memory = std::pmr::get_default_resource())
-      : state_(memory),
-        begin_(memory),
-        count_(memory),
-        pool_(memory),
-        found_(memory),
-        sort_scratch_(memory),
-        kept_{WorkVector<std::uint64_t>(memory), WorkVector<std::uint64_t>(memory),
-              WorkVector<std::uint64_t>(memory), WorkVector<std::uint64_t>(memory)},
-        flags_(memory),
-        triples_(memory),
-        chain_head_(memory),
-        chain_next_(memory),
-        joined_(memory) {}
+  explicit Selector(std::pmr::memory_resource* memory = std::pmr::get_default_resource());
 
   // Sizes the buffers for `limits` (scene keypoints, arc matches per query
-  // and per frame, frame size for the profiles) and an index of
+  // and per frame, correspondences, threads) and an index of
   // `model_keypoints` keypoints: select() then allocates nothing, and stops
   // looking up model arcs once limits.max_arc_pool are kept in a frame.
-  // With `completion` (graph.complete_circuits), also the per-half-edge
-  // queries and the completed circuits.
-  void reserve(const Limits& limits, std::uint32_t model_keypoints, bool completion = false);
+  // With `completion` (graph.complete_circuits), also the completed
+  // circuits. With fill false (Detector::workspace_bytes' measuring pass)
+  // only counts: nothing is written into the memory.
+  void reserve(const Limits& limits, std::uint32_t model_keypoints, bool completion = false,
+               bool fill = true);
 
   // Clears and fills `matches` (at most limits.max_correspondences); updates
-  // stats.correspondences and the truncation flags.
+  // stats' selection counts and truncation flags. With circuit completion
+  // and in.workers, the look-ups and the joins run on the workers; the
+  // output is the same for any number of them.
   void select(const SelectionInput& in, const Limits& limits, WorkVector<KeygraphMatch>& matches,
               DetectStats& stats);
 
@@ -95,7 +90,7 @@ class Selector {
   // the completion's chain heads) is all clear, as select() leaves it after
   // every keygraph and as the next keygraph needs it: a flag left set would
   // only cost time (the join checks every arc), so no output shows one.
-  bool join_state_clear() const { return all_flags_clear(); }
+  bool join_state_clear() const;
 
  private:
   // The model-arc keys (from << 32 | to) similar to one half-edge:
@@ -106,65 +101,103 @@ class Selector {
     std::uint32_t count = 0;
     bool reversed = false;
   };
-  // Half-edge e's list, looked up on first use (empty when the arc has no
-  // descriptor).
-  ArcList lookup(const SelectionInput& in, int e, const Limits& limits, DetectStats& stats);
 
-  // With in.adjacency: fills triples_ with the model triples (in the scene
-  // keygraph's vertex order, sorted, each once) that two of the three lists
-  // join into a clockwise circuit passing `plausible`, closed by a model arc
-  // that matches the third scene arc. False when more than `capacity` were
-  // found before duplicates (up to one per pass) were removed: the rest are
-  // dropped.
+  // One thread's state of the join: the candidate flags (a byte per model
+  // keypoint: bit i leaves, 4 + i enters list i), the kept lists, the
+  // completion's chains and triples, its counters, and its correspondences
+  // (threads other than the caller's; in keygraph order, with the chunks
+  // they came from).
+  struct JoinScratch {
+    explicit JoinScratch(std::pmr::memory_resource* memory);
+    WorkVector<std::uint32_t> found;         // one search's tree slots
+    WorkVector<std::uint64_t> sort_scratch;  // one kept list (core/selection/arc_keys.h)
+    WorkVector<std::uint64_t> kept[kMaxVertices];
+    std::uint32_t kept_count[kMaxVertices] = {0, 0, 0, 0};
+    WorkVector<std::uint8_t> flags;
+    WorkVector<std::array<std::uint32_t, 3>> triples;
+    std::uint32_t triple_count = 0;
+    // The completion's join on the shared vertex w: per model keypoint the
+    // first kept arc into w (2w) and out of w (2w + 1), plus one (0: none);
+    // per kept arc the next of its w (arcs into w, then arcs out of w).
+    // All zero between passes.
+    WorkVector<std::uint32_t> chain_head;
+    WorkVector<std::uint32_t> chain_next;
+    WorkVector<std::uint32_t> joined;  // the shared vertices of a pass
+    WorkVector<KeygraphMatch> out;
+    // This frame's counts (DetectStats' selection counts).
+    std::uint64_t completion_tried = 0, completion_clockwise = 0;
+    std::uint64_t completion_plausible = 0, completion_closed = 0;
+    std::uint64_t semi_join_in = 0, semi_join_kept = 0;
+    std::uint64_t vertex_rejections = 0;
+    bool truncated_completion = false;  // a keygraph's circuits beyond their capacity
+    void clear_counts();
+  };
+  // A run of keygraphs joined by one thread: where its correspondences
+  // went in that thread's JoinScratch::out, and whether the output was
+  // full before the run ended.
+  struct Chunk {
+    int worker = 0;
+    std::uint32_t begin = 0, end = 0;
+    bool full = false;
+    bool truncated_completion = false;
+  };
+
+  // Half-edge e's list, looked up on first use (empty when the arc has no
+  // descriptor): the selection without circuit completion, one thread.
+  ArcList lookup(const SelectionInput& in, int e, const Limits& limits, DetectStats& stats,
+                 JoinScratch& s);
+  // With circuit completion every arc of every keygraph is looked up, so
+  // all are looked up first (search_chosen, the described direction of
+  // each edge, in the description's order), and list_of() reads them.
+  void search_chosen(const SelectionInput& in, const Limits& limits, DetectStats& stats);
+  ArcList list_of(const SelectionInput& in, int e) const;
+  // Searches half-edge e into the pool at `at` (room for `capacity` keys);
+  // returns the keys written, `total` the arcs found.
+  std::uint32_t search_into(const SelectionInput& in, int e, JoinScratch& s, std::uint64_t* at,
+                            std::uint32_t capacity, std::uint32_t& total) const;
+
+  // Joins keygraphs [first, last) into s.out (or `out`), `lists` giving each
+  // half-edge's list; false when the output filled up (limits.
+  // max_correspondences).
+  template <class Lists>
+  bool join(const SelectionInput& in, const Limits& limits, const SceneKeygraph* first,
+            const SceneKeygraph* last, JoinScratch& js, WorkVector<KeygraphMatch>& out,
+            Lists&& list_for);
+
+  // With in.adjacency: fills s.triples with the model triples (in the
+  // scene keygraph's vertex order, sorted, each once) that two of the three
+  // lists join into a clockwise circuit passing `plausible`, closed by a
+  // model arc that matches the third scene arc. False when more than
+  // `capacity` were found before duplicates (up to one per pass) were
+  // removed: the rest are dropped.
   template <class Plausible>
   bool complete_circuit(const SelectionInput& in, const SceneKeygraph& g, const ArcList* lists,
-                        std::uint32_t capacity, Plausible&& plausible);
+                        std::uint32_t capacity, JoinScratch& js, Plausible&& plausible);
 
-  // Fills kept_[0..k) with the arcs of lists[0..k) (a k-circuit's, in
+  // Fills s.kept[0..k) with the arcs of lists[0..k) (a k-circuit's, in
   // order) that can close a circuit, each sorted; false when one is empty.
-  bool candidate_lists(const ArcList* lists, int k);
+  bool candidate_lists(const ArcList* lists, int k, JoinScratch& js);
 
-  bool all_flags_clear() const {
-    for (std::uint8_t f : flags_)
-      if (f != 0) return false;
-    for (std::uint32_t h : chain_head_)
-      if (h != 0) return false;
-    return true;
-  }
+  // Per-thread scratch sized for the frame (within reserve()'s capacity).
+  void prepare(JoinScratch& s, const SelectionInput& in, const Limits& limits, bool completion);
 
   enum : std::uint8_t { kUnseen = 0, kLooked = 1, kReversed = 2 };
+  std::pmr::memory_resource* memory_;
   WorkVector<std::uint8_t> state_;
   WorkVector<std::uint32_t> begin_;
   WorkVector<std::uint32_t> count_;
+  WorkVector<std::uint32_t> total_;  // arcs found per half-edge (search_chosen)
   // Model-arc keys of all lookups of the frame, unsorted: pool_[0,
   // pool_used_). The vector only grows, so a frame's look-ups write their
   // keys without zeroing them first (a resize per look-up cleared about
   // 3 MB a frame).
   WorkVector<std::uint64_t> pool_;
   std::size_t pool_used_ = 0;
-  WorkVector<std::uint32_t> found_;
-  WorkVector<std::uint64_t> sort_scratch_;  // one kept list (core/selection/arc_keys.h)
-  WorkVector<std::uint64_t> kept_[kMaxVertices];
-  std::uint32_t kept_count_[kMaxVertices] = {0, 0, 0, 0};
-  WorkVector<std::uint8_t> flags_;  // per model keypoint: bit i leaves, 4 + i enters list i
-  int id_bits_ = 32;                // bits of the index's keypoint ids
-  WorkVector<std::array<std::uint32_t, 3>> triples_;
-  std::uint32_t triple_count_ = 0;
-  // The completion's join on the shared vertex w: per model keypoint the
-  // first kept arc into w (2w) and out of w (2w + 1), plus one (0: none);
-  // per kept arc the next of its w (arcs into w, then arcs out of w).
-  // All zero between passes.
-  WorkVector<std::uint32_t> chain_head_;
-  WorkVector<std::uint32_t> chain_next_;
-  WorkVector<std::uint32_t> joined_;  // the shared vertices of a pass
-  // The completion's funnel this frame (DetectStats::completion_*).
-  std::uint64_t completion_tried_ = 0;
-  std::uint64_t completion_clockwise_ = 0;
-  std::uint64_t completion_plausible_ = 0;
-  std::uint64_t completion_closed_ = 0;
   std::size_t pool_limit_ = static_cast<std::size_t>(-1);
-  std::uint64_t semi_join_in_ = 0;
-  std::uint64_t semi_join_kept_ = 0;
+  int id_bits_ = 32;  // bits of the index's keypoint ids
+  // One per thread (Limits::threads), the caller's first.
+  WorkVector<JoinScratch> scratch_;
+  WorkVector<Chunk> chunks_;
 };
 
 }  // namespace kg
