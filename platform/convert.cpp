@@ -5,6 +5,8 @@
 #include <limits>
 #include <string>
 
+#include "keygraph/simd.h"
+
 #if defined(__ARM_NEON) && !defined(KG_PLATFORM_NO_NEON)
 #include <arm_neon.h>
 #define KG_PLATFORM_HAVE_NEON 1
@@ -134,33 +136,29 @@ bool neon_compiled() {
 }
 
 void yuyv_to_gray(const std::uint8_t* src, std::ptrdiff_t src_stride, int width, int height,
-                  std::uint8_t* dst, std::ptrdiff_t dst_stride, Simd simd) {
+                  std::uint8_t* dst, std::ptrdiff_t dst_stride) {
 #if KG_PLATFORM_HAVE_NEON
-  if (simd == Simd::kAuto) {
+  if (simd_level() != SimdLevel::kScalar) {
     packed_neon<0>(src, src_stride, width, height, dst, dst_stride);
     return;
   }
-#else
-  (void)simd;
 #endif
   packed_scalar(src, src_stride, width, height, dst, dst_stride, 0);
 }
 
 void uyvy_to_gray(const std::uint8_t* src, std::ptrdiff_t src_stride, int width, int height,
-                  std::uint8_t* dst, std::ptrdiff_t dst_stride, Simd simd) {
+                  std::uint8_t* dst, std::ptrdiff_t dst_stride) {
 #if KG_PLATFORM_HAVE_NEON
-  if (simd == Simd::kAuto) {
+  if (simd_level() != SimdLevel::kScalar) {
     packed_neon<1>(src, src_stride, width, height, dst, dst_stride);
     return;
   }
-#else
-  (void)simd;
 #endif
   packed_scalar(src, src_stride, width, height, dst, dst_stride, 1);
 }
 
 Status to_gray(const FrameLayout& layout, const std::uint8_t* data, std::size_t size,
-               std::uint8_t* scratch, std::size_t scratch_size, ImageView& out, Simd simd) {
+               std::uint8_t* scratch, std::size_t scratch_size, ImageView& out) {
   if (Status s = check_layout(layout); !s) return s;
   const std::size_t needed = luma_bytes(layout);
   if (data == nullptr || size < needed) {
@@ -183,9 +181,9 @@ Status to_gray(const FrameLayout& layout, const std::uint8_t* data, std::size_t 
                 std::to_string(pixels) + ")"};
   }
   if (layout.format == PixelFormat::kYuyv) {
-    yuyv_to_gray(data, layout.stride, layout.width, layout.height, scratch, layout.width, simd);
+    yuyv_to_gray(data, layout.stride, layout.width, layout.height, scratch, layout.width);
   } else {
-    uyvy_to_gray(data, layout.stride, layout.width, layout.height, scratch, layout.width, simd);
+    uyvy_to_gray(data, layout.stride, layout.width, layout.height, scratch, layout.width);
   }
   out = ImageView(scratch, layout.width, layout.height, layout.width);
   return Status::ok();

@@ -5,8 +5,8 @@
 // UYVY) are converted into a caller-provided buffer. The packed conversions
 // have a NEON path, compiled when the target has NEON (__ARM_NEON) and
 // KG_PLATFORM_NO_NEON is not defined, and a scalar path that is always
-// compiled; Simd::kScalar forces the scalar one so tests can check that both
-// give identical bytes.
+// compiled; simd_level() (keygraph/simd.h) chooses, as for the core's
+// loops, and both give identical bytes (tested).
 //
 // Layout conventions (those of V4L2 single-planar formats):
 // - `stride` is the number of bytes from one row of the first plane to the
@@ -59,11 +59,6 @@ std::size_t frame_bytes(const FrameLayout& layout);
 // plane up to the end of its last row's payload. 0 when check_layout fails.
 std::size_t luma_bytes(const FrameLayout& layout);
 
-enum class Simd : std::uint8_t {
-  kAuto,    // the fastest path compiled in (NEON when available)
-  kScalar,  // the portable path, for tests and comparisons
-};
-
 // True when this build has a NEON path for the packed conversions.
 bool neon_compiled();
 
@@ -76,16 +71,15 @@ bool neon_compiled();
 // "short buffer" (kCorruptData); scratch missing or too small
 // (kInvalidArgument). `out` is left unchanged on error.
 Status to_gray(const FrameLayout& layout, const std::uint8_t* data, std::size_t size,
-               std::uint8_t* scratch, std::size_t scratch_size, ImageView& out,
-               Simd simd = Simd::kAuto);
+               std::uint8_t* scratch, std::size_t scratch_size, ImageView& out);
 
 // Packed 4:2:2 to gray: dst(x, y) = the Y byte of pixel (x, y). The caller
 // guarantees the layout (src rows of at least min_stride bytes, dst rows of
 // at least width bytes); width, height > 0.
 void yuyv_to_gray(const std::uint8_t* src, std::ptrdiff_t src_stride, int width, int height,
-                  std::uint8_t* dst, std::ptrdiff_t dst_stride, Simd simd = Simd::kAuto);
+                  std::uint8_t* dst, std::ptrdiff_t dst_stride);
 void uyvy_to_gray(const std::uint8_t* src, std::ptrdiff_t src_stride, int width, int height,
-                  std::uint8_t* dst, std::ptrdiff_t dst_stride, Simd simd = Simd::kAuto);
+                  std::uint8_t* dst, std::ptrdiff_t dst_stride);
 
 // Copies a gray view into dst (rows dst_stride >= width bytes apart), for
 // callers that keep a frame past the next call to FrameSource::next().

@@ -59,11 +59,9 @@ class FrameSource {
 };
 
 // The status codes next() uses for the non-fatal outcomes listed above.
-// StatusCode has no dedicated values for them yet, so each is mapped onto
-// one existing code that frame sources use for nothing else.
-inline constexpr StatusCode kTimeoutCode = StatusCode::kResourceExhausted;
-inline constexpr StatusCode kEndOfStreamCode = StatusCode::kNotFound;
-inline constexpr StatusCode kBadFrameCode = StatusCode::kCorruptData;
+inline constexpr StatusCode kTimeoutCode = StatusCode::kTimeout;
+inline constexpr StatusCode kEndOfStreamCode = StatusCode::kEndOfStream;
+inline constexpr StatusCode kBadFrameCode = StatusCode::kBadFrame;
 
 inline bool is_timeout(const Status& s) {
   return s.code() == kTimeoutCode;

@@ -1,34 +1,48 @@
 // Per-frame detection of the models of a ModelIndex (paper sections 5-7).
 //
 //   kg::ModelIndex index;
-//   if (auto s = kg::ModelIndex::open("signs.kgi", index); !s) { ... }
-//   kg::Detector detector(index);            // one workspace, allocated here
+//   if (kg::Status s = kg::ModelIndex::open("signs.kgi", index); !s) { ... }
+//   kg::Detector detector(index, kg::Limits{}.for_frame(1280, 720));  // allocates here, once
+//   if (!detector.status()) { ... }
 //   kg::DetectionList found;                 // fixed capacity, no heap
-//   detector.detect(kg::ImageView{data, w, h, stride}, found);
+//   detector.detect(kg::ImageView{y_plane, 1280, 720, stride}, found);   // never allocates
 //
 // Memory: the constructor lays out one workspace for `Limits` (frame size,
 // keypoints, keygraphs, correspondences, detections) and allocates it in one
-// piece, or uses a buffer the caller supplies; detect() never allocates. When
-// a frame needs more than the limits allow, detection degrades (the stats'
-// truncated_* flags say what was cut) instead of overflowing. A frame larger
-// than max_width x max_height is an error.
+// piece, or uses a buffer the caller supplies; nothing is allocated after
+// that (set_options() and detect() included). When a frame needs more than
+// the limits allow, detection degrades (the stats' truncated_* flags say
+// what was cut) instead of overflowing. A frame larger than max_width x
+// max_height is an error (kInvalidArgument).
 //
-// The index must outlive the detector. A Detector is not thread-safe; use
-// one per thread (they can share one index).
+// Settings: everything that makes the frame's descriptors comparable with
+// the models' (keypoints, sampling, keygraph structure, descriptors) comes
+// from the index and cannot change; how hard to search, how poses are
+// estimated and accepted, and which models to look for are DetectOptions,
+// which default to the index's and can be changed per detector.
+//
+// Lifetime and threads: the index must outlive the detector. A Detector is
+// not thread-safe; use one per thread (they can share one index, which is
+// read-only). Results (DetectionList, stats(), last_matches()) stay valid
+// until the next detect() on the same detector.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <string_view>
+#include <vector>
 
+#include "keygraph/detection.h"
 #include "keygraph/image.h"
 #include "keygraph/model_index.h"
+#include "keygraph/params.h"
 #include "keygraph/status.h"
 #include "keygraph/types.h"
 
 namespace kg {
 
-inline constexpr int kMaxDetections = 64;  // capacity of a DetectionList
+class FramePipeline;  // the frame's stages (src/core/pipeline)
 
 // Capacities of the per-frame work, from which the workspace is sized.
 // Reaching one degrades detection (the stats say what was cut); it never
@@ -60,139 +74,56 @@ struct Limits {
   }
 };
 
-struct Detection {
-  int model_id = -1;
-  std::string_view model_name;  // points into the index
-  Homography homography{};      // model pixels -> scene pixels
-  Point2f corners[4];           // model outline mapped into the scene
-  int inliers = 0;              // distinct keypoint correspondences within threshold
-  int inlier_keygraphs = 0;     // keygraph correspondences all of whose vertices are inliers
-  // Fraction of the model's keypoints that project inside the frame and
-  // find a frame keypoint within the inlier threshold under the final pose
-  // (chance level is the frame's keypoint density times the threshold disk).
-  double score = 0.0;
-  double chance = 0.0;     // the same fraction for the pose shifted by 3 thresholds
-  double rms_error = 0.0;  // refined reprojection error of the inliers, pixels
-  // Binomial z-score of `score` against `chance` (over the model keypoints
-  // the views say the pose's scale should show): the verification's test.
-  double verification_z = 0.0;
-  // Normalised cross-correlation of the model's appearance image (stored in
-  // the index, format 6.2) with the frame under the final pose, after the
-  // photometric refinement aligned it: in [0, 1] (a negative correlation is
-  // reported as 0); -1 when not measured (an index without appearances,
-  // most of the model outside the frame, a flat or tiny appearance, or a
-  // degenerate pose).
-  double appearance = -1.0;
-  // Estimated probability, in [0, 1], that the detection is right (the right
-  // model, every corner within 10 px): a logistic model of the support
-  // above, fitted on the sign benchmark (core/pose/confidence.h). Threshold it to
-  // trade detections for fewer false ones (docs/RESULTS.md, "Confidence").
-  double confidence = 0.0;
-  int ransac_iterations = 0;
+// Settings of the frame's work that an application may change per detector
+// without rebuilding the index. DetectOptions::from(index) gives the
+// index's own (what `keygraph build` stored), which a Detector starts with;
+// set_options() changes them between frames. `keygraph detect`, `live`,
+// `bench` and `eval` set them with --set NAME=VALUE
+// (detect_option_names()).
+struct DetectOptions {
+  // Pose estimation and acceptance: RANSAC's confidence, iteration cap and
+  // seed, the inlier threshold, the minimum support, the verification and
+  // appearance checks, the triangle patch check (keygraph/params.h,
+  // RansacParams, has each field's meaning and range).
+  RansacParams ransac;
+  // Search effort: tree leaves visited per scene arc (0: exact search, the
+  // slowest), and the index size (models) up to which that budget holds;
+  // it grows with the square root of the models beyond (0: fixed).
+  // DescriptorParams has both; more leaves find more of a model's arcs for
+  // more time.
+  int max_search_leaves = 8;
+  int search_reference_models = 10;
+  // Detections whose confidence (Detection::confidence, in [0, 1]) is below
+  // this are dropped: 0 keeps every detection that passed the checks; 0.5
+  // keeps those more likely right than wrong.
+  double min_confidence = 0.0;
+  // The models to look for: `model_count` ids of ModelIndex::model(), read
+  // by set_options() and the constructor (the array is not kept). nullptr
+  // (the default) looks for every model. Correspondences with other models
+  // are dropped before the pose; the search itself is the index's.
+  const std::int32_t* models = nullptr;
+  std::size_t model_count = 0;
+
+  // The index's own settings, every model searched.
+  static DetectOptions from(const ModelIndex& index);
 };
 
-struct DetectStats {
-  int keypoints = 0;          // detected in the frame
-  int sampled_keypoints = 0;  // after Chebyshev sampling
-  int keygraphs = 0;          // scene keygraphs (Delaunay)
-  int arcs_described = 0;     // scene arcs with a valid descriptor
-  // Model arcs found similar to them (descriptor and scale attributes), summed.
-  long long arc_matches = 0;
-  int correspondences = 0;  // keygraph correspondences selected
-  // Keygraph correspondences whose arcs all matched but a vertex pair did
-  // not (vertex descriptors only).
-  long long vertex_rejections = 0;
-  // Keygraph correspondences dropped by the triangle patch check
-  // (RansacParams::min_triangle_correlation); correspondences counts them.
-  int patch_rejections = 0;
-  int ransac_iterations = 0;  // summed over models and instances
-  // Circuit completion (GraphParams::complete_circuits), summed over the
-  // keygraphs: model triples joined from two arcs similar to scene arcs,
-  // of which clockwise, of which a plausible local map (whose closing arc
-  // is then looked up in the model), and of which the closing arc is
-  // similar to the third scene arc too (counted before the output's
-  // capacity is checked). A circuit that several passes find is counted
-  // once per pass. With scene_upsample 3, of the last pass only (as
-  // correspondences).
-  long long completion_tried = 0;
-  long long completion_clockwise = 0;
-  long long completion_plausible = 0;
-  long long completion_closed = 0;
-  bool truncated_keypoints = false;
-  bool truncated_arc_matches = false;
-  bool truncated_correspondences = false;
-  bool truncated_detections = false;
-  // Time per stage, milliseconds (steady clock).
-  double ms_keypoints = 0, ms_graph = 0, ms_describe = 0, ms_select = 0, ms_pose = 0;
-};
-
-// Detections of one frame: a fixed-capacity list (no heap), filled by
-// Detector::detect().
-class DetectionList {
- public:
-  using value_type = Detection;
-  using iterator = Detection*;
-  using const_iterator = const Detection*;
-
-  std::size_t size() const { return size_; }
-  bool empty() const { return size_ == 0; }
-  static constexpr std::size_t capacity() { return kMaxDetections; }
-  void clear() { size_ = 0; }
-  // Keeps the first `size` detections (no effect when there are fewer).
-  void truncate(std::size_t size) { size_ = size < size_ ? size : size_; }
-  // False (and nothing added) when full.
-  bool push_back(const Detection& d) {
-    if (size_ == capacity()) return false;
-    items_[size_++] = d;
-    return true;
-  }
-  Detection& operator[](std::size_t i) { return items_[i]; }
-  const Detection& operator[](std::size_t i) const { return items_[i]; }
-  iterator begin() { return items_; }
-  iterator end() { return items_ + size_; }
-  const_iterator begin() const { return items_; }
-  const_iterator end() const { return items_ + size_; }
-
- private:
-  Detection items_[kMaxDetections];
-  std::size_t size_ = 0;
-};
-
-// A read-only view of an array the detector owns (valid until the next
-// detect() call or the detector's end).
-template <class T>
-class ConstSpan {
- public:
-  ConstSpan() = default;
-  ConstSpan(const T* data, std::size_t size) : data_(data), size_(size) {}
-  std::size_t size() const { return size_; }
-  bool empty() const { return size_ == 0; }
-  const T* data() const { return data_; }
-  const T& operator[](std::size_t i) const { return data_[i]; }
-  const T* begin() const { return data_; }
-  const T* end() const { return data_ + size_; }
-
- private:
-  const T* data_ = nullptr;
-  std::size_t size_ = 0;
-};
-
-// One keygraph correspondence: model keypoint ids (global) and scene
-// keypoint positions for each vertex of the structure.
-struct KeygraphMatch {
-  int model_id = -1;
-  std::uint32_t model_vertices[4] = {0, 0, 0, 0};
-  std::int32_t scene_vertices[4] = {0, 0, 0, 0};  // indices into the frame's keypoints
-  // The triangle patch correlation of the first three vertices
-  // (RansacParams::min_triangle_correlation), in [-1, 1]; 0, neutral, when
-  // the check is off or could not judge the correspondence.
-  float patch_correlation = 0.f;
-};
+// Sets the option `name` ("ransac.seed", "descriptor.max_search_leaves",
+// "min_confidence"; keygraph/param_text.h spells the values) of `options`.
+// kInvalidArgument for a name that is not a runtime option (the index's
+// other parameters are fixed: rebuild the index to change them) or a value
+// that does not parse; ranges are checked by set_options().
+Status set_detect_option(DetectOptions& options, std::string_view name, std::string_view value);
+// The names set_detect_option() accepts.
+std::vector<std::string> detect_option_names();
 
 class Detector {
  public:
-  // Allocates the workspace for `limits` (one allocation).
+  // Allocates the workspace for `limits` (one allocation), with the index's
+  // options.
   explicit Detector(const ModelIndex& index, const Limits& limits = Limits{});
+  // The same with `options` (as set_options() takes them).
+  Detector(const ModelIndex& index, const Limits& limits, const DetectOptions& options);
   // Uses `size` bytes at `buffer` (64-byte aligned, at least
   // workspace_bytes(index, limits)) as the workspace and allocates nothing;
   // the caller keeps the buffer alive and untouched while the detector
@@ -213,9 +144,20 @@ class Detector {
   // Bytes of the workspace handed out so far: equal to workspace_bytes()
   // after construction and, since detect() allocates nothing, ever after.
   std::size_t workspace_used() const;
-  // Ok, or why construction failed (limits out of range, buffer too small).
+  // Ok, or why construction failed (limits or options out of range, buffer
+  // too small).
   const Status& status() const;
   const Limits& limits() const;
+
+  // Changes the options for the next frames (allocates nothing). Checked
+  // first: kInvalidArgument for a value out of range or a model id not in
+  // the index, and the options in effect stay as they were.
+  Status set_options(const DetectOptions& options);
+  // The options in effect; their `models` is nullptr (searches_model()
+  // says which models are searched).
+  const DetectOptions& options() const;
+  // Whether model `id` is searched (set_options()).
+  bool searches_model(int id) const;
 
   // Detects with the built-in keypoint detector (the index's detector must
   // be kHessian, and the index must have no vertex descriptors). Clears and
@@ -241,16 +183,15 @@ class Detector {
   const ModelIndex& index() const;
 
  private:
-  struct Impl;
-  struct Header;  // at the start of the workspace: its allocator and the Impl
+  struct Header;  // at the start of the workspace: its allocator and the pipeline
   static std::size_t header_bytes();
-  void place(void* buffer, std::size_t size);
+  void place(void* buffer, std::size_t size, const DetectOptions& options);
   void release();
 
   const ModelIndex* index_ = nullptr;
-  Header* header_ = nullptr;  // at the start of the workspace
-  Impl* impl_ = nullptr;      // header_->impl
-  void* owned_ = nullptr;     // the workspace, when the detector allocated it
+  Header* header_ = nullptr;           // at the start of the workspace
+  FramePipeline* pipeline_ = nullptr;  // header_->pipeline
+  void* owned_ = nullptr;              // the workspace, when the detector allocated it
   std::size_t workspace_size_ = 0;
   Limits limits_;
   Status status_;

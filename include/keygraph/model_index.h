@@ -23,8 +23,7 @@
 
 namespace kg {
 
-struct KdNode;
-struct KdNodeInt;
+struct IndexInternals;  // the core's access to the search tree (src/core/index)
 
 struct ModelInfo {
   std::string_view name;
@@ -157,17 +156,6 @@ class ModelIndex {
   // tree slot `slot` (< arc_count()), so a tree query's slots name arcs
   // directly.
   std::uint32_t arc_count() const { return arc_count_; }
-  // Asks the cache for arc(slot)'s memory: a hint, no effect on results.
-  // A look-up converts its slots after requesting them all, so the misses
-  // of these random reads overlap.
-  void prefetch_arc(std::uint32_t slot) const {
-#if defined(__GNUC__)
-    __builtin_prefetch(arc_from_ + slot);
-    __builtin_prefetch(arc_to_offset_ + slot);
-#else
-    (void)slot;
-#endif
-  }
   ModelArc arc(std::uint32_t slot) const {
     const std::uint32_t from = arc_from_[slot];
     return {from,
@@ -177,76 +165,42 @@ class ModelIndex {
   // Vertex descriptors (Params::descriptor.vertex_descriptor), one per
   // keypoint, kVertexDescriptorSize bytes each in keypoint order; nullptr
   // when the index has none (vertex_descriptor == kNone).
-  const std::uint8_t* vertex_descriptors() const {
-    return vertex_descriptors_;
-  }
+  const std::uint8_t* vertex_descriptors() const { return vertex_descriptors_; }
 
-  // Search tree over the arcs (core/index/kdtree.h has the layout), in the
-  // encoding params().descriptor.encoding names: per tree slot a point of
-  // kSearchDims components (the arc descriptor, then its scale attributes,
-  // core/description/arc_attributes.h) from the accessor of that encoding (the others
-  // return nullptr), and the internal nodes (KdNode for float32, KdNodeInt
-  // for int16 and int8).
-  DescriptorEncoding descriptor_encoding() const {
-    return params_.descriptor.encoding;
-  }
-  const ArcSearchPoint* tree_points_f32() const;
-  const ArcSearchPointI16* tree_points_i16() const;
-  const ArcSearchPointI8* tree_points_i8() const;
-  // Per tree leaf (2^tree_depth(), left to right) the component-wise minimum
-  // and maximum of its points, in the same encoding.
-  const ArcSearchPoint* leaf_bounds_f32() const;
-  const ArcSearchPointI16* leaf_bounds_i16() const;
-  const ArcSearchPointI8* leaf_bounds_i8() const;
-  const KdNode* tree_nodes_f32() const;
-  const KdNodeInt* tree_nodes_int() const;
-  std::uint32_t tree_node_count() const {
-    return tree_node_count_;
-  }
-  int tree_depth() const {
-    return tree_depth_;
-  }
+  // The arc descriptors' encoding (Params::descriptor.encoding).
+  DescriptorEncoding descriptor_encoding() const { return params_.descriptor.encoding; }
+  // Size of the search tree over the arcs (informational: `keygraph
+  // inspect`): its internal nodes and its depth (2^depth leaves).
+  std::uint32_t tree_node_count() const { return tree_node_count_; }
+  int tree_depth() const { return tree_depth_; }
 
   // The quality report (see ModelQuality); false for files of format 6.0
   // and indexes written without one.
-  bool has_quality() const {
-    return model_quality_ != nullptr;
-  }
+  bool has_quality() const { return model_quality_ != nullptr; }
   // Model i's record (has_quality() and 0 <= i < model_count(); else empty).
   ModelQuality model_quality(int i) const;
-  std::uint32_t view_quality_count() const {
-    return view_quality_count_;
-  }
+  std::uint32_t view_quality_count() const { return view_quality_count_; }
   ViewQuality view_quality(std::uint32_t i) const;  // i < view_quality_count()
-  std::uint32_t look_alike_count() const {
-    return look_alike_count_;
-  }
+  std::uint32_t look_alike_count() const { return look_alike_count_; }
   LookAlike look_alike(std::uint32_t i) const;  // i < look_alike_count()
 
   // The models' appearances (see ModelAppearance); false for files older
   // than format 6.2 and indexes built with views.appearance_size 0.
-  bool has_appearance() const {
-    return appearances_ != nullptr;
-  }
+  bool has_appearance() const { return appearances_ != nullptr; }
   // Model `model`'s appearance; empty when none is stored or model is not
   // in [0, model_count()).
   ModelAppearance appearance(int model) const;
   // The largest width * height over the models' appearances (0 when none):
   // what a workspace for aligning any of them needs.
-  int max_appearance_pixels() const {
-    return max_appearance_pixels_;
-  }
+  int max_appearance_pixels() const { return max_appearance_pixels_; }
 
   // The whole index: size in bytes and its first byte (mapped, owned or the
   // caller's buffer).
-  const std::uint8_t* data() const {
-    return data_;
-  }
-  std::size_t byte_size() const {
-    return size_;
-  }
+  const std::uint8_t* data() const { return data_; }
+  std::size_t byte_size() const { return size_; }
 
  private:
+  friend struct IndexInternals;
   Status validate(const std::uint8_t* data, std::size_t size);
   Status validate_quality(const std::uint8_t* quality, std::uint32_t quality_count,
                           const std::uint8_t* views, std::uint32_t view_count,

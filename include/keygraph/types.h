@@ -2,7 +2,6 @@
 #pragma once
 
 #include <array>
-#include <cstdint>
 
 namespace kg {
 
@@ -31,23 +30,8 @@ inline Point2f apply(const Homography& h, Point2f p) {
           static_cast<float>((h[3] * p.x + h[4] * p.y + h[5]) / w)};
 }
 
-// Number of Fourier coefficients kept per arc (paper: m = 3), so an arc
-// descriptor has 2 * kMaxCoefficients numbers (real and imaginary parts).
+// Number of Fourier coefficients an arc descriptor can keep (paper: m = 3):
+// the upper bound of DescriptorParams::coefficients.
 inline constexpr int kMaxCoefficients = 3;
-inline constexpr int kDescriptorSize = 2 * kMaxCoefficients;
-using ArcDescriptor = std::array<float, kDescriptorSize>;
-// The same descriptor quantised for storage and search
-// (DescriptorParams::encoding): each component times 32767 or 127, rounded.
-using ArcDescriptorI16 = std::array<std::int16_t, kDescriptorSize>;
-using ArcDescriptorI8 = std::array<std::int8_t, kDescriptorSize>;
-
-// What the model index's search tree stores per arc: the descriptor, then
-// the arc's scale attributes ln(length / sigma) at its start and at its end
-// (core/description/arc_attributes.h), in the same encoding.
-inline constexpr int kArcAttributes = 2;
-inline constexpr int kSearchDims = kDescriptorSize + kArcAttributes;
-using ArcSearchPoint = std::array<float, kSearchDims>;
-using ArcSearchPointI16 = std::array<std::int16_t, kSearchDims>;
-using ArcSearchPointI8 = std::array<std::int8_t, kSearchDims>;
 
 }  // namespace kg

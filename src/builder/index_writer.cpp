@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "core/description/arc_attributes.h"
+#include "core/description/arc_types.h"
 #include "core/description/descriptor_encoding.h"
 #include "core/index/crc32.h"
 #include "core/index/index_format.h"

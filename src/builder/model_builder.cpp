@@ -18,6 +18,7 @@
 #include "builder/sift_descriptors.h"
 #include "core/description/arc_attributes.h"
 #include "core/description/arc_descriptor.h"
+#include "core/description/arc_types.h"
 #include "core/description/descriptor_encoding.h"
 #include "core/image/blur.h"
 #include "core/image/plane.h"

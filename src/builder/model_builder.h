@@ -12,6 +12,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "core/description/arc_types.h"
 #include "keygraph/model_index.h"
 #include "keygraph/params.h"
 #include "keygraph/status.h"

@@ -13,6 +13,7 @@
 #include "builder/in_memory_index.h"
 #include "builder/parallel.h"
 #include "core/description/arc_attributes.h"
+#include "core/description/arc_types.h"
 #include "core/index/kdtree.h"
 
 namespace kg {

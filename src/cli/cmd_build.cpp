@@ -36,12 +36,12 @@
 #include "builder/model_set.h"
 #include "builder/model_views.h"
 #include "builder/parallel.h"
-#include "builder/param_overrides.h"
 #include "builder/progress.h"
 #include "cli/commands.h"
 #include "cli/device/options.h"
 #include "cli/device/quality_report.h"
-#include "core/index/param_names.h"
+#include "core/params/param_names.h"
+#include "keygraph/param_text.h"
 #include "platform/files/output_file.h"
 
 namespace kg::cli {
@@ -273,7 +273,7 @@ int cmd_build(const Args& args) {
           "the smallest size, pixels on the long edge, at which a model must still be\n"
           "found: views are simulated down to it; 0: no views (views.min_size)",
           [&params](const std::string& v) -> std::string {
-            if (Status s = apply_param_override("views.min_size=" + v, params); !s)
+            if (Status s = set_param(params, "views.min_size=" + v); !s)
               return "--min-size: " + s.message();
             return {};
           },
@@ -284,7 +284,7 @@ int cmd_build(const Args& args) {
           "be found: frontal views are simulated up to it; 1: none larger than the\n"
           "image (views.max_scale)",
           [&params](const std::string& v) -> std::string {
-            if (Status s = apply_param_override("views.max_scale=" + v, params); !s)
+            if (Status s = set_param(params, "views.max_scale=" + v); !s)
               return "--max-scale: " + s.message();
             return {};
           },
@@ -295,7 +295,7 @@ int cmd_build(const Args& args) {
           "the tilt levels in ASIFT's steps (1 to about 55, 2 to about 62) unless\n"
           "views.tilt_levels is --set (views.max_tilt)",
           [&params, &tilt_given](const std::string& v) -> std::string {
-            if (Status s = apply_param_override("views.max_tilt=" + v, params); !s)
+            if (Status s = set_param(params, "views.max_tilt=" + v); !s)
               return "--max-tilt: " + s.message();
             tilt_given = true;
             return {};
@@ -305,7 +305,7 @@ int cmd_build(const Args& args) {
              "any parameter of keygraph/params.h\n"
              "(e.g. graph.max_keypoints=300; keygraph inspect lists them all)",
              [&params, &tilt_levels_given](const std::string& v) -> std::string {
-               if (Status s = apply_param_override(v, params); !s) return s.message();
+               if (Status s = set_param(params, v); !s) return s.message();
                if (v.rfind("views.tilt_levels=", 0) == 0) tilt_levels_given = true;
                return {};
              })

@@ -11,7 +11,6 @@
 #include <cstdio>
 #include <sstream>
 
-#include "builder/param_overrides.h"
 #include "builder/progress.h"
 #include "cli/commands.h"
 #include "cli/device/options.h"
@@ -22,6 +21,7 @@
 #include "eval/report_io.h"
 #include "eval/synth_eval.h"
 #include "keygraph/detector.h"
+#include "keygraph/param_text.h"
 
 namespace kg::cli {
 
@@ -42,7 +42,7 @@ std::string joined(const std::vector<std::string>& items) {
 
 Options::Apply set_param(Params& params) {
   return [&params](const std::string& v) {
-    const Status s = apply_param_override(v, params);
+    const Status s = set_param(params, v);
     return s ? std::string() : s.message();
   };
 }

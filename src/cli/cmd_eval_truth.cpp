@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "builder/param_overrides.h"
 #include "builder/progress.h"
 #include "cli/commands.h"
 #include "cli/device/options.h"
@@ -15,6 +14,7 @@
 #include "eval/baselines.h"
 #include "eval/truth_eval.h"
 #include "eval/truth_report.h"
+#include "keygraph/param_text.h"
 
 namespace kg::cli {
 
@@ -44,7 +44,7 @@ Options truth_options(TruthEvalOptions& o, std::string& out_dir, bool& quiet) {
               "a detection is correct when every corner is within PX pixels")
       .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h (with --models)",
              [&o](const std::string& v) {
-               const Status s = apply_param_override(v, o.params);
+               const Status s = set_param(o.params, v);
                o.params_set = true;
                return s ? std::string() : s.message();
              })

@@ -12,13 +12,13 @@
 
 #include <opencv2/core/utility.hpp>
 
-#include "builder/param_overrides.h"
 #include "cli/commands.h"
 #include "cli/device/options.h"
 #include "core/index/index_format.h"
 #include "eval/repeatability.h"
 #include "eval/repeatability_report.h"
 #include "eval/report_io.h"
+#include "keygraph/param_text.h"
 
 namespace kg::cli {
 
@@ -73,7 +73,7 @@ int cmd_repeatability(const Args& args) {
           "hessian,mser,sift,orb,akaze")
       .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h",
              [&params](const std::string& v) {
-               const Status s = apply_param_override(v, params);
+               const Status s = set_param(params, v);
                return s ? std::string() : s.message();
              })
       .repeatable()

@@ -9,12 +9,12 @@
 
 #include "builder/image_io.h"
 #include "builder/keypoints.h"
-#include "builder/param_overrides.h"
 #include "core/index/index_format.h"
 #include "core/keygraphs/delaunay.h"
 #include "core/pose/point_grid.h"
 #include "core/sampling/sampling.h"
 #include "eval/oxford.h"
+#include "keygraph/param_text.h"
 
 namespace kg {
 
@@ -73,7 +73,7 @@ Status parse_repeatability_detector(const std::string& text, const Params& base,
     const std::string setting = parts[i].find('.') < parts[i].find('=')
                                     ? parts[i]
                                     : "keypoints." + parts[0] + "_" + parts[i];
-    if (Status s = apply_param_override(setting, out.params); !s)
+    if (Status s = set_param(out.params, setting); !s)
       return {s.code(), "detector '" + text + "': " + s.message()};
   }
   out.params.keypoints.detector = out.method == RepeatabilityMethod::kMser

@@ -44,9 +44,9 @@
 #include "builder/image_io.h"
 #include "builder/in_memory_index.h"
 #include "builder/model_builder.h"
-#include "builder/param_overrides.h"
 #include "core/description/arc_attributes.h"
 #include "core/description/arc_descriptor.h"
+#include "core/description/arc_types.h"
 #include "core/image/blur.h"
 #include "core/keygraphs/delaunay.h"
 #include "core/keygraphs/keygraph.h"
@@ -55,6 +55,7 @@
 #include "core/selection/selection.h"
 #include "eval/baselines.h"
 #include "keygraph/detector.h"
+#include "keygraph/param_text.h"
 
 namespace kg {
 namespace {
@@ -377,24 +378,37 @@ void arc_search_stage(benchmark::State& state, const Frame* f) {
   state.counters["matches"] = static_cast<double>(matches);
 }
 
-// Keytuple selection with its lazy descriptors and look-ups (ms_select).
+// The scene arcs' descriptors (ms_describe, without the blur) and the
+// keytuple selection with its look-ups (ms_select), without circuit
+// completion.
 void selection_stage(benchmark::State& state, const Frame* f) {
   const ArcSearch search(data().index.index());
+  const Params& params = data().index.index().params();
   Selector selector;
   selector.reserve(data().limits, data().index.index().keypoint_count());
+  SceneArcs arcs;
+  arcs.reserve(f->gray.cols, f->gray.rows, static_cast<int>(f->points.size()),
+               params.descriptor.blur_sigma);
+  arcs.blur(ImageView(f->gray.data, f->gray.cols, f->gray.rows,
+                      static_cast<std::ptrdiff_t>(f->gray.step)),
+            params.descriptor);
+  const Structure structure = params.graph.structure;
+  const int arcs_per_keygraph = structure == Structure::kArc ? 1 : vertex_count(structure);
   SelectionInput in;
   in.index = &data().index.index();
+  in.params = &params;
   in.search = &search;
-  in.blurred = view_of(f->blurred);
   in.scene_points = f->points.data();
-  in.scene_scales = f->scales.data();
   in.triangulation = &f->triangulation;
   in.keygraphs = &f->keygraphs;
+  in.arcs = &arcs;
   WorkVector<KeygraphMatch> matches;
   matches.reserve(static_cast<std::size_t>(data().limits.max_correspondences));
   DetectStats stats;
   for (auto _ : state) {
     stats = DetectStats{};
+    arcs.describe(search, params, f->points.data(), f->scales.data(), f->triangulation,
+                  f->keygraphs, arcs_per_keygraph);
     selector.select(in, data().limits, matches, stats);
     benchmark::DoNotOptimize(matches.data());
   }

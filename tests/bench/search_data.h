@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/description/arc_types.h"
 #include "core/index/kdtree.h"
 #include "core/support/rng.h"
 #include "keygraph/types.h"

@@ -20,11 +20,11 @@
 #include "builder/index_writer.h"
 #include "builder/model_builder.h"
 #include "builder/model_quality.h"
-#include "builder/param_overrides.h"
 #include "cli/device/quality_report.h"
 #include "eval/synth/sign_catalogue.h"
 #include "eval/synth/sign_pictograms.h"
 #include "keygraph/model_index.h"
+#include "keygraph/param_text.h"
 #include "support/test_data.h"
 
 namespace kg {

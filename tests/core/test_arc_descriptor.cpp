@@ -15,6 +15,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/description/arc_types.h"
 #include "core/image/blur.h"
 #include "core/image/plane.h"
 #include "support/test_data.h"

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/description/arc_descriptor.h"
+#include "core/description/arc_types.h"
 #include "core/description/descriptor_encoding.h"
 #include "core/index/kdtree.h"
 #include "core/index/leaf_scan.h"

@@ -26,6 +26,7 @@
 #include <flann/flann.hpp>
 
 #include "bench/search_data.h"
+#include "core/description/arc_types.h"
 #include "core/index/kdtree.h"
 #include "core/support/rng.h"
 

@@ -35,9 +35,11 @@
 #include "builder/model_builder.h"
 #include "builder/model_quality.h"
 #include "core/description/arc_attributes.h"
+#include "core/description/arc_types.h"
 #include "core/description/descriptor_encoding.h"
 #include "core/index/crc32.h"
 #include "core/index/index_format.h"
+#include "core/index/index_internals.h"
 #include "core/index/kdtree.h"
 #include "core/keygraphs/keygraph.h"
 #include "core/pose/homography.h"
@@ -290,11 +292,11 @@ bool slot_holds(const ModelIndex& index, std::uint32_t slot, const ArcDescriptor
   const ArcSearchPoint p = search_point(d, attributes);
   switch (index.descriptor_encoding()) {
     case DescriptorEncoding::kFloat32:
-      return index.tree_points_f32()[slot] == p;
+      return IndexInternals::tree_points_f32(index)[slot] == p;
     case DescriptorEncoding::kInt16:
-      return index.tree_points_i16()[slot] == encode_point<std::int16_t>(p);
+      return IndexInternals::tree_points_i16(index)[slot] == encode_point<std::int16_t>(p);
     case DescriptorEncoding::kInt8:
-      return index.tree_points_i8()[slot] == encode_point<std::int8_t>(p);
+      return IndexInternals::tree_points_i8(index)[slot] == encode_point<std::int8_t>(p);
   }
   return false;
 }
@@ -383,16 +385,18 @@ void expect_matches(const ModelIndex& index, const std::vector<BuiltModel>& mode
   const std::uint32_t nodes = (1u << index.tree_depth()) - 1;
   ASSERT_EQ(index.tree_node_count(), nodes);
   const DescriptorEncoding e = index.descriptor_encoding();
-  EXPECT_EQ(index.tree_points_f32() != nullptr, e == DescriptorEncoding::kFloat32);
-  EXPECT_EQ(index.tree_points_i16() != nullptr, e == DescriptorEncoding::kInt16);
-  EXPECT_EQ(index.tree_points_i8() != nullptr, e == DescriptorEncoding::kInt8);
-  EXPECT_EQ(index.tree_nodes_f32() != nullptr, e == DescriptorEncoding::kFloat32);
-  EXPECT_EQ(index.tree_nodes_int() != nullptr, e != DescriptorEncoding::kFloat32);
+  EXPECT_EQ(IndexInternals::tree_points_f32(index) != nullptr, e == DescriptorEncoding::kFloat32);
+  EXPECT_EQ(IndexInternals::tree_points_i16(index) != nullptr, e == DescriptorEncoding::kInt16);
+  EXPECT_EQ(IndexInternals::tree_points_i8(index) != nullptr, e == DescriptorEncoding::kInt8);
+  EXPECT_EQ(IndexInternals::tree_nodes_f32(index) != nullptr, e == DescriptorEncoding::kFloat32);
+  EXPECT_EQ(IndexInternals::tree_nodes_int(index) != nullptr, e != DescriptorEncoding::kFloat32);
   for (std::uint32_t n = 0; n < nodes; ++n) {
     if (e == DescriptorEncoding::kFloat32) {
-      ASSERT_LT(index.tree_nodes_f32()[n].dim, static_cast<std::uint32_t>(kSearchDims));
+      ASSERT_LT(IndexInternals::tree_nodes_f32(index)[n].dim,
+                static_cast<std::uint32_t>(kSearchDims));
     } else {
-      ASSERT_LT(index.tree_nodes_int()[n].dim, static_cast<std::uint32_t>(kSearchDims));
+      ASSERT_LT(IndexInternals::tree_nodes_int(index)[n].dim,
+                static_cast<std::uint32_t>(kSearchDims));
     }
   }
 }
@@ -492,17 +496,20 @@ TEST_F(ModelIndexTest, ArcSearchEqualsBruteForceOnStoredDescriptors) {
           };
           switch (e) {
             case DescriptorEncoding::kFloat32:
-              near = kd_distance2(index.tree_points_f32()[slot], p) < r * r;
-              inside = in_box(index.tree_points_f32()[slot], p, box);
+              near = kd_distance2(IndexInternals::tree_points_f32(index)[slot], p) < r * r;
+              inside = in_box(IndexInternals::tree_points_f32(index)[slot], p, box);
               break;
             case DescriptorEncoding::kInt16:
-              near =
-                  kd_distance2(index.tree_points_i16()[slot], encode_point<std::int16_t>(p)) < r2;
-              inside = in_box(index.tree_points_i16()[slot], encode_point<std::int16_t>(p), box);
+              near = kd_distance2(IndexInternals::tree_points_i16(index)[slot],
+                                  encode_point<std::int16_t>(p)) < r2;
+              inside = in_box(IndexInternals::tree_points_i16(index)[slot],
+                              encode_point<std::int16_t>(p), box);
               break;
             case DescriptorEncoding::kInt8:
-              near = kd_distance2(index.tree_points_i8()[slot], encode_point<std::int8_t>(p)) < r2;
-              inside = in_box(index.tree_points_i8()[slot], encode_point<std::int8_t>(p), box);
+              near = kd_distance2(IndexInternals::tree_points_i8(index)[slot],
+                                  encode_point<std::int8_t>(p)) < r2;
+              inside = in_box(IndexInternals::tree_points_i8(index)[slot],
+                              encode_point<std::int8_t>(p), box);
               break;
           }
           if (near && (inside || !with_box)) expected.push_back(slot);
@@ -1122,7 +1129,7 @@ TEST(ModelViewsIndex, ViewRangesAndViewAttributesRoundTrip) {
   for (std::size_t i = 0; i < bm.arcs.size(); ++i)
     built.insert({{bm.arcs[i].from, bm.arcs[i].to}, bm.arc_attributes[i]});
   ASSERT_EQ(index.arc_count(), bm.arcs.size());
-  const ArcSearchPointI8* points = index.tree_points_i8();
+  const ArcSearchPointI8* points = IndexInternals::tree_points_i8(index);
   ASSERT_NE(points, nullptr);
   for (std::uint32_t slot = 0; slot < index.arc_count(); ++slot) {
     const ModelArc a = index.arc(slot);

@@ -12,6 +12,7 @@
 
 #include "builder/in_memory_index.h"
 #include "builder/model_builder.h"
+#include "core/description/arc_types.h"
 #include "core/pose/point_grid.h"
 #include "core/pose/pose.h"
 #include "core/pose/ransac.h"
@@ -147,9 +148,9 @@ Result estimate(const Scenario& s) {
   const FrameKeypoints frame = frame_of(s, grid);
   Rng rng(7);
   bool truncated = false;
-  r.iterations =
-      pose.estimate(s.index.index(), 0, s.matches.data(), static_cast<int>(s.matches.size()),
-                    s.scene_points.data(), frame, rng, 16, r.out, truncated);
+  r.iterations = pose.estimate(s.index.index(), s.index.index().params(), 0, s.matches.data(),
+                               static_cast<int>(s.matches.size()), s.scene_points.data(), frame,
+                               rng, 16, r.out, truncated);
   return r;
 }
 

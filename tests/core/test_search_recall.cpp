@@ -23,8 +23,8 @@
 
 #include "builder/desktop_detect.h"
 #include "builder/model_builder.h"
-#include "builder/param_overrides.h"
 #include "core/selection/selection.h"
+#include "keygraph/param_text.h"
 #include "support/opencv_scenes.h"
 #include "support/test_data.h"
 

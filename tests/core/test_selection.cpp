@@ -25,6 +25,7 @@
 #include "builder/model_builder.h"
 #include "core/description/arc_attributes.h"
 #include "core/description/arc_descriptor.h"
+#include "core/description/arc_types.h"
 #include "core/image/blur.h"
 #include "core/keygraphs/delaunay.h"
 #include "core/keygraphs/keygraph.h"
@@ -176,7 +177,7 @@ const Case& the_case(Structure structure = Structure::kCircuit3) {
 }
 
 // The selector's correspondences as a set (each must be new). Checks the
-// candidate flags after every keygraph; `kept_share`: the share of the
+// join's state after every keygraph; `kept_share`: the share of the
 // model arcs its semi-join received that it kept.
 // `leaves`: the search's leaf budget (-1: the index's); `adjacency`: set,
 // circuits are completed from two lists (graph.complete_circuits).
@@ -186,26 +187,51 @@ std::set<Match> select_all(const Case& c, const Limits& limits, DetectStats& sta
   const ArcSearch search =
       leaves < 0 ? ArcSearch(c.built.index()) : ArcSearch(c.built.index(), leaves);
   Selector selector;
-  selector.set_checking(true);
   selector.reserve(limits, c.built.index().keypoint_count(), adjacency != nullptr);
+  // The description stage, as the detector runs it before the selection.
+  const cv::Mat& gray = c.scene.gray;
+  SceneArcs arcs;
+  arcs.reserve(gray.cols, gray.rows, static_cast<int>(c.scene.points.size()),
+               c.params.descriptor.blur_sigma);
+  arcs.blur(ImageView(gray.data, gray.cols, gray.rows, static_cast<int>(gray.step)),
+            c.params.descriptor);
+  const Structure structure = c.params.graph.structure;
+  arcs.describe(search, c.params, c.scene.points.data(), c.scene.scales.data(),
+                c.scene.triangulation, c.scene.keygraphs,
+                structure == Structure::kArc ? 1 : vertex_count(structure));
   SelectionInput in;
   in.index = &c.built.index();
+  in.params = &c.params;
   in.search = &search;
-  in.blurred = view_of(c.scene.blurred);
   in.scene_points = c.scene.points.data();
-  in.scene_scales = c.scene.scales.data();
   in.triangulation = &c.scene.triangulation;
   in.keygraphs = &c.scene.keygraphs;
+  in.arcs = &arcs;
   in.adjacency = adjacency;
   WorkVector<KeygraphMatch> matches;
   matches.reserve(static_cast<std::size_t>(limits.max_correspondences));
+  // The join's state is clear after every keygraph: selected one keygraph
+  // at a time (a flag left set would only cost time, so no output shows it).
+  WorkVector<SceneKeygraph> one;
+  one.reserve(1);
+  SelectionInput single = in;
+  single.keygraphs = &one;
+  WorkVector<KeygraphMatch> scratch;
+  scratch.reserve(static_cast<std::size_t>(limits.max_correspondences));
+  int left_set = 0;
+  for (const SceneKeygraph& g : c.scene.keygraphs) {
+    one.assign(1, g);
+    DetectStats ignored;
+    selector.select(single, limits, scratch, ignored);
+    left_set += selector.join_state_clear() ? 0 : 1;
+  }
+  EXPECT_EQ(left_set, 0) << "keygraphs that left a candidate flag or chain head set";
   selector.select(in, limits, matches, stats);
-  EXPECT_TRUE(selector.candidate_flags_clear()) << "a candidate flag left set after a keygraph";
+  EXPECT_TRUE(selector.join_state_clear()) << "a candidate flag left set after the frame";
   if (kept_share != nullptr)
-    *kept_share = selector.semi_join_arcs_in() == 0
-                      ? 1.0
-                      : static_cast<double>(selector.semi_join_arcs_kept()) /
-                            static_cast<double>(selector.semi_join_arcs_in());
+    *kept_share = stats.join_arcs_in == 0 ? 1.0
+                                          : static_cast<double>(stats.join_arcs_kept) /
+                                                static_cast<double>(stats.join_arcs_in);
   std::set<Match> selected;
   for (const KeygraphMatch& m : matches) {
     EXPECT_EQ(m.model_id, 0);

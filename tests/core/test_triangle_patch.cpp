@@ -160,7 +160,7 @@ TEST_F(TrianglePatchTest, VectorSamplingEqualsBaseline) {
   const SimdLevel chosen = simd_level();
   std::printf("dispatched level: %s\n", simd_level_name(chosen));
   const std::vector<TrianglePatch> dispatched = run();
-  set_simd_level(SimdLevel::kBaseline);
+  set_simd_level(SimdLevel::kScalar);
   const std::vector<TrianglePatch> baseline = run();
   set_simd_level(SimdLevel::kAvx2);
   EXPECT_EQ(simd_level(), chosen);  // restored

@@ -11,10 +11,10 @@
 #include <fstream>
 #include <sstream>
 
-#include "builder/param_overrides.h"
 #include "core/index/index_format.h"
 #include "eval/oxford.h"
 #include "eval/oxford_report.h"
+#include "keygraph/param_text.h"
 #include "support/data_dir.h"
 
 namespace kg {
@@ -210,17 +210,17 @@ TEST(OxfordEval, ReadsTextHomography) {
 
 TEST(ParamOverrides, SetsValidatesAndRejects) {
   Params p;
-  ASSERT_TRUE(apply_param_override("descriptor.similarity_threshold=0.5", p).is_ok());
+  ASSERT_TRUE(set_param(p, "descriptor.similarity_threshold=0.5").is_ok());
   EXPECT_FLOAT_EQ(p.descriptor.similarity_threshold, 0.5f);
-  ASSERT_TRUE(apply_param_override("graph.scene_sampling=random", p).is_ok());
+  ASSERT_TRUE(set_param(p, "graph.scene_sampling=random").is_ok());
   EXPECT_EQ(p.graph.scene_sampling, SceneSampling::kRandom);
-  ASSERT_TRUE(apply_param_override("ransac.max_iterations=500", p).is_ok());
+  ASSERT_TRUE(set_param(p, "ransac.max_iterations=500").is_ok());
   EXPECT_EQ(p.ransac.max_iterations, 500);
-  EXPECT_FALSE(apply_param_override("ransac.max_iterations=5x", p).is_ok());
-  EXPECT_FALSE(apply_param_override("no.such=1", p).is_ok());
-  EXPECT_FALSE(apply_param_override("missing-equals", p).is_ok());
-  ASSERT_TRUE(apply_param_override("graph.min_distance=200", p).is_ok());  // parses ...
-  EXPECT_FALSE(format::validate_params(p).is_ok());                        // ... but min > max
+  EXPECT_FALSE(set_param(p, "ransac.max_iterations=5x").is_ok());
+  EXPECT_FALSE(set_param(p, "no.such=1").is_ok());
+  EXPECT_FALSE(set_param(p, "missing-equals").is_ok());
+  ASSERT_TRUE(set_param(p, "graph.min_distance=200").is_ok());  // parses ...
+  EXPECT_FALSE(format::validate_params(p).is_ok());             // ... but min > max
   EXPECT_GT(param_names().size(), 20u);
 }
 

@@ -15,11 +15,11 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "builder/param_overrides.h"
 #include "eval/synth/sign_catalogue.h"
 #include "eval/synth/synth_frame.h"
 #include "eval/synth/synth_set.h"
 #include "eval/synth_eval.h"
+#include "keygraph/param_text.h"
 
 namespace kg {
 namespace {

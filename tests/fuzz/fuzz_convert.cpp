@@ -12,13 +12,13 @@
 #include <cstring>
 #include <vector>
 
+#include "keygraph/simd.h"
 #include "platform/convert.h"
 
 namespace {
 
 using kg::platform::FrameLayout;
 using kg::platform::PixelFormat;
-using kg::platform::Simd;
 
 void require(bool ok, const char* what) {
   if (!ok) {
@@ -55,10 +55,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       static_cast<std::size_t>(layout.width) * static_cast<std::size_t>(layout.height);
   std::vector<std::uint8_t> scratch_a(scratch_size), scratch_b(scratch_size);
   kg::ImageView a, b;
+  kg::set_simd_level(kg::best_simd_level());
   const kg::Status sa = kg::platform::to_gray(layout, frame.data(), frame.size(), scratch_a.data(),
-                                              scratch_a.size(), a, Simd::kAuto);
+                                              scratch_a.size(), a);
+  kg::set_simd_level(kg::SimdLevel::kScalar);
   const kg::Status sb = kg::platform::to_gray(layout, frame.data(), frame.size(), scratch_b.data(),
-                                              scratch_b.size(), b, Simd::kScalar);
+                                              scratch_b.size(), b);
+  kg::set_simd_level(kg::best_simd_level());
   require(sa.is_ok() == sb.is_ok(), "SIMD and scalar paths disagree on the status");
   if (luma == 0 || frame.size() < luma)
     require(!sa.is_ok(), "accepted a short buffer or bad layout");

@@ -1,6 +1,6 @@
 // libFuzzer target for the command line's value parsers: strict integers
 // (parse_int), WIDTHxHEIGHT (parse_size), --set NAME=VALUE
-// (apply_param_override, then the whole parameter set validated as the
+// (set_param, then the whole parameter set validated as the
 // index writer does) and --draw file names (draw_paths). Each input is
 // split at NUL bytes into arguments. A parsed value must be within its range
 // and print back as the text it came from (leading zeros aside).
@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "builder/param_overrides.h"
 #include "cli/device/command_line.h"
 #include "core/index/index_format.h"
+#include "keygraph/param_text.h"
 
 namespace {
 
@@ -56,7 +56,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
               "parse_size: values differ from the text");
     }
     kg::Params params;
-    if (kg::apply_param_override(a, params)) (void)kg::format::validate_params(params);
+    if (kg::set_param(params, a)) (void)kg::format::validate_params(params);
   }
   if (args.size() >= 2) {
     std::vector<std::string> scenes(args.begin() + 1, args.end());

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "platform/convert.h"
+#include "support/simd_scope.h"
 
 namespace kg::platform {
 namespace {
@@ -141,11 +142,12 @@ TEST(Convert, YuyvKnownBuffer) {
       10, 128, 11, 129, 12, 130, 99, 131, p, p, p, p, p, p, p, p,
       20, 140, 21, 141, 22, 142, 98, 143, p, p, p, p, p, p, p, p,
   };
-  for (Simd simd : {Simd::kAuto, Simd::kScalar}) {
+  for (SimdLevel level : {best_simd_level(), SimdLevel::kScalar}) {
+    const test::SimdScope scope(level);
     std::uint8_t gray[6] = {};
     ImageView out;
     ASSERT_TRUE(
-        to_gray({PixelFormat::kYuyv, 3, 2, 16}, frame, sizeof frame, gray, sizeof gray, out, simd));
+        to_gray({PixelFormat::kYuyv, 3, 2, 16}, frame, sizeof frame, gray, sizeof gray, out));
     EXPECT_EQ(out.data, gray);
     EXPECT_EQ(out.stride, 3);
     const std::uint8_t expected[6] = {10, 11, 12, 20, 21, 22};
@@ -158,11 +160,12 @@ TEST(Convert, UyvyKnownBuffer) {
       128, 10, 129, 11, 130, 12, 131, 13,  // row 0: 4 pixels
       140, 20, 141, 21, 142, 22, 143, 23,  // row 1
   };
-  for (Simd simd : {Simd::kAuto, Simd::kScalar}) {
+  for (SimdLevel level : {best_simd_level(), SimdLevel::kScalar}) {
+    const test::SimdScope scope(level);
     std::uint8_t gray[8] = {};
     ImageView out;
     ASSERT_TRUE(
-        to_gray({PixelFormat::kUyvy, 4, 2, 8}, frame, sizeof frame, gray, sizeof gray, out, simd));
+        to_gray({PixelFormat::kUyvy, 4, 2, 8}, frame, sizeof frame, gray, sizeof gray, out));
     const std::uint8_t expected[8] = {10, 11, 12, 13, 20, 21, 22, 23};
     for (int i = 0; i < 8; ++i) EXPECT_EQ(gray[i], expected[i]) << i;
   }
@@ -177,14 +180,15 @@ TEST(Convert, PackedOddWidthsAndPaddedStrides) {
         for (int pad : {0, 1, 5, 64}) {
           const std::ptrdiff_t stride = static_cast<std::ptrdiff_t>(min_stride(f, w)) + pad;
           const std::vector<std::uint8_t> buf = make_packed(w, h, stride, uyvy);
-          for (Simd simd : {Simd::kAuto, Simd::kScalar}) {
+          for (SimdLevel level : {best_simd_level(), SimdLevel::kScalar}) {
+            const test::SimdScope scope(level);
             std::vector<std::uint8_t> gray(static_cast<std::size_t>(w * h));
             ImageView out;
             // Exactly the bytes read: the last row without its padding.
             const std::size_t size = luma_bytes({f, w, h, stride});
             ASSERT_LE(size, buf.size());
             ASSERT_TRUE(
-                to_gray({f, w, h, stride}, buf.data(), size, gray.data(), gray.size(), out, simd));
+                to_gray({f, w, h, stride}, buf.data(), size, gray.data(), gray.size(), out));
             expect_luma(out, w, h);
           }
         }
@@ -199,12 +203,13 @@ TEST(Convert, PackedKernelsLeaveDestinationPaddingAlone) {
   const std::ptrdiff_t src_stride = 80, dst_stride = 45;
   for (bool uyvy : {false, true}) {
     const std::vector<std::uint8_t> src = make_packed(w, h, src_stride, uyvy);
-    for (Simd simd : {Simd::kAuto, Simd::kScalar}) {
+    for (SimdLevel level : {best_simd_level(), SimdLevel::kScalar}) {
+      const test::SimdScope scope(level);
       std::vector<std::uint8_t> dst(static_cast<std::size_t>(dst_stride * h), 0xCD);
       if (uyvy) {
-        uyvy_to_gray(src.data(), src_stride, w, h, dst.data(), dst_stride, simd);
+        uyvy_to_gray(src.data(), src_stride, w, h, dst.data(), dst_stride);
       } else {
-        yuyv_to_gray(src.data(), src_stride, w, h, dst.data(), dst_stride, simd);
+        yuyv_to_gray(src.data(), src_stride, w, h, dst.data(), dst_stride);
       }
       expect_luma(ImageView(dst.data(), w, h, dst_stride), w, h);
       for (int y = 0; y < h; ++y) {
@@ -229,10 +234,11 @@ TEST(Convert, NeonMatchesScalarOnRandomFrames) {
     for (std::uint8_t& b : src) b = static_cast<std::uint8_t>(byte(rng));
     std::vector<std::uint8_t> a(static_cast<std::size_t>(w * h)), s(a.size());
     ImageView va, vs;
-    ASSERT_TRUE(
-        to_gray({f, w, h, stride}, src.data(), src.size(), a.data(), a.size(), va, Simd::kAuto));
-    ASSERT_TRUE(
-        to_gray({f, w, h, stride}, src.data(), src.size(), s.data(), s.size(), vs, Simd::kScalar));
+    ASSERT_TRUE(to_gray({f, w, h, stride}, src.data(), src.size(), a.data(), a.size(), va));
+    ASSERT_TRUE([&] {
+      const test::SimdScope scalar(SimdLevel::kScalar);
+      return to_gray({f, w, h, stride}, src.data(), src.size(), s.data(), s.size(), vs);
+    }());
     ASSERT_EQ(a, s) << pixel_format_name(f) << " " << w << "x" << h << " stride " << stride;
     // And both equal the definition: every other byte.
     for (int y = 0; y < h; ++y) {

@@ -20,7 +20,7 @@
 #include "core/description/descriptor_encoding.h"
 #include "core/index/crc32.h"
 #include "core/index/index_format.h"
-#include "core/index/param_names.h"
+#include "core/params/param_names.h"
 #include "core/selection/selection.h"
 #include "keygraph/model_index.h"
 #include "platform/files/regular_file.h"

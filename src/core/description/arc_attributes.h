@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <type_traits>
 
+#include "core/description/arc_types.h"
 #include "core/description/descriptor_encoding.h"
 #include "keygraph/params.h"
 #include "keygraph/types.h"

@@ -1,4 +1,5 @@
 #include "core/description/arc_descriptor.h"
+#include "core/description/arc_types.h"
 
 #include <algorithm>
 #include <cmath>

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/description/arc_types.h"
 #include "keygraph/image.h"
 #include "keygraph/params.h"
 #include "keygraph/types.h"

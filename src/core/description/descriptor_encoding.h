@@ -10,7 +10,8 @@
 #include <cstdint>
 #include <limits>
 
-#include "core/index/param_names.h"
+#include "core/description/arc_types.h"
+#include "core/params/param_names.h"
 #include "keygraph/params.h"
 #include "keygraph/types.h"
 

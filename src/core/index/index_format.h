@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "core/description/arc_types.h"
 #include "keygraph/params.h"
 #include "keygraph/status.h"
 #include "keygraph/types.h"

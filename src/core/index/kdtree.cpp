@@ -4,6 +4,7 @@
 #include <limits>
 #include <type_traits>
 
+#include "core/description/arc_types.h"
 #include "core/index/leaf_scan.h"
 #include "core/support/cell_queue.h"
 

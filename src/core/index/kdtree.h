@@ -26,6 +26,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/description/arc_types.h"
 #include "keygraph/types.h"
 
 namespace kg {

@@ -1,9 +1,12 @@
 #include "core/index/leaf_scan.h"
+#include "core/description/arc_types.h"
 
-#if defined(__ARM_NEON) || defined(__ARM_NEON__)
+#include "core/support/simd_dispatch.h"
+
+#if defined(KG_SIMD_NEON)
 #include <arm_neon.h>
 #define KG_LEAF_NEON 1
-#elif defined(__SSE2__)
+#elif defined(KG_SIMD_SSE2)
 #include <emmintrin.h>
 #define KG_LEAF_SSE2 1
 #endif
@@ -63,7 +66,7 @@ bool leaf_may_match_i8_scalar(const ArcSearchPointI8* bounds, const ArcSearchPoi
 
 #if defined(KG_LEAF_NEON)
 
-const char* leaf_scan_isa() {
+static const char* leaf_scan_vector_isa() {
   return "neon";
 }
 
@@ -86,8 +89,8 @@ inline bool inside(int16x8_t d, std::int32_t radius2, int16x4_t limit) {
 
 }  // namespace
 
-int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, std::int32_t radius2,
-                 std::int32_t box, std::uint16_t* hits) {
+static int scan_leaf_i8_vector(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q,
+                               std::int32_t radius2, std::int32_t box, std::uint16_t* hits) {
   const int8x8_t query = vld1_s8(q.data());
   const int16x4_t limit = vdup_n_s16(box_limit(box));
   int found = 0;
@@ -99,8 +102,8 @@ int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, st
   return found;
 }
 
-bool leaf_may_match_i8(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
-                       std::int32_t radius2, std::int32_t box) {
+static bool leaf_may_match_i8_vector(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
+                                     std::int32_t radius2, std::int32_t box) {
   const int16x8_t query = vmovl_s8(vld1_s8(q.data()));
   const int16x8_t below = vsubq_s16(vmovl_s8(vld1_s8(bounds[0].data())), query);
   const int16x8_t above = vsubq_s16(query, vmovl_s8(vld1_s8(bounds[1].data())));
@@ -113,7 +116,7 @@ bool leaf_may_match_i8(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q
 
 #elif defined(KG_LEAF_SSE2)
 
-const char* leaf_scan_isa() {
+static const char* leaf_scan_vector_isa() {
   return "sse2";
 }
 
@@ -147,8 +150,8 @@ constexpr std::uint8_t kBitCount[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3
 
 }  // namespace
 
-int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, std::int32_t radius2,
-                 std::int32_t box, std::uint16_t* hits) {
+static int scan_leaf_i8_vector(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q,
+                               std::int32_t radius2, std::int32_t box, std::uint16_t* hits) {
   std::int64_t q64;
   __builtin_memcpy(&q64, q.data(), sizeof q64);
   const __m128i query = widen_low(_mm_set1_epi64x(q64));
@@ -198,8 +201,8 @@ int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, st
   return found;
 }
 
-bool leaf_may_match_i8(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
-                       std::int32_t radius2, std::int32_t box) {
+static bool leaf_may_match_i8_vector(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
+                                     std::int32_t radius2, std::int32_t box) {
   std::int64_t q64, lo64, hi64;
   __builtin_memcpy(&q64, q.data(), sizeof q64);
   __builtin_memcpy(&lo64, bounds[0].data(), sizeof lo64);
@@ -226,20 +229,36 @@ bool leaf_may_match_i8(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q
 
 #else
 
-const char* leaf_scan_isa() {
+static const char* leaf_scan_vector_isa() {
   return "scalar";
 }
 
-int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, std::int32_t radius2,
-                 std::int32_t box, std::uint16_t* hits) {
+static int scan_leaf_i8_vector(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q,
+                               std::int32_t radius2, std::int32_t box, std::uint16_t* hits) {
   return scan_leaf_i8_scalar(p, n, q, radius2, box, hits);
 }
 
-bool leaf_may_match_i8(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
-                       std::int32_t radius2, std::int32_t box) {
+static bool leaf_may_match_i8_vector(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
+                                     std::int32_t radius2, std::int32_t box) {
   return leaf_may_match_i8_scalar(bounds, q, radius2, box);
 }
 
 #endif
+
+const char* leaf_scan_isa() {
+  return simd_level() == SimdLevel::kScalar ? "scalar" : leaf_scan_vector_isa();
+}
+
+int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, std::int32_t radius2,
+                 std::int32_t box, std::uint16_t* hits) {
+  if (simd_level() == SimdLevel::kScalar) return scan_leaf_i8_scalar(p, n, q, radius2, box, hits);
+  return scan_leaf_i8_vector(p, n, q, radius2, box, hits);
+}
+
+bool leaf_may_match_i8(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
+                       std::int32_t radius2, std::int32_t box) {
+  if (simd_level() == SimdLevel::kScalar) return leaf_may_match_i8_scalar(bounds, q, radius2, box);
+  return leaf_may_match_i8_vector(bounds, q, radius2, box);
+}
 
 }  // namespace kg

@@ -1,13 +1,14 @@
 // The inner loop of the model index's search: a kd-tree leaf of int8 tree
 // points (kSearchDims components: the descriptor, then the scale
 // attributes) compared with one query. It is most of a frame's search time,
-// so it has SIMD versions (NEON on ARM, SSE2 on x86-64) chosen at compile
-// time, and a scalar one that is the reference: both give identical results
-// (tests/core/test_kdtree.cpp).
+// so it has vector versions (NEON on ARM, SSE2 on x86-64) beside the
+// scalar one, which is the reference: both give identical results
+// (tests/core/test_kdtree.cpp); simd_level() (keygraph/simd.h) chooses.
 #pragma once
 
 #include <cstdint>
 
+#include "core/description/arc_types.h"
 #include "keygraph/types.h"
 
 namespace kg {
@@ -19,7 +20,8 @@ namespace kg {
 // code writes positions four at a time.
 int scan_leaf_i8_scalar(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q,
                         std::int32_t radius2, std::int32_t box, std::uint16_t* hits);
-// The same, vectorised where the target has NEON or SSE2 (else the scalar code).
+// The same, vectorised where the target has NEON or SSE2 and simd_level()
+// is not kScalar (else the scalar code).
 int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, std::int32_t radius2,
                  std::int32_t box, std::uint16_t* hits);
 // Whether a leaf whose points lie in [bounds[0], bounds[1]] (component-wise)
@@ -32,7 +34,7 @@ bool leaf_may_match_i8_scalar(const ArcSearchPointI8* bounds, const ArcSearchPoi
 // The same, vectorised like scan_leaf_i8.
 bool leaf_may_match_i8(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
                        std::int32_t radius2, std::int32_t box);
-// Which implementation scan_leaf_i8 is: "neon", "sse2" or "scalar".
+// Which implementation scan_leaf_i8 runs now: "neon", "sse2" or "scalar".
 const char* leaf_scan_isa();
 
 }  // namespace kg

@@ -20,9 +20,11 @@
 #define KG_HAVE_MMAP 0
 #endif
 
+#include "core/description/arc_types.h"
 #include "core/description/descriptor_encoding.h"
 #include "core/index/crc32.h"
 #include "core/index/index_format.h"
+#include "core/index/index_internals.h"
 #include "core/index/kdtree.h"
 
 namespace kg {
@@ -758,44 +760,44 @@ int ModelIndex::model_of_keypoint(std::uint32_t keypoint) const {
   return lo;
 }
 
-const ArcSearchPoint* ModelIndex::tree_points_f32() const {
-  return descriptor_encoding() == DescriptorEncoding::kFloat32
-             ? reinterpret_cast<const ArcSearchPoint*>(tree_descriptors_)
+const ArcSearchPoint* IndexInternals::tree_points_f32(const ModelIndex& index) {
+  return index.descriptor_encoding() == DescriptorEncoding::kFloat32
+             ? reinterpret_cast<const ArcSearchPoint*>(index.tree_descriptors_)
              : nullptr;
 }
-const ArcSearchPointI16* ModelIndex::tree_points_i16() const {
-  return descriptor_encoding() == DescriptorEncoding::kInt16
-             ? reinterpret_cast<const ArcSearchPointI16*>(tree_descriptors_)
+const ArcSearchPointI16* IndexInternals::tree_points_i16(const ModelIndex& index) {
+  return index.descriptor_encoding() == DescriptorEncoding::kInt16
+             ? reinterpret_cast<const ArcSearchPointI16*>(index.tree_descriptors_)
              : nullptr;
 }
-const ArcSearchPointI8* ModelIndex::tree_points_i8() const {
-  return descriptor_encoding() == DescriptorEncoding::kInt8
-             ? reinterpret_cast<const ArcSearchPointI8*>(tree_descriptors_)
+const ArcSearchPointI8* IndexInternals::tree_points_i8(const ModelIndex& index) {
+  return index.descriptor_encoding() == DescriptorEncoding::kInt8
+             ? reinterpret_cast<const ArcSearchPointI8*>(index.tree_descriptors_)
              : nullptr;
 }
-const ArcSearchPoint* ModelIndex::leaf_bounds_f32() const {
-  return descriptor_encoding() == DescriptorEncoding::kFloat32
-             ? reinterpret_cast<const ArcSearchPoint*>(leaf_bounds_)
+const ArcSearchPoint* IndexInternals::leaf_bounds_f32(const ModelIndex& index) {
+  return index.descriptor_encoding() == DescriptorEncoding::kFloat32
+             ? reinterpret_cast<const ArcSearchPoint*>(index.leaf_bounds_)
              : nullptr;
 }
-const ArcSearchPointI16* ModelIndex::leaf_bounds_i16() const {
-  return descriptor_encoding() == DescriptorEncoding::kInt16
-             ? reinterpret_cast<const ArcSearchPointI16*>(leaf_bounds_)
+const ArcSearchPointI16* IndexInternals::leaf_bounds_i16(const ModelIndex& index) {
+  return index.descriptor_encoding() == DescriptorEncoding::kInt16
+             ? reinterpret_cast<const ArcSearchPointI16*>(index.leaf_bounds_)
              : nullptr;
 }
-const ArcSearchPointI8* ModelIndex::leaf_bounds_i8() const {
-  return descriptor_encoding() == DescriptorEncoding::kInt8
-             ? reinterpret_cast<const ArcSearchPointI8*>(leaf_bounds_)
+const ArcSearchPointI8* IndexInternals::leaf_bounds_i8(const ModelIndex& index) {
+  return index.descriptor_encoding() == DescriptorEncoding::kInt8
+             ? reinterpret_cast<const ArcSearchPointI8*>(index.leaf_bounds_)
              : nullptr;
 }
-const KdNode* ModelIndex::tree_nodes_f32() const {
-  return descriptor_encoding() == DescriptorEncoding::kFloat32
-             ? reinterpret_cast<const KdNode*>(tree_nodes_)
+const KdNode* IndexInternals::tree_nodes_f32(const ModelIndex& index) {
+  return index.descriptor_encoding() == DescriptorEncoding::kFloat32
+             ? reinterpret_cast<const KdNode*>(index.tree_nodes_)
              : nullptr;
 }
-const KdNodeInt* ModelIndex::tree_nodes_int() const {
-  return descriptor_encoding() != DescriptorEncoding::kFloat32
-             ? reinterpret_cast<const KdNodeInt*>(tree_nodes_)
+const KdNodeInt* IndexInternals::tree_nodes_int(const ModelIndex& index) {
+  return index.descriptor_encoding() != DescriptorEncoding::kFloat32
+             ? reinterpret_cast<const KdNodeInt*>(index.tree_nodes_)
              : nullptr;
 }
 

@@ -12,55 +12,15 @@
 #include <vector>
 
 #include "core/pose/appearance_align.h"
+#include "core/pose/overlap.h"
 #include "core/pose/point_grid.h"
+#include "core/pose/verification.h"
 #include "core/support/rng.h"
 #include "core/support/workspace.h"
 #include "keygraph/detector.h"
 #include "keygraph/model_index.h"
 
 namespace kg {
-
-// All keypoints of the frame (before sampling), for guided refinement: once
-// a pose is found, every model keypoint is projected and paired with the
-// nearest frame keypoint within the inlier threshold; the pose is refined on
-// those pairs and the fraction of model keypoints so re-found is the
-// detection's score.
-struct FrameKeypoints {
-  const Keypoint* keypoints = nullptr;
-  int count = 0;
-  const PointGrid* grid = nullptr;
-  int width = 0;
-  int height = 0;
-  // The frame, lightly blurred, for the photometric refinement (empty: none).
-  ImageView image;
-};
-
-// The keypoint support of a pose, as the detector's verification measures
-// it: the model keypoints the pose's scale shows inside the frame, those
-// that land within the verification radius of a frame keypoint, the
-// fraction that lands so under the pose shifted by three inlier thresholds
-// (chance), and the binomial z-score of the first fraction against it. A
-// detection needs z >= ransac.min_verification_z. For evaluation: asked of
-// a ground-truth pose, it says whether the frame's keypoints could have
-// confirmed it at all (`keygraph eval --truth`).
-struct PoseSupport {
-  int shown = 0;
-  int refound = 0;
-  double chance = 0.0;
-  double z = 0.0;
-};
-PoseSupport measure_pose_support(const ModelIndex& index, int model_id, const FrameKeypoints& frame,
-                                 const Homography& h);
-
-// Whether two detections' outlines cover the same part of the frame: the
-// centre of either lies inside the other.
-bool outlines_overlap(const Point2f* a, const Point2f* b);
-
-// Where detections overlap (look-alike signs, or one sign explained by two
-// models or twice), keeps the best supported one: the clearly better
-// appearance correlation where both have one, else the most inliers, then
-// the largest score over chance. Keeps the order of the rest.
-void keep_best_of_overlapping(DetectionList& found);
 
 class PoseEstimator {
  public:
@@ -74,9 +34,11 @@ class PoseEstimator {
   // Appends the instances of `model_id` found among matches[0..n) (all of
   // that model) to `out`, at most `max_out` in total in `out`. Returns the
   // RANSAC iterations run.
-  int estimate(const ModelIndex& index, int model_id, const KeygraphMatch* matches, int n,
-               const Point2f* scene_points, const FrameKeypoints& frame, Rng& rng, int max_out,
-               DetectionList& out, bool& truncated);
+  // `params` are the index's with the detector's options applied.
+  int estimate(const ModelIndex& index, const Params& params, int model_id,
+               const KeygraphMatch* matches, int n, const Point2f* scene_points,
+               const FrameKeypoints& frame, Rng& rng, int max_out, DetectionList& out,
+               bool& truncated);
 
  private:
   friend struct KeygraphEstimator;
@@ -87,11 +49,11 @@ class PoseEstimator {
   // Pairs every model keypoint the pose's scale shows with the nearest
   // frame keypoint within the verification radius (guided_model_,
   // guided_scene_) and returns the support they give.
-  Support guided_pairs(const ModelIndex& index, const ModelInfo& info, const FrameKeypoints& frame,
-                       const Homography& h);
+  Support guided_pairs(const ModelIndex& index, const RansacParams& rp, const ModelInfo& info,
+                       const FrameKeypoints& frame, const Homography& h);
   // Refines h on guided pairs and measures the support of the final pose.
-  Support guided_refine(const ModelIndex& index, const ModelInfo& info, const FrameKeypoints& frame,
-                        Homography& h);
+  Support guided_refine(const ModelIndex& index, const Params& params, const ModelInfo& info,
+                        const FrameKeypoints& frame, Homography& h);
   // Distinct keypoint correspondences and, per keygraph match, its k indices into them.
   WorkVector<std::uint64_t> pairs_;
   WorkVector<Point2f> pair_model_;

@@ -7,8 +7,10 @@
 
 #include "core/description/arc_attributes.h"
 #include "core/description/arc_descriptor.h"
+#include "core/description/arc_types.h"
 #include "core/description/descriptor_encoding.h"
 #include "core/description/vertex_descriptor.h"
+#include "core/index/index_internals.h"
 #include "core/pose/homography.h"
 #include "core/sampling/sampling.h"
 #include "core/selection/arc_keys.h"
@@ -51,190 +53,6 @@ bool plausible_local_map(const Point2f* m, const Point2f* s, int k, const Params
 
 }  // namespace
 
-ArcSearch::ArcSearch(const ModelIndex& index)
-    : ArcSearch(index, leaves_for(index.params().descriptor, index.model_count())) {}
-
-int ArcSearch::leaves_for(const DescriptorParams& params, std::uint64_t models) {
-  const int base = params.max_search_leaves;
-  const auto reference = static_cast<std::uint64_t>(std::max(0, params.search_reference_models));
-  if (base <= 0 || reference == 0 || models <= reference) return std::max(0, base);
-  // Each model adds arcs near a query (alike signs most: one family's
-  // arrows, fonts and pictograms); a budget grown with the square root of
-  // the models keeps most of a sign's arcs within reach at a cost that
-  // grows more slowly than the index (docs/RESULTS.md, "Index size and
-  // recall"). The models, not the arcs: ten unrelated photos with 680 000
-  // arcs lose nothing at 20 leaves, fifty signs with 842 000 lose a quarter.
-  const double grown =
-      base * std::sqrt(static_cast<double>(models) / static_cast<double>(reference));
-  const double cap = std::min(static_cast<double>(base) * kMaxLeavesGrowth,
-                              static_cast<double>(std::numeric_limits<int>::max()));
-  return static_cast<int>(std::lround(std::min(grown, cap)));
-}
-
-ArcSearch::ArcSearch(const ModelIndex& index, int max_leaves) {
-  const Params& params = index.params();
-  encoding_ = params.descriptor.encoding;
-  const float radius = params.descriptor.similarity_threshold;
-  radius2_ = radius * radius;
-  box_ = attribute_box(params.graph);
-  max_leaves_ = max_leaves;
-  const std::uint32_t n = index.arc_count();
-  const int depth = index.tree_depth();
-  switch (encoding_) {
-    case DescriptorEncoding::kFloat32:
-      points_f32_ = index.tree_points_f32();
-      f32_ = ArcTreeView(index.tree_points_f32(), nullptr, n, index.tree_nodes_f32(), depth,
-                         index.leaf_bounds_f32());
-      break;
-    case DescriptorEncoding::kInt16:
-      points_i16_ = index.tree_points_i16();
-      i16_ = ArcTreeView16(index.tree_points_i16(), nullptr, n, index.tree_nodes_int(), depth,
-                           index.leaf_bounds_i16());
-      if (!scaled_radius2(radius, encoding_, std::numeric_limits<ArcTreeView16::Dist>::max(),
-                          radius2_scaled_))
-        radius2_scaled_ = 0;  // unreachable: validate_params checked the scaled radius
-      break;
-    case DescriptorEncoding::kInt8:
-      points_i8_ = index.tree_points_i8();
-      i8_ = ArcTreeView8(index.tree_points_i8(), nullptr, n, index.tree_nodes_int(), depth,
-                         index.leaf_bounds_i8());
-      if (!scaled_radius2(radius, encoding_, std::numeric_limits<ArcTreeView8::Dist>::max(),
-                          radius2_scaled_))
-        radius2_scaled_ = 0;
-      break;
-  }
-}
-
-std::uint32_t ArcSearch::radius_search(const ArcDescriptor& q, const float* attributes,
-                                       std::uint32_t* out, std::uint32_t capacity) const {
-  return search(query(q, attributes), out, capacity);
-}
-
-std::uint32_t ArcSearch::radius_search_quantised(const std::int32_t* q, const float* attributes,
-                                                 std::uint32_t* out, std::uint32_t capacity) const {
-  if (encoding_ == DescriptorEncoding::kFloat32) return 0;  // searched with float descriptors
-  return search(query_quantised(q, attributes), out, capacity);
-}
-
-ArcSearch::Query ArcSearch::query(const ArcDescriptor& q, const float* attributes) const {
-  const float none[kArcAttributes] = {0.f, 0.f};
-  Query out;
-  out.box = box_ > 0 && attributes != nullptr;
-  const ArcSearchPoint p = search_point(q, attributes != nullptr ? attributes : none);
-  auto widen = [&out](const auto& encoded_point) {
-    for (int i = 0; i < kSearchDims; ++i) out.point[i] = static_cast<float>(encoded_point[i]);
-  };
-  switch (encoding_) {
-    case DescriptorEncoding::kFloat32:
-      out.point = p;
-      break;
-    case DescriptorEncoding::kInt16:
-      widen(encode_point<std::int16_t>(p));
-      break;
-    case DescriptorEncoding::kInt8:
-      widen(encode_point<std::int8_t>(p));
-      break;
-  }
-  return out;
-}
-
-ArcSearch::Query ArcSearch::query_quantised(const std::int32_t* q, const float* attributes) const {
-  Query out;
-  out.box = box_ > 0 && attributes != nullptr;
-  for (int i = 0; i < kDescriptorSize; ++i) out.point[i] = static_cast<float>(q[i]);
-  for (int i = 0; i < kArcAttributes; ++i)
-    out.point[kDescriptorSize + i] = attributes != nullptr ? attributes[i] : 0.f;
-  return out;
-}
-
-template <class T>
-std::array<T, kSearchDims> ArcSearch::encoded(const Query& q) const {
-  std::array<T, kSearchDims> p{};
-  for (int i = 0; i < kSearchDims; ++i) p[i] = static_cast<T>(q.point[i]);
-  return p;
-}
-
-std::uint32_t ArcSearch::search(const Query& q, std::uint32_t* out, std::uint32_t capacity) const {
-  switch (encoding_) {
-    case DescriptorEncoding::kFloat32: {
-      const float b = q.box ? static_cast<float>(box_) : std::numeric_limits<float>::max();
-      return max_leaves_ > 0
-                 ? f32_.radius_search_approximate(q.point, radius2_, b, max_leaves_, out, capacity)
-                 : f32_.radius_search(q.point, radius2_, b, out, capacity);
-    }
-    case DescriptorEncoding::kInt16:
-      return search_encoded(encoded<std::int16_t>(q), q.box, out, capacity);
-    case DescriptorEncoding::kInt8:
-      return search_encoded(encoded<std::int8_t>(q), q.box, out, capacity);
-  }
-  return 0;
-}
-
-namespace {
-
-// What the tree's leaf scan tests, for one point.
-template <class T, class Dist>
-bool within(const std::array<T, kSearchDims>& p, const std::array<T, kSearchDims>& q, Dist radius2,
-            bool box, Dist half_width) {
-  if (!(kd_distance2(p, q) < radius2)) return false;
-  if (!box) return true;
-  for (int d = kDescriptorSize; d < kSearchDims; ++d) {
-    const Dist diff = static_cast<Dist>(p[d]) - static_cast<Dist>(q[d]);
-    if ((diff < 0 ? -diff : diff) > half_width) return false;
-  }
-  return true;
-}
-
-}  // namespace
-
-void ArcSearch::prefetch(std::uint32_t slot) const {
-#if defined(__GNUC__)
-  switch (encoding_) {
-    case DescriptorEncoding::kFloat32:
-      __builtin_prefetch(points_f32_ + slot);
-      break;
-    case DescriptorEncoding::kInt16:
-      __builtin_prefetch(points_i16_ + slot);
-      break;
-    case DescriptorEncoding::kInt8:
-      __builtin_prefetch(points_i8_ + slot);
-      break;
-  }
-#else
-  (void)slot;
-#endif
-}
-
-bool ArcSearch::matches(const Query& q, std::uint32_t slot) const {
-  switch (encoding_) {
-    case DescriptorEncoding::kFloat32:
-      return within(points_f32_[slot], q.point, radius2_, q.box, static_cast<float>(box_));
-    case DescriptorEncoding::kInt16:
-      return within(points_i16_[slot], encoded<std::int16_t>(q), radius2_scaled_, q.box,
-                    static_cast<std::int64_t>(box_));
-    case DescriptorEncoding::kInt8:
-      return within(points_i8_[slot], encoded<std::int8_t>(q),
-                    static_cast<ArcTreeView8::Dist>(radius2_scaled_), q.box, box_);
-  }
-  return false;
-}
-
-std::uint32_t ArcSearch::search_encoded(const ArcSearchPointI16& p, bool box, std::uint32_t* out,
-                                        std::uint32_t capacity) const {
-  const std::int64_t b = box ? box_ : std::numeric_limits<std::int64_t>::max();
-  return max_leaves_ > 0
-             ? i16_.radius_search_approximate(p, radius2_scaled_, b, max_leaves_, out, capacity)
-             : i16_.radius_search(p, radius2_scaled_, b, out, capacity);
-}
-
-std::uint32_t ArcSearch::search_encoded(const ArcSearchPointI8& p, bool box, std::uint32_t* out,
-                                        std::uint32_t capacity) const {
-  const auto r2 = static_cast<ArcTreeView8::Dist>(radius2_scaled_);
-  const std::int32_t b = box ? box_ : std::numeric_limits<std::int32_t>::max();
-  return max_leaves_ > 0 ? i8_.radius_search_approximate(p, r2, b, max_leaves_, out, capacity)
-                         : i8_.radius_search(p, r2, b, out, capacity);
-}
-
 Selector::ArcList Selector::lookup(const SelectionInput& in, int e, const Limits& limits,
                                    DetectStats& stats) {
   if (state_[e] != kUnseen) return {begin_[e], count_[e], state_[e] == kReversed};
@@ -254,34 +72,15 @@ Selector::ArcList Selector::lookup(const SelectionInput& in, int e, const Limits
     count_[e] = count_[opposite];
     return {begin_[e], count_[e], true};
   }
-  const WorkVector<int>& tri = in.triangulation->triangles();
-  const Point2f a = in.scene_points[tri[e]];
-  const Point2f b = in.scene_points[tri[Delaunay::next(e)]];
-  const Params& params = in.index->params();
-  if (chebyshev(a, b) < params.graph.min_distance) return {begin_[e], 0, false};
-  // Integer encodings describe in fixed point (already quantised); float32
-  // is the float reference.
-  const bool fixed = uses_fixed_point(params.descriptor);
-  ArcDescriptor d;
-  std::int32_t q[kDescriptorSize];
-  if (fixed ? !arc_descriptor_fixed(in.blurred, a, b, params.descriptor,
-                                    encoding_scale(params.descriptor.encoding), sums_, q)
-            : !arc_descriptor(in.blurred, a, b, params.descriptor, profile_, d))
-    return {begin_[e], 0, false};
-  ++stats.arcs_described;
+  // The arc was described by the description stage, or its opposite was
+  // and the selection reaches this direction first (without circuit
+  // completion only; core/description/scene_arcs.h).
+  SceneArcs& arcs = *in.arcs;
+  if (!arcs.chosen(e)) arcs.describe_now(e);
+  if (!arcs.described(e)) return {begin_[e], 0, false};
+  const ArcSearch::Query& query = arcs.query(e);
   const auto cap = static_cast<std::uint32_t>(limits.max_arc_matches);
   found_.resize(cap);
-  float attributes[kArcAttributes];
-  const bool scaled = in.scene_scales != nullptr &&
-                      arc_attributes(a, b, in.scene_scales[tri[e]],
-                                     in.scene_scales[tri[Delaunay::next(e)]], attributes);
-  const ArcSearch::Query query = fixed
-                                     ? in.search->query_quantised(q, scaled ? attributes : nullptr)
-                                     : in.search->query(d, scaled ? attributes : nullptr);
-  if (in.adjacency != nullptr) {
-    described_[e] = 1;
-    queries_[e] = query;
-  }
   const std::uint32_t total = in.search->search(query, found_.data(), cap);
   stats.arc_matches += total;
   std::uint32_t n = std::min(total, cap);
@@ -293,7 +92,7 @@ Selector::ArcList Selector::lookup(const SelectionInput& in, int e, const Limits
   pool_used_ += n;
   std::uint64_t* keys = pool_.data() + begin_[e];
   const std::uint32_t* slots = found_.data();
-  for (std::uint32_t i = 0; i < n; ++i) in.index->prefetch_arc(slots[i]);
+  for (std::uint32_t i = 0; i < n; ++i) IndexInternals::prefetch_arc(*in.index, slots[i]);
   for (std::uint32_t i = 0; i < n; ++i) {
     const ModelArc arc = in.index->arc(slots[i]);
     keys[i] = arc_key(arc.from, arc.to);
@@ -425,12 +224,12 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
     // matches the model arcs of the other direction.
     int closing = g.edges[(p + 2) % 3];
     bool flip = false;
-    if (described_[closing] == 0) {
+    if (!in.arcs->described(closing)) {
       closing = opposite[closing];
-      if (closing < 0 || described_[closing] == 0) continue;
+      if (closing < 0 || !in.arcs->described(closing)) continue;
       flip = true;
     }
-    const ArcSearch::Query& query = queries_[closing];
+    const ArcSearch::Query& query = in.arcs->query(closing);
     const std::uint64_t* a_keys = pool_.data() + first.begin;
     const std::uint64_t* b_keys = pool_.data() + second.begin;
     const int sa = first.reversed ? 32 : 0, sb = second.reversed ? 32 : 0;
@@ -565,12 +364,7 @@ void Selector::reserve(const Limits& limits, std::uint32_t model_keypoints, bool
   sort_scratch_.reserve(per_query);
   for (WorkVector<std::uint64_t>& kept : kept_) kept.reserve(per_query);
   flags_.reserve(model_keypoints);
-  // A profile has at most the frame's longer side plus one samples.
-  profile_.reserve(static_cast<std::size_t>(std::max(limits.max_width, limits.max_height)) + 1);
-  sums_.reserve(profile_.capacity() + 30);
   if (completion) {
-    described_.reserve(half_edges);
-    queries_.reserve(half_edges);
     triples_.reserve(3 * per_query);  // a circuit is found by up to 3 passes before dedupe
     chain_head_.reserve(2 * static_cast<std::size_t>(model_keypoints));
     chain_next_.reserve(2 * per_query);
@@ -596,10 +390,8 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   // All clear between keygraphs (candidate_lists() clears what it flags).
   flags_.assign(in.index->keypoint_count(), 0);
   const bool completion =
-      in.adjacency != nullptr && in.index->params().graph.structure == Structure::kCircuit3;
+      in.adjacency != nullptr && in.params->graph.structure == Structure::kCircuit3;
   if (in.adjacency != nullptr) {
-    described_.assign(edges, 0);
-    queries_.resize(edges);
     if (triples_.size() < 3 * per_query) triples_.resize(3 * per_query);
     if (chain_next_.size() < 2 * per_query) chain_next_.resize(2 * per_query);
     if (joined_.size() < per_query) joined_.resize(per_query);
@@ -607,12 +399,11 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     const std::size_t heads = 2 * static_cast<std::size_t>(in.index->keypoint_count());
     if (chain_head_.size() != heads) chain_head_.assign(heads, 0);
   }
-  flags_left_ = false;
   semi_join_in_ = 0;
   semi_join_kept_ = 0;
   completion_tried_ = completion_clockwise_ = 0;
   completion_plausible_ = completion_closed_ = 0;
-  const Structure structure = in.index->params().graph.structure;
+  const Structure structure = in.params->graph.structure;
   const int k = vertex_count(structure);
   // An arc keygraph has one arc; a circuit has as many arcs as vertices.
   const int looked_up_arcs = structure == Structure::kArc ? 1 : k;
@@ -620,7 +411,7 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   const WorkVector<int>& tri = in.triangulation->triangles();
   const auto cap = static_cast<std::size_t>(limits.max_correspondences);
 
-  const Params& params = in.index->params();
+  const Params& params = *in.params;
   const bool check_vertices = in.model_descriptors != nullptr && in.scene_descriptors != nullptr;
   const float vertex_max2 = params.descriptor.vertex_threshold * params.descriptor.vertex_threshold;
   constexpr auto kRow = static_cast<std::size_t>(kVertexDescriptorSize);
@@ -671,6 +462,7 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   auto emit = [&](const std::uint32_t* model, const SceneKeygraph& g, bool checked = false) {
     if (!checked && !plausible(model, g)) return true;
     const int model_id = owner_of(model[0]).model;
+    if (in.model_searched != nullptr && in.model_searched[model_id] == 0) return true;
     if (check_vertices && !similar_vertices(model, g)) {
       ++stats.vertex_rejections;
       return true;
@@ -704,7 +496,6 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
       const bool all =
           complete_circuit(in, g, lists, static_cast<std::uint32_t>(3 * per_query),
                            [&](const std::uint32_t* model) { return plausible(model, g); });
-      if (checking_ && !all_flags_clear()) flags_left_ = true;
       if (!all) stats.truncated_correspondences = true;
       for (std::uint32_t x = 0; x < triple_count_ && room; ++x)
         room = emit(triples_[x].data(), g, true);
@@ -736,7 +527,6 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
     // Only the few arcs whose ends are candidates of both their vertices
     // can close a circuit: join those, sorted by (from, to).
     const bool joinable = candidate_lists(lists, k);
-    if (checking_ && !all_flags_clear()) flags_left_ = true;
     if (!joinable) continue;
     const std::uint64_t* r[kMaxVertices] = {kept_[0].data(), kept_[1].data(), kept_[2].data(),
                                             kept_[3].data()};
@@ -776,6 +566,8 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   stats.completion_clockwise = static_cast<long long>(completion_clockwise_);
   stats.completion_plausible = static_cast<long long>(completion_plausible_);
   stats.completion_closed = static_cast<long long>(completion_closed_);
+  stats.join_arcs_in = static_cast<long long>(semi_join_in_);
+  stats.join_arcs_kept = static_cast<long long>(semi_join_kept_);
 }
 
 }  // namespace kg

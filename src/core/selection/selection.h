@@ -4,9 +4,10 @@
 // similar to a model arc (c_m, a_m), and (a_m, b_m, c_m) must be a model
 // keytuple (clockwise). Arcs and 4-circuits follow the same chain.
 //
-// Scene arcs are Delaunay half-edges; each is described and looked up in
-// the model search tree at most once per frame, on first use, and its
-// opposite half-edge reads the same model arcs reversed. A circuit's lists
+// Scene arcs are Delaunay half-edges, described beforehand
+// (core/description/scene_arcs.h); each is looked up in the model search
+// tree at most once per frame, on first use, and its opposite half-edge
+// reads the same model arcs reversed. A circuit's lists
 // are first cut to the arcs whose ends are candidates of both their scene
 // vertices (a byte of flags per model keypoint: which lists it leaves and
 // enters), which drops nearly all of them; the few left are sorted by
@@ -19,7 +20,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/index/kdtree.h"
+#include "core/description/arc_types.h"
+#include "core/description/scene_arcs.h"
+#include "core/index/arc_search.h"
 #include "core/keygraphs/delaunay.h"
 #include "core/keygraphs/keygraph.h"
 #include "core/selection/arc_adjacency.h"
@@ -29,85 +32,19 @@
 
 namespace kg {
 
-// The model index's search tree in its descriptor encoding, searched with
-// float descriptors: the query is quantised as the model descriptors were
-// (core/description/descriptor_encoding.h) and compared against the similarity
-// threshold scaled into the same domain. Returns tree slots, which are
-// indices into ModelIndex::arcs(). Allocates nothing.
-class ArcSearch {
- public:
-  ArcSearch() = default;
-  // max_leaves: at most that many tree leaves per query (0: exact), by
-  // default leaves_for() the index's parameters and model count.
-  explicit ArcSearch(const ModelIndex& index);
-  ArcSearch(const ModelIndex& index, int max_leaves);
-
-  // Leaves per query for an index of `models` models built with `params`:
-  // max_search_leaves, grown with the square root of models over
-  // search_reference_models (at most kMaxLeavesGrowth-fold); 0: exact.
-  static int leaves_for(const DescriptorParams& params, std::uint64_t models);
-  static constexpr int kMaxLeavesGrowth = 8;
-  int max_leaves() const { return max_leaves_; }
-
-  DescriptorEncoding encoding() const { return encoding_; }
-  // Slots of the model arcs whose descriptor is within
-  // params.descriptor.similarity_threshold of q and, when `attributes` is
-  // not null (core/description/arc_attributes.h) and params.graph.max_scale_error > 0,
-  // whose scale attributes are each within max_scale_error of them (see
-  // BasicKdTreeView::radius_search for `capacity` and the return value).
-  std::uint32_t radius_search(const ArcDescriptor& q, const float* attributes, std::uint32_t* out,
-                              std::uint32_t capacity) const;
-  // The same for a descriptor already quantised at the index's encoding
-  // scale (int16 and int8 indexes: arc_descriptor_fixed()).
-  std::uint32_t radius_search_quantised(const std::int32_t* q, const float* attributes,
-                                        std::uint32_t* out, std::uint32_t capacity) const;
-
-  // A scene arc's search point in the tree's domain (integer encodings: the
-  // integers, held exactly in floats) and whether its attributes are boxed:
-  // kept so the arc can be compared again with single model arcs.
-  struct Query {
-    ArcSearchPoint point{};
-    bool box = false;
-  };
-  Query query(const ArcDescriptor& q, const float* attributes) const;
-  Query query_quantised(const std::int32_t* q, const float* attributes) const;
-  std::uint32_t search(const Query& q, std::uint32_t* out, std::uint32_t capacity) const;
-  // Whether the model arc in tree slot `slot` is within the similarity
-  // radius and scale box of q: what search() tests, for one arc.
-  bool matches(const Query& q, std::uint32_t slot) const;
-  // Asks the cache for the model arc point matches() reads.
-  void prefetch(std::uint32_t slot) const;
-
- private:
-  template <class T>
-  std::array<T, kSearchDims> encoded(const Query& q) const;
-  std::uint32_t search_encoded(const ArcSearchPointI16& p, bool box, std::uint32_t* out,
-                               std::uint32_t capacity) const;
-  std::uint32_t search_encoded(const ArcSearchPointI8& p, bool box, std::uint32_t* out,
-                               std::uint32_t capacity) const;
-
-  DescriptorEncoding encoding_ = DescriptorEncoding::kFloat32;
-  const ArcSearchPoint* points_f32_ = nullptr;  // tree points, by slot
-  const ArcSearchPointI16* points_i16_ = nullptr;
-  const ArcSearchPointI8* points_i8_ = nullptr;
-  ArcTreeView f32_;
-  ArcTreeView16 i16_;
-  ArcTreeView8 i8_;
-  float radius2_ = 0.f;              // float32
-  std::int64_t radius2_scaled_ = 0;  // int16, int8
-  std::int32_t box_ = 0;             // attribute box, grid steps (0: none)
-  int max_leaves_ = 0;               // approximate search (0: exact)
-};
-
 struct SelectionInput {
   const ModelIndex* index = nullptr;
+  // The index's parameters with the detector's options applied.
+  const Params* params = nullptr;
+  // Per model, 0 when its correspondences are dropped (DetectOptions::
+  // models); nullptr keeps every model's.
+  const std::uint8_t* model_searched = nullptr;
   const ArcSearch* search = nullptr;
-  ImageView blurred;                      // scene blurred for profiles
   const Point2f* scene_points = nullptr;  // sampled scene keypoints
-  // Their detector scales (sigma, pixels; 0 unknown), for
-  // GraphParams::max_scale_error; nullptr skips that check.
-  const float* scene_scales = nullptr;
   const Delaunay* triangulation = nullptr;
+  // The scene arcs' queries (core/description/scene_arcs.h); the selection
+  // asks it for an arc its description stage left to the other direction.
+  SceneArcs* arcs = nullptr;
   const WorkVector<SceneKeygraph>* keygraphs = nullptr;
   // Vertex descriptors (kVertexDescriptorSize bytes) and their inverse
   // norms, of the model keypoints (global ids) and of the sampled scene
@@ -136,14 +73,10 @@ class Selector {
         kept_{WorkVector<std::uint64_t>(memory), WorkVector<std::uint64_t>(memory),
               WorkVector<std::uint64_t>(memory), WorkVector<std::uint64_t>(memory)},
         flags_(memory),
-        described_(memory),
-        queries_(memory),
         triples_(memory),
         chain_head_(memory),
         chain_next_(memory),
-        joined_(memory),
-        profile_(memory),
-        sums_(memory) {}
+        joined_(memory) {}
 
   // Sizes the buffers for `limits` (scene keypoints, arc matches per query
   // and per frame, frame size for the profiles) and an index of
@@ -154,20 +87,15 @@ class Selector {
   void reserve(const Limits& limits, std::uint32_t model_keypoints, bool completion = false);
 
   // Clears and fills `matches` (at most limits.max_correspondences); updates
-  // stats.arcs_described, correspondences and the truncation flags.
+  // stats.correspondences and the truncation flags.
   void select(const SelectionInput& in, const Limits& limits, WorkVector<KeygraphMatch>& matches,
               DetectStats& stats);
 
-  // For tests. A left-over candidate flag would only cost time (the join
-  // checks every arc), so outputs cannot show one, and a left-over chain
-  // head of the completion's join could rarely: with checking on,
-  // select() looks at every flag and head after every keygraph, and
-  // candidate_flags_clear() says whether all were clear each time.
-  void set_checking(bool on) { checking_ = on; }
-  bool candidate_flags_clear() const { return !flags_left_ && all_flags_clear(); }
-  // Model arcs the last select() passed to its semi-join, and kept.
-  std::uint64_t semi_join_arcs_in() const { return semi_join_in_; }
-  std::uint64_t semi_join_arcs_kept() const { return semi_join_kept_; }
+  // Whether the join's per-model-keypoint state (the candidate flags and
+  // the completion's chain heads) is all clear, as select() leaves it after
+  // every keygraph and as the next keygraph needs it: a flag left set would
+  // only cost time (the join checks every arc), so no output shows one.
+  bool join_state_clear() const { return all_flags_clear(); }
 
  private:
   // The model-arc keys (from << 32 | to) similar to one half-edge:
@@ -220,9 +148,6 @@ class Selector {
   std::uint32_t kept_count_[kMaxVertices] = {0, 0, 0, 0};
   WorkVector<std::uint8_t> flags_;  // per model keypoint: bit i leaves, 4 + i enters list i
   int id_bits_ = 32;                // bits of the index's keypoint ids
-  // Per half-edge, with in.adjacency: whether it was described, and its query.
-  WorkVector<std::uint8_t> described_;
-  WorkVector<ArcSearch::Query> queries_;
   WorkVector<std::array<std::uint32_t, 3>> triples_;
   std::uint32_t triple_count_ = 0;
   // The completion's join on the shared vertex w: per model keypoint the
@@ -237,11 +162,7 @@ class Selector {
   std::uint64_t completion_clockwise_ = 0;
   std::uint64_t completion_plausible_ = 0;
   std::uint64_t completion_closed_ = 0;
-  WorkVector<float> profile_;
-  WorkVector<std::int32_t> sums_;  // fixed-point profiles
   std::size_t pool_limit_ = static_cast<std::size_t>(-1);
-  bool checking_ = false;
-  bool flags_left_ = false;
   std::uint64_t semi_join_in_ = 0;
   std::uint64_t semi_join_kept_ = 0;
 };

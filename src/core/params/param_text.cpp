@@ -1,61 +1,71 @@
-#include "builder/param_overrides.h"
+#include "keygraph/param_text.h"
 
 #include <charconv>
 #include <cmath>
-#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <type_traits>
 
 #include "core/index/index_format.h"
-#include "core/index/param_names.h"
+#include "core/params/param_names.h"
 
 namespace kg {
 namespace {
 
+// The whole text as a number of type T (no exceptions: the core is built
+// without them). Floating-point text as strtod reads it ("1e-3", "inf" and
+// "nan" parse; the range checks refuse what is out of range).
 template <class T>
-bool parse_number(const std::string& text, T& out) {
+bool parse_number(std::string_view text, T& out) {
+  if (text.empty()) return false;
   if constexpr (std::is_floating_point_v<T>) {
-    try {
-      std::size_t used = 0;
-      const double v = std::stod(text, &used);
-      if (used != text.size()) return false;
-      out = static_cast<T>(v);
-      return true;
-    } catch (...) {
-      return false;
-    }
+    const std::string copy(text);  // strtod needs a terminated string
+    char* end = nullptr;
+    const double v = std::strtod(copy.c_str(), &end);
+    if (end != copy.c_str() + copy.size()) return false;
+    out = static_cast<T>(v);
+    return true;
   } else {
-    const auto r = std::from_chars(text.data(), text.data() + text.size(), out);
-    return r.ec == std::errc() && r.ptr == text.data() + text.size();
+    T v{};
+    const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (r.ec != std::errc() || r.ptr != text.data() + text.size()) return false;
+    out = v;
+    return true;
   }
 }
 
 }  // namespace
 
-Status apply_param_override(const std::string& assignment, Params& params) {
-  const std::size_t eq = assignment.find('=');
-  if (eq == std::string::npos || eq == 0)
-    return {StatusCode::kInvalidArgument, "--set takes NAME=VALUE, got '" + assignment + "'"};
-  const std::string name = assignment.substr(0, eq), value = assignment.substr(eq + 1);
+Status set_param(Params& params, std::string_view name, std::string_view value) {
   bool known = false, parsed = false;
   format::visit_params(params, [&](const char* field_name, auto& field) {
     if (known || name != field_name) return;
     known = true;
     using T = std::decay_t<decltype(field)>;
     if constexpr (std::is_enum_v<T>) {
-      parsed = parse_enum(value.c_str(), field);
+      parsed = parse_enum(std::string(value).c_str(), field);
     } else {
       parsed = parse_number(value, field);
     }
   });
-  if (!known) return {StatusCode::kInvalidArgument, "unknown parameter '" + name + "'"};
-  if (!parsed) return {StatusCode::kInvalidArgument, "bad value '" + value + "' for " + name};
+  if (!known)
+    return {StatusCode::kInvalidArgument, "unknown parameter '" + std::string(name) + "'"};
+  if (!parsed)
+    return {StatusCode::kInvalidArgument,
+            "bad value '" + std::string(value) + "' for " + std::string(name)};
   return Status::ok();
 }
 
-bool param_value_text(const Params& params, const std::string& name, std::string& out) {
+Status set_param(Params& params, std::string_view assignment) {
+  const std::size_t eq = assignment.find('=');
+  if (eq == std::string_view::npos || eq == 0)
+    return {StatusCode::kInvalidArgument,
+            "--set takes NAME=VALUE, got '" + std::string(assignment) + "'"};
+  return set_param(params, assignment.substr(0, eq), assignment.substr(eq + 1));
+}
+
+bool param_value_text(const Params& params, std::string_view name, std::string& out) {
   bool known = false;
   format::visit_params(params, [&](const char* field_name, const auto& field) {
     if (known || name != field_name) return;
@@ -109,6 +119,24 @@ Params frontal_params(Params base) {
   base.graph.max_neighbour_rank = 0;
   base.descriptor.max_search_leaves = 20;
   return base;
+}
+
+Status preset_params(std::string_view name, Params& out) {
+  if (name == "defaults") {
+    out = Params{};
+  } else if (name == "frontal") {
+    out = frontal_params();
+  } else if (name == "angled") {
+    out = angled_params();
+  } else {
+    return {StatusCode::kInvalidArgument,
+            "unknown preset '" + std::string(name) + "' (defaults, frontal or angled)"};
+  }
+  return Status::ok();
+}
+
+std::vector<std::string> preset_names() {
+  return {"defaults", "frontal", "angled"};
 }
 
 }  // namespace kg

@@ -1,0 +1,279 @@
+// DetectOptions: the runtime settings a detector takes without rebuilding
+// the index (keygraph/detector.h), on opencv-doc's box in box_in_scene and
+// graf1 -> graf3 with one two-model index.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "keygraph/detector.h"
+#include "keygraph/param_text.h"
+#include "keygraph/simd.h"
+#include "support/alloc_counter.h"
+#include "support/opencv_scenes.h"
+#include "support/simd_scope.h"
+#include "support/test_data.h"
+
+namespace kg {
+namespace {
+
+struct Fixture {
+  test::InMemoryIndex built;
+  cv::Mat box_scene, graf_scene;
+};
+
+// The box (model 0) and a graf1 crop (model 1), built once.
+const Fixture& fixture() {
+  static Fixture f = [] {
+    Fixture x;
+    const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+    EXPECT_FALSE(box.empty());
+    EXPECT_TRUE(
+        test::build_in_memory({{"box", box}, {"graf", test::graf_crop()}}, Params{}, x.built));
+    x.box_scene = test::load_gray(test::opencv_data("box_in_scene.png"));
+    x.graf_scene = test::load_gray(test::opencv_data("graf3.png"));
+    return x;
+  }();
+  return f;
+}
+
+Limits limits_for(const cv::Mat& a, const cv::Mat& b) {
+  return Limits{}.for_frame(std::max(a.cols, b.cols), std::max(a.rows, b.rows));
+}
+
+std::vector<int> found_models(Detector& detector, const cv::Mat& scene) {
+  DetectionList found;
+  EXPECT_TRUE(detector.detect(test::view(scene), found));
+  std::vector<int> ids;
+  for (const Detection& d : found) ids.push_back(d.model_id);
+  return ids;
+}
+
+TEST(DetectOptions, DefaultToTheIndexParameters) {
+  const Fixture& f = fixture();
+  const ModelIndex& index = f.built.index;
+  const DetectOptions o = DetectOptions::from(index);
+  const Params& p = index.params();
+  EXPECT_EQ(o.ransac.seed, p.ransac.seed);
+  EXPECT_EQ(o.ransac.max_iterations, p.ransac.max_iterations);
+  EXPECT_EQ(o.ransac.min_triangle_correlation, p.ransac.min_triangle_correlation);
+  EXPECT_EQ(o.max_search_leaves, p.descriptor.max_search_leaves);
+  EXPECT_EQ(o.search_reference_models, p.descriptor.search_reference_models);
+  EXPECT_EQ(o.min_confidence, 0.0);
+  EXPECT_EQ(o.models, nullptr);
+
+  // A detector without options and one given the index's find the same.
+  const Limits limits = limits_for(f.box_scene, f.graf_scene);
+  Detector implicit(index, limits), explicit_options(index, limits, o);
+  ASSERT_TRUE(implicit.status()) << implicit.status().message();
+  ASSERT_TRUE(explicit_options.status()) << explicit_options.status().message();
+  DetectionList a, b;
+  ASSERT_TRUE(implicit.detect(test::view(f.box_scene), a));
+  ASSERT_TRUE(explicit_options.detect(test::view(f.box_scene), b));
+  ASSERT_EQ(a.size(), 1u);
+  ASSERT_EQ(b.size(), 1u);
+  EXPECT_EQ(a[0].homography, b[0].homography);
+  EXPECT_EQ(implicit.options().ransac.seed, p.ransac.seed);
+}
+
+TEST(DetectOptions, ModelsToSearch) {
+  const Fixture& f = fixture();
+  const ModelIndex& index = f.built.index;
+  Detector detector(index, limits_for(f.box_scene, f.graf_scene));
+  ASSERT_TRUE(detector.status());
+  EXPECT_EQ(found_models(detector, f.box_scene), std::vector<int>{0});
+  EXPECT_EQ(found_models(detector, f.graf_scene), std::vector<int>{1});
+
+  // Only the graf crop: the box is no longer found, the graf still is.
+  DetectOptions o = DetectOptions::from(index);
+  const std::int32_t graf_only[] = {1};
+  o.models = graf_only;
+  o.model_count = 1;
+  ASSERT_TRUE(detector.set_options(o));
+  EXPECT_FALSE(detector.searches_model(0));
+  EXPECT_TRUE(detector.searches_model(1));
+  EXPECT_EQ(detector.options().models, nullptr);  // the array is not kept
+  EXPECT_TRUE(found_models(detector, f.box_scene).empty());
+  EXPECT_EQ(found_models(detector, f.graf_scene), std::vector<int>{1});
+  for (const KeygraphMatch& m : detector.last_matches()) EXPECT_EQ(m.model_id, 1);
+
+  // An empty list searches nothing; nullptr every model again.
+  o.model_count = 0;
+  ASSERT_TRUE(detector.set_options(o));
+  EXPECT_TRUE(found_models(detector, f.box_scene).empty());
+  o.models = nullptr;
+  ASSERT_TRUE(detector.set_options(o));
+  EXPECT_EQ(found_models(detector, f.box_scene), std::vector<int>{0});
+}
+
+TEST(DetectOptions, ConfidenceFloorDropsLessLikelyDetections) {
+  const Fixture& f = fixture();
+  const ModelIndex& index = f.built.index;
+  Detector detector(index, limits_for(f.box_scene, f.graf_scene));
+  DetectionList found;
+  ASSERT_TRUE(detector.detect(test::view(f.box_scene), found));
+  ASSERT_EQ(found.size(), 1u);
+  const double confidence = found[0].confidence;
+  ASSERT_GT(confidence, 0.0);
+  ASSERT_LT(confidence, 1.0);
+  DetectOptions o = DetectOptions::from(index);
+  o.min_confidence = confidence;  // kept: at the floor
+  ASSERT_TRUE(detector.set_options(o));
+  ASSERT_TRUE(detector.detect(test::view(f.box_scene), found));
+  EXPECT_EQ(found.size(), 1u);
+  o.min_confidence = std::nextafter(confidence, 2.0);  // dropped: just below
+  ASSERT_TRUE(detector.set_options(o));
+  ASSERT_TRUE(detector.detect(test::view(f.box_scene), found));
+  EXPECT_TRUE(found.empty());
+}
+
+TEST(DetectOptions, SearchEffortAndSeedTakeEffect) {
+  const Fixture& f = fixture();
+  const ModelIndex& index = f.built.index;
+  Detector detector(index, limits_for(f.box_scene, f.graf_scene));
+  DetectionList found;
+  ASSERT_TRUE(detector.detect(test::view(f.box_scene), found));
+  const long long budgeted = detector.stats().arc_matches;
+  // The exact search (no leaf budget) finds at least every arc the budget did.
+  DetectOptions o = DetectOptions::from(index);
+  o.max_search_leaves = 0;
+  ASSERT_TRUE(detector.set_options(o));
+  ASSERT_TRUE(detector.detect(test::view(f.box_scene), found));
+  EXPECT_GT(detector.stats().arc_matches, budgeted);
+  ASSERT_EQ(found.size(), 1u);
+
+  // Another seed: the box is still found, and the same seed twice gives
+  // the same pose.
+  o = DetectOptions::from(index);
+  o.ransac.seed = 12345;
+  Detector a(index, limits_for(f.box_scene, f.graf_scene), o);
+  Detector b(index, limits_for(f.box_scene, f.graf_scene), o);
+  DetectionList fa, fb;
+  ASSERT_TRUE(a.detect(test::view(f.box_scene), fa));
+  ASSERT_TRUE(b.detect(test::view(f.box_scene), fb));
+  ASSERT_EQ(fa.size(), 1u);
+  ASSERT_EQ(fb.size(), 1u);
+  EXPECT_EQ(fa[0].homography, fb[0].homography);
+  EXPECT_EQ(a.options().ransac.seed, 12345u);
+}
+
+TEST(DetectOptions, BadOptionsAreRefusedAndLeaveTheOldOnes) {
+  const Fixture& f = fixture();
+  const ModelIndex& index = f.built.index;
+  Detector detector(index, limits_for(f.box_scene, f.graf_scene));
+  DetectOptions o = DetectOptions::from(index);
+  o.ransac.max_iterations = 0;
+  Status s = detector.set_options(o);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("max_iterations"), std::string::npos) << s.message();
+  EXPECT_EQ(detector.options().ransac.max_iterations, index.params().ransac.max_iterations);
+
+  o = DetectOptions::from(index);
+  const std::int32_t missing[] = {0, 2};
+  o.models = missing;
+  o.model_count = 2;
+  s = detector.set_options(o);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("model id 2"), std::string::npos) << s.message();
+  EXPECT_TRUE(detector.searches_model(1));
+
+  o = DetectOptions::from(index);
+  o.min_confidence = 1.5;
+  EXPECT_FALSE(detector.set_options(o));
+  o.min_confidence = std::nan("");
+  EXPECT_FALSE(detector.set_options(o));
+
+  // A detector constructed with bad options is failed and says why.
+  o = DetectOptions::from(index);
+  o.ransac.inlier_threshold = -1.0;
+  Detector failed(index, Limits{}, o);
+  EXPECT_EQ(failed.status().code(), StatusCode::kInvalidArgument);
+  DetectionList found;
+  EXPECT_FALSE(failed.detect(test::view(f.box_scene), found));
+}
+
+TEST(DetectOptions, SetOptionsAllocatesNothing) {
+  const Fixture& f = fixture();
+  const ModelIndex& index = f.built.index;
+  Detector detector(index, limits_for(f.box_scene, f.graf_scene));
+  DetectOptions o = DetectOptions::from(index);
+  const std::int32_t graf_only[] = {1};
+  o.models = graf_only;
+  o.model_count = 1;
+  o.max_search_leaves = 30;
+  o.min_confidence = 0.2;
+  DetectionList found;
+  const test::AllocationCounter counter;
+  ASSERT_TRUE(detector.set_options(o));
+  ASSERT_TRUE(detector.detect(test::view(f.graf_scene), found));
+  EXPECT_EQ(counter.count(), 0);
+  EXPECT_EQ(detector.workspace_used(), detector.workspace_bytes());
+}
+
+TEST(DetectOptions, SetByName) {
+  DetectOptions o;
+  EXPECT_TRUE(set_detect_option(o, "ransac.seed", "7"));
+  EXPECT_EQ(o.ransac.seed, 7u);
+  EXPECT_TRUE(set_detect_option(o, "descriptor.max_search_leaves", "0"));
+  EXPECT_EQ(o.max_search_leaves, 0);
+  EXPECT_TRUE(set_detect_option(o, "min_confidence", "0.5"));
+  EXPECT_EQ(o.min_confidence, 0.5);
+  EXPECT_TRUE(set_detect_option(o, "ransac.min_triangle_correlation", "0"));
+  EXPECT_EQ(o.ransac.min_triangle_correlation, 0.f);
+
+  Status s = set_detect_option(o, "descriptor.blur_sigma", "2");
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("fixed by the index"), std::string::npos) << s.message();
+  s = set_detect_option(o, "no.such", "1");
+  EXPECT_NE(s.message().find("unknown option"), std::string::npos) << s.message();
+  EXPECT_FALSE(set_detect_option(o, "ransac.seed", "x"));
+  EXPECT_FALSE(set_detect_option(o, "min_confidence", ""));
+  EXPECT_EQ(o.ransac.seed, 7u);  // unchanged by the failures
+
+  const std::vector<std::string> names = detect_option_names();
+  EXPECT_NE(std::find(names.begin(), names.end(), "ransac.seed"), names.end());
+  EXPECT_NE(std::find(names.begin(), names.end(), "min_confidence"), names.end());
+  EXPECT_EQ(std::find(names.begin(), names.end(), "views.max_tilt"), names.end());
+}
+
+// The vector code computes what the portable code computes: the same
+// detections, bit for bit, at every SIMD level (keygraph/simd.h).
+TEST(SimdLevels, DetectionsIdenticalAtEveryLevel) {
+  const Fixture& f = fixture();
+  const ModelIndex& index = f.built.index;
+  const auto detect_at = [&](SimdLevel level) {
+    const test::SimdScope scope(level);
+    Detector detector(index, limits_for(f.box_scene, f.graf_scene));
+    DetectionList found;
+    EXPECT_TRUE(detector.detect(test::view(f.box_scene), found));
+    EXPECT_EQ(found.size(), 1u);
+    return found.empty() ? Homography{} : found[0].homography;
+  };
+  const Homography best = detect_at(best_simd_level());
+  std::printf("best level: %s\n", simd_level_name(best_simd_level()));
+  EXPECT_EQ(detect_at(SimdLevel::kScalar), best);
+  EXPECT_EQ(detect_at(SimdLevel::kBaseline), best);
+  // Clamped to what the CPU and build have.
+  {
+    const test::SimdScope scope(SimdLevel::kAvx2);
+    EXPECT_EQ(simd_level(), best_simd_level());
+  }
+}
+
+TEST(Presets, NamedConfigurations) {
+  Params p;
+  ASSERT_TRUE(preset_params("frontal", p));
+  EXPECT_EQ(p.views.max_tilt, 0.f);
+  EXPECT_EQ(p.graph.complete_circuits, 0);
+  EXPECT_EQ(p.descriptor.max_search_leaves, 20);
+  ASSERT_TRUE(preset_params("angled", p));
+  EXPECT_EQ(p.views.max_tilt, 60.f);
+  EXPECT_EQ(p.views.tilt_levels, 2);
+  ASSERT_TRUE(preset_params("defaults", p));
+  EXPECT_EQ(p.views.max_tilt, Params{}.views.max_tilt);
+  EXPECT_EQ(preset_params("sideways", p).code(), StatusCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace kg
