@@ -8,8 +8,9 @@
 #   Depends      libkeygraph-dev needs nothing: a core-only user gets no
 #                OpenCV or libcamera; what the components need is Suggested;
 #   contents     no builder library.
-# (.ci/run checks the rest for host and cross builds: architectures, the
-# tool's dependencies and ELF machine, the unpacked tool and CMake package.)
+# Any build directory's packages: the host's (ctest) or a cross-build's
+# (.ci/run, which checks the rest: architectures, the tool's dependencies
+# and ELF machine, the unpacked tool and CMake package).
 #
 # usage: debian_packages.sh CPACK BUILD_DIR VERSION FILES_HAVE_OPENCV(ON|OFF)
 set -u
@@ -38,23 +39,25 @@ if ! "$CPACK" --config "$BUILD/CPackConfig.cmake" -B "$TMP/out" >"$TMP/cpack.log
   tail -n 30 "$TMP/cpack.log" >&2
   exit 1
 fi
-arch=$(dpkg-architecture -qDEB_HOST_ARCH)
-
+# The short descriptions: the tool's is the desktop or the device build's.
 declare -A short=(
   [libkeygraph-dev]="keygraph: static libraries and headers"
-  [keygraph]="keygraph: build, detect, evaluate and run live detection"
+  [keygraph]="keygraph: build, detect, evaluate and run live detection|keygraph: live detection on a device"
 )
+arch=
 for pkg in libkeygraph-dev keygraph; do
-  deb=$TMP/out/${pkg}_${VERSION}_${arch}.deb
+  debs=("$TMP/out/${pkg}_${VERSION}_"*.deb)
+  deb=${debs[0]}
   if [ ! -f "$deb" ]; then
-    bad "cpack made no $(basename "$deb"); it made: $(cd "$TMP/out" && ls -- *.deb 2>/dev/null)"
+    bad "cpack made no ${pkg}_${VERSION}_<arch>.deb; it made: $(cd "$TMP/out" && ls -- *.deb 2>/dev/null)"
     continue
   fi
+  arch=$(dpkg-deb -f "$deb" Architecture)
   # dpkg-deb -f prints the short description on the field's line, the long
   # one indented below it.
   description=$(dpkg-deb -f "$deb" Description)
   first=$(head -n 1 <<<"$description")
-  [ "$first" = "${short[$pkg]}" ] || bad "$pkg: Description begins '$first', expected '${short[$pkg]}'"
+  grep -qxE "${short[$pkg]}" <<<"$first" || bad "$pkg: Description begins '$first', expected '${short[$pkg]}'"
   grep -q ';' <<<"$description" && bad "$pkg: Description holds ';': $description"
   [ "$(wc -l <<<"$description")" -ge 3 ] || bad "$pkg: no long description: $description"
   grep -vq '^ ' <<<"$(tail -n +2 <<<"$description")" &&
@@ -68,7 +71,7 @@ for pkg in libkeygraph-dev keygraph; do
   grep -q builder <<<"$contents" && bad "$pkg: holds a builder: $(grep builder <<<"$contents")"
 done
 
-dev=$TMP/out/libkeygraph-dev_${VERSION}_${arch}.deb
+dev=$TMP/out/libkeygraph-dev_${VERSION}_${arch:-none}.deb
 if [ -f "$dev" ]; then
   depends=$(dpkg-deb -f "$dev" Depends)
   grep -Eq 'opencv|libcamera' <<<"$depends" && bad "libkeygraph-dev: Depends on $depends"
