@@ -1,9 +1,8 @@
 # Debian packages with CPack, from any build directory (host or cross):
 #   cpack --config <build>/CPackConfig.cmake -B <out>
 # gives two .deb files (install components of cmake/KeygraphInstall.cmake):
-#   libkeygraph-dev_<version>_<arch>.deb  static libraries (core, frame sources,
-#                                         desktop builder on hosts), headers,
-#                                         CMake package, pkg-config file
+#   libkeygraph-dev_<version>_<arch>.deb  static libraries (core, frame sources),
+#                                         headers, CMake package, pkg-config files
 #   keygraph_<version>_<arch>.deb         the keygraph tool (desktop or device)
 # <arch> is the build's target: amd64, or arm64 / armhf from the cross
 # toolchains. Both install under /usr. The tool's dependencies come from
@@ -21,7 +20,10 @@ endif()
 set(CPACK_GENERATOR DEB)
 set(CPACK_PACKAGE_NAME keygraph)
 set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
-set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "planar object detection with keygraphs")
+# No CPACK_PACKAGE_DESCRIPTION_SUMMARY: CPack would put it before every
+# package's own description; each description's first line is its package's
+# short description instead (Debian's Description field).
+set(CPACK_RESOURCE_FILE_LICENSE "${PROJECT_SOURCE_DIR}/LICENSE")
 set(CPACK_PACKAGE_CONTACT "keygraph maintainers <maintainers@keygraph.invalid>")
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 set(CPACK_DEB_COMPONENT_INSTALL ON)
@@ -34,36 +36,41 @@ set(CPACK_DEBIAN_PACKAGE_ARCHITECTURE ${_kg_deb_arch})
 
 set(CPACK_DEBIAN_DEV_PACKAGE_NAME libkeygraph-dev)
 set(CPACK_DEBIAN_DEV_PACKAGE_SECTION libdevel)
+# One string each (several strings would be a CMake list, joined by ';'):
+# the first line is Debian's short description, the rest the long one.
 set(CPACK_COMPONENT_DEV_DESCRIPTION
-    "keygraph: static libraries and headers\n"
-    "The runtime core (C++17, no OpenCV), the frame sources (platform/), the CMake\n"
-    "package (find_package(keygraph)) and the pkg-config file (keygraph.pc).")
-# What the installed CMake package looks for (cmake/keygraphConfig.cmake.in):
-# OpenCV for the desktop builder and the file source's decoders, libcamera
-# for its frame source.
-set(_kg_dev_depends "")
-if(KG_BUILD_TOOLS OR KG_FILES_HAVE_OPENCV)
-  list(APPEND _kg_dev_depends libopencv-dev)
+    "keygraph: static libraries and headers\n\
+The runtime core (C++17, no OpenCV), the frame sources (keygraph/platform/),\n\
+the CMake package (find_package(keygraph COMPONENTS core files v4l2 ...)) and\n\
+the pkg-config files (keygraph.pc, keygraph-files.pc, ...). Each component\n\
+needs only its own dependencies: the core none.")
+# What a component needs is suggested, not required: the core alone needs
+# nothing; keygraph::files needs OpenCV's imgcodecs when it was built with
+# them, keygraph::libcamera libcamera through pkg-config
+# (cmake/keygraphConfig.cmake.in says so when one is missing).
+set(_kg_dev_suggests pkg-config)
+if(KG_FILES_HAVE_OPENCV)
+  list(APPEND _kg_dev_suggests libopencv-dev)
 endif()
 if(TARGET keygraph_platform_libcamera)
-  list(APPEND _kg_dev_depends libcamera-dev pkg-config)
+  list(APPEND _kg_dev_suggests libcamera-dev)
 endif()
-string(REPLACE ";" ", " CPACK_DEBIAN_DEV_PACKAGE_DEPENDS "${_kg_dev_depends}")
+list(JOIN _kg_dev_suggests ", " CPACK_DEBIAN_DEV_PACKAGE_SUGGESTS)
 
 set(CPACK_DEBIAN_TOOL_PACKAGE_NAME keygraph)
 set(CPACK_DEBIAN_TOOL_PACKAGE_SECTION graphics)
 if(KG_BUILD_TOOLS)
   set(CPACK_COMPONENT_TOOL_DESCRIPTION
-      "keygraph: build, detect, evaluate and run live detection\n"
-      "The desktop keygraph tool: builds model indexes (OpenCV), detects, inspects,\n"
-      "evaluates, and detects live on cameras and image files.")
+      "keygraph: build, detect, evaluate and run live detection\n\
+The desktop keygraph tool: builds model indexes (OpenCV), detects, inspects,\n\
+evaluates, and detects live on cameras and image files.")
   # keygraph demo reads box.png and box_in_scene.png from opencv-doc.
   set(CPACK_DEBIAN_TOOL_PACKAGE_RECOMMENDS opencv-doc)
 else()
   set(CPACK_COMPONENT_TOOL_DESCRIPTION
-      "keygraph: live detection on a device\n"
-      "The device build of the keygraph tool (no OpenCV): live detection on V4L2\n"
-      "and libcamera cameras and image files, bench, inspect, detect on PGM files.")
+      "keygraph: live detection on a device\n\
+The device build of the keygraph tool (no OpenCV): live detection on V4L2\n\
+and libcamera cameras and image files, bench, inspect, detect on PGM files.")
 endif()
 # libcamera finds a camera's pipeline through its IPA modules (Debian:
 # libcamera-ipa, which libcamera0.0.3 does not pull in).

@@ -1,22 +1,25 @@
-// The shape of a device application: open a model index, build one
-// detector, then detect on every frame of a frame source, here a V4L2
+// The shape of a device application: open a model index, size a
+// detector for the source's frames, then detect on every frame of a frame source, here a V4L2
 // camera or a directory of PGM images (keygraph::v4l2, keygraph::files).
 // Nothing is allocated per frame by the detector or the sources; frames are
-// views of the capture buffers.
+// views of the capture buffers. The detector's workspace is sized for the
+// frames it gets (kg::Limits, 640x480 by default): a larger frame is an
+// error, not a resize, so the detector is made once the source's frame size
+// is known, and again only for a larger frame (files of several sizes).
 //
 //   keygraph_camera_example signs.kgi /dev/video0 [FRAMES]
 //   keygraph_camera_example signs.kgi frames/ [FRAMES]
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <keygraph/detector.h>
 #include <keygraph/model_index.h>
-
-#include "platform/files/file_source.h"
-#include "platform/frame_source.h"
-#include "platform/v4l2/v4l2_source.h"
+#include <keygraph/platform/files/file_source.h>
+#include <keygraph/platform/frame_source.h>
+#include <keygraph/platform/v4l2/v4l2_source.h>
 
 namespace {
 
@@ -38,7 +41,7 @@ int main(int argc, char** argv) {
 
   kg::ModelIndex index;
   if (kg::Status s = kg::ModelIndex::open(argv[1], index); !s) return fail(s.message());
-  kg::Detector detector(index);  // allocates its buffers here, once
+  std::optional<kg::Detector> detector;  // made for the first frame's size
   kg::DetectionList found;
 
   std::unique_ptr<kg::platform::FrameSource> source;
@@ -65,7 +68,17 @@ int main(int argc, char** argv) {
       exit_code = fail(s.message());
       break;
     }
-    if (kg::Status d = detector.detect(frame.image, found); !d) {
+    const kg::ImageView& image = frame.image;
+    if (!detector || image.width > detector->limits().max_width ||
+        image.height > detector->limits().max_height) {
+      // The one line that sizes the detector for its source (allocates here):
+      detector.emplace(index, kg::Limits{}.for_frame(image.width, image.height));
+      if (!detector->status()) {
+        exit_code = fail(detector->status().message());
+        break;
+      }
+    }
+    if (kg::Status d = detector->detect(image, found); !d) {
       exit_code = fail(d.message());
       break;
     }

@@ -23,8 +23,8 @@
 #include <string>
 #include <vector>
 
-#include "platform/files/pgm.h"
-#include "platform/frame_source.h"
+#include "keygraph/platform/files/pgm.h"
+#include "keygraph/platform/frame_source.h"
 
 namespace kg::platform {
 

@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-#include "platform/frame_source.h"
+#include "keygraph/platform/frame_source.h"
 
 namespace kg::platform {
 

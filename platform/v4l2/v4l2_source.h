@@ -26,9 +26,9 @@
 #include <string>
 #include <vector>
 
-#include "platform/convert.h"
-#include "platform/frame_source.h"
-#include "platform/v4l2/system_io.h"
+#include "keygraph/platform/convert.h"
+#include "keygraph/platform/frame_source.h"
+#include "keygraph/platform/v4l2/system_io.h"
 
 namespace kg::platform {
 

@@ -1,9 +1,6 @@
 #include "builder/desktop_detect.h"
 
 #include <algorithm>
-#include <string>
-
-#include <opencv2/imgproc.hpp>
 
 #include "builder/image_io.h"
 
@@ -34,22 +31,6 @@ Status DesktopDetector::detect(const cv::Mat& gray, DetectionList& out) {
   extractor_.extract(gray, params.keypoints, limits_.max_keypoints, keypoints_);
   return detector_.detect(view_of(gray), keypoints_.data(), static_cast<int>(keypoints_.size()),
                           out);
-}
-
-cv::Mat draw_detections(const cv::Mat& gray, const DetectionList& detections) {
-  cv::Mat canvas;
-  cv::cvtColor(gray, canvas, cv::COLOR_GRAY2BGR);
-  const cv::Scalar colours[] = {{0, 220, 0}, {0, 160, 255}, {255, 80, 0}, {200, 0, 200}};
-  int i = 0;
-  for (const Detection& d : detections) {
-    const cv::Scalar c = colours[i++ % 4];
-    std::vector<cv::Point> quad;
-    for (const Point2f& p : d.corners) quad.emplace_back(cvRound(p.x), cvRound(p.y));
-    cv::polylines(canvas, quad, true, c, 2, cv::LINE_AA);
-    cv::putText(canvas, std::string(d.model_name), quad[0] + cv::Point(4, 18),
-                cv::FONT_HERSHEY_SIMPLEX, 0.6, c, 2, cv::LINE_AA);
-  }
-  return canvas;
 }
 
 }  // namespace kg

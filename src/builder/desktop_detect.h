@@ -30,7 +30,4 @@ class DesktopDetector {
   std::vector<std::uint8_t> vertex_descriptors_;
 };
 
-// Draws each detection's outline and name onto a BGR copy of `gray`.
-cv::Mat draw_detections(const cv::Mat& gray, const DetectionList& detections);
-
 }  // namespace kg

@@ -6,19 +6,28 @@
 // --name and --roi apply to the model image that follows them: --roi makes
 // the model that rectangle of the image (model pixel (0,0) is image pixel
 // (X,Y)); without --name the model is named after the file's stem.
+// A MODEL argument may also be a directory (every image in it a model, or
+// its models.json) or a models.json (names, files, ROIs; docs/EVAL.md), as
+// eval --models reads them. --max-side PX downsamples each model image
+// (after its ROI) to PX on its long edge, and decodes JPEG photos over the
+// pixel limit at a reduced size first (load_model_photo()).
 // Every build measures the model quality report (builder/model_quality.h),
 // stores it in the index and prints it; --no-look-alikes skips rendering
 // each model as a scene. --draw-model DIR writes DIR/NAME.png per model:
 // its keypoints and strongest keygraphs.
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
 #include <system_error>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "builder/image_io.h"
 #include "builder/in_memory_index.h"
@@ -92,14 +101,89 @@ Status draw_models(const std::string& dir, const std::vector<BuiltModel>& models
   return Status::ok();
 }
 
+// Whether a MODEL argument names a set of models (a directory, or a
+// models.json) rather than one image.
+bool is_model_set(const std::string& arg) {
+  std::error_code ec;
+  return std::filesystem::is_directory(arg, ec) ||
+         std::filesystem::path(arg).extension() == ".json";
+}
+
+// The model images as the builder gets them, when --max-side is given:
+// loaded here (ROI and downsampling applied), then handed out by
+// prepared_image(), the loader build_model_set() calls (a plain function).
+std::map<std::string, cv::Mat> g_prepared;
+
+Status prepared_image(const std::string& key, cv::Mat& gray) {
+  const auto it = g_prepared.find(key);
+  if (it == g_prepared.end()) return {StatusCode::kNotFound, key + ": not loaded"};
+  gray = it->second;
+  return Status::ok();
+}
+
+// Loads each source with load_model_photo(), cuts its ROI (given in the
+// file's pixels, so scaled when the photo was decoded reduced) and
+// downsamples it to `max_side` on its long edge; the sources then name
+// their prepared image and carry no ROI.
+Status prepare_model_images(std::vector<ModelSource>& sources, int max_side) {
+  g_prepared.clear();
+  for (ModelSource& source : sources) {
+    cv::Mat gray;
+    int scale = 1;
+    if (Status s = load_model_photo(source.path, gray, scale); !s) return s;
+    std::string key = source.path;
+    if (source.roi) {
+      const cv::Rect r = *source.roi;
+      const cv::Rect scaled(r.x / scale, r.y / scale, std::max(1, r.width / scale),
+                            std::max(1, r.height / scale));
+      if (std::int64_t{r.x} + r.width > std::int64_t{gray.cols} * scale ||
+          std::int64_t{r.y} + r.height > std::int64_t{gray.rows} * scale ||
+          (scaled & cv::Rect(0, 0, gray.cols, gray.rows)) != scaled)
+        return {StatusCode::kInvalidArgument,
+                "ROI " + std::to_string(r.x) + "," + std::to_string(r.y) + "," +
+                    std::to_string(r.width) + "," + std::to_string(r.height) + " lies outside " +
+                    source.path};
+      gray = gray(scaled).clone();
+      key += " (ROI " + std::to_string(r.x) + "," + std::to_string(r.y) + "," +
+             std::to_string(r.width) + "," + std::to_string(r.height) + ")";
+    }
+    const int long_side = std::max(gray.cols, gray.rows);
+    if (long_side > max_side) {
+      const double f = static_cast<double>(max_side) / long_side;
+      cv::Mat smaller;
+      cv::resize(gray, smaller,
+                 cv::Size(std::max(1, static_cast<int>(std::lround(gray.cols * f))),
+                          std::max(1, static_cast<int>(std::lround(gray.rows * f)))),
+                 0, 0, cv::INTER_AREA);
+      gray = smaller;
+    }
+    g_prepared[key] = gray;
+    source.path = key;
+    source.roi.reset();
+  }
+  return Status::ok();
+}
+
+// load_image() with a hint for photos over the pixel limit.
+Status load_model_image_or_hint(const std::string& path, cv::Mat& gray) {
+  Status s = load_image(path, gray);
+  if (s.code() != StatusCode::kResourceExhausted) return s;
+  return {s.code(), s.message() + "; --max-side PX (e.g. --max-side 2000) downsamples it"};
+}
+
 }  // namespace
 
 int cmd_build(const Args& args) {
-  std::vector<std::string> names, paths;
-  std::vector<std::optional<cv::Rect>> rois;
+  // The MODEL arguments in order: an image, or a set (directory, models.json).
+  struct ModelArgument {
+    bool set;
+    ModelSource source;
+  };
+  std::vector<ModelArgument> arguments;
   std::optional<cv::Rect> pending_roi;
   std::optional<std::string> pending_name;
   std::string output, draw_dir;
+  int max_side = 0;
   bool look_alikes = true;
   Params params;
   bool tilt_given = false, tilt_levels_given = false;
@@ -115,32 +199,43 @@ int cmd_build(const Args& args) {
                 "Compiles model images (signs, posters, any planar object) into one index.\n"
                 "--name and --roi apply to the MODEL that follows them.");
   table
-      .positional("MODEL...", "model image files (PNG, JPEG, ...): one model each",
-                  [&](const std::string& v) {
-                    paths.push_back(v);
-                    rois.push_back(pending_roi);
+      .positional("MODEL...",
+                  "model image files (PNG, JPEG, ...): one model each; or a directory (each\n"
+                  "image in it a model, or its models.json) or a models.json (docs/EVAL.md)",
+                  [&](const std::string& v) -> std::string {
+                    if (is_model_set(v)) {
+                      if (pending_name || pending_roi)
+                        return "--name and --roi apply to one model image, not to " + v;
+                      arguments.push_back({true, {{}, v, std::nullopt}});
+                      return {};
+                    }
+                    arguments.push_back(
+                        {false,
+                         {pending_name ? *pending_name : std::filesystem::path(v).stem().string(),
+                          v, pending_roi}});
                     pending_roi.reset();
-                    names.push_back(pending_name ? *pending_name
-                                                 : std::filesystem::path(v).stem().string());
                     pending_name.reset();
-                    return std::string();
+                    return {};
                   })
-      .text("-o, --output", "OUT.kgi", output, "the index to write (required)")
+      .text("-o, --out, --output", "OUT.kgi", output, "the index to write (required)")
       .value("--name", "NAME", "the next MODEL's name (default: its file name without extension)",
              [&pending_name](const std::string& v) -> std::string {
                if (pending_name) return "two --name options for one model image";
                pending_name = v;
                return {};
              })
+      .repeatable()
       .value("--roi", "X,Y,W,H",
              "the next MODEL is this rectangle of its image, in pixels\n"
              "(model pixel (0,0) is image pixel (X,Y); default: the whole image)",
              [&pending_roi](const std::string& v) -> std::string {
                cv::Rect roi;
                if (!parse_roi(v, roi)) return "--roi takes X,Y,W,H (pixels), got '" + v + "'";
+               if (pending_roi) return "two --roi options for one model image";
                pending_roi = roi;
                return {};
              })
+      .repeatable()
       .value(
           "--detector", "hessian|mser", "the keypoint detector",
           [&params](const std::string& v) -> std::string {
@@ -208,13 +303,18 @@ int cmd_build(const Args& args) {
           },
           param_text("views.max_tilt"))
       .value("--set", "NAME=VALUE",
-             "any parameter of keygraph/params.h, repeatable\n"
+             "any parameter of keygraph/params.h\n"
              "(e.g. graph.max_keypoints=300; keygraph inspect lists them all)",
              [&params, &tilt_levels_given](const std::string& v) -> std::string {
                if (Status s = set_param(params, v); !s) return s.message();
                if (v.rfind("views.tilt_levels=", 0) == 0) tilt_levels_given = true;
                return {};
              })
+      .repeatable()
+      .integer("--max-side", "PX", max_side, 0, Limits::kMaxSide,
+               "downsample each model image (after its ROI) to PX pixels on its long edge\n"
+               "when larger, and decode JPEG photos over the pixel limit at 1/2, 1/4 or\n"
+               "1/8 of their size first; 0: use the images as they are")
       .text("--draw-model", "DIR", draw_dir,
             "also write a picture of each model into DIR (MODEL.png: its keypoints\n"
             "and strongest keygraphs)")
@@ -228,7 +328,8 @@ int cmd_build(const Args& args) {
       .flag("-q, --quiet", quiet,
             "no progress on stderr (by default one line rewritten in place on a\n"
             "terminal, otherwise a line per model)")
-      .example("keygraph build --name exit --roi 10,10,200,120 exit.png stairs.png -o signs.kgi");
+      .example("keygraph build --name exit --roi 10,10,200,120 exit.png stairs.png -o signs.kgi")
+      .example("keygraph build --max-side 2000 photos/ -o signs.kgi");
   if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
   if (tilt_given && !tilt_levels_given)
     params.views.tilt_levels =
@@ -236,24 +337,41 @@ int cmd_build(const Args& args) {
   if (pending_roi) return table.usage_error("--roi must come before the model image it applies to");
   if (pending_name)
     return table.usage_error("--name must come before the model image it applies to");
-  if (paths.empty()) return table.usage_error("no model images given");
+  if (arguments.empty()) return table.usage_error("no model images given");
   if (output.empty()) return table.usage_error("no output given (-o OUT.kgi)");
+  // The models, each set read; its files and the sets themselves are inputs.
+  std::vector<ModelSource> sources;
+  std::vector<std::string> paths;
+  for (ModelArgument& a : arguments) {
+    paths.push_back(a.source.path);
+    if (!a.set) {
+      sources.push_back(std::move(a.source));
+      continue;
+    }
+    std::vector<ModelSource> set;
+    if (Status s = read_model_sources(a.source.path, set); !s) return fail(s.message());
+    for (ModelSource& m : set) {
+      paths.push_back(m.path);
+      sources.push_back(std::move(m));
+    }
+  }
 
   // The output first: a device node, a directory or one of the model
   // images as -o fails before the build, and an interrupted build leaves
   // nothing behind (the temporary is removed on SIGINT and SIGTERM).
   platform::OutputFile out;
-  if (Status s = out.create(output, paths); !s) return fail("build: -o " + s.message());
+  if (Status s = out.create(output, paths); !s) return fail("-o " + s.message());
   // So is a --draw-model that cannot be a directory (checked again when drawing).
   if (!draw_dir.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(draw_dir, ec);
     if (!std::filesystem::is_directory(draw_dir, ec))
-      return fail("build: --draw-model " + draw_dir + ": not a directory");
+      return fail("--draw-model " + draw_dir + ": not a directory");
   }
 
-  std::vector<ModelSource> sources;
-  for (std::size_t i = 0; i < paths.size(); ++i) sources.push_back({names[i], paths[i], rois[i]});
+  if (max_side > 0) {
+    if (Status s = prepare_model_images(sources, max_side); !s) return fail(s.message());
+  }
   ModelBuildOptions options;
   options.params = params;
   options.threads = jobs;
@@ -261,7 +379,10 @@ int cmd_build(const Args& args) {
   std::vector<BuiltModel> models;
   ProgressReporter progress({"build", "model", is_terminal(stderr), true},
                             quiet ? nullptr : stderr);
-  Status built = build_model_set(sources, options, load_image, grays, models, progress.callback());
+  Status built =
+      build_model_set(sources, options, max_side > 0 ? prepared_image : load_model_image_or_hint,
+                      grays, models, progress.callback());
+  g_prepared.clear();
   progress.finish();
   if (!built) return fail("build: " + built.message());
   // Each model's size alone: what it adds to an index.
@@ -300,7 +421,8 @@ int cmd_build(const Args& args) {
   Status s = out.write(bytes.data(), bytes.size());
   if (s) s = out.commit();
   if (!s) return fail(s.message());
-  std::printf("wrote %s (%zu models)\n", output.c_str(), models.size());
+  std::printf("wrote %s (%s)\n", output.c_str(),
+              counted(static_cast<long long>(models.size()), "model").c_str());
   return 0;
 }
 

@@ -1,6 +1,11 @@
-// keygraph demo [--out DIR]: the Quick start's main job. Builds an index of
+// keygraph demo [-o DIR]: the Quick start's main job. Builds an index of
 // box.png from Debian's opencv-doc images, finds the box in
-// box_in_scene.png, prints where, and draws the outline.
+// box_in_scene.png, prints where, and draws the outline. Without -o it
+// writes into a directory of its own under the system's temporary
+// directory, so that a demo run from a checkout leaves nothing there.
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -14,20 +19,49 @@
 
 namespace kg::cli {
 
+namespace {
+
+// The default output directory: keygraph-demo-<uid> in the temporary
+// directory, made if missing; an existing one must be a directory of this
+// user's (not a link someone else planted in a shared /tmp).
+Status default_demo_dir(std::string& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path tmp = fs::temp_directory_path(ec);
+  if (ec)
+    return {StatusCode::kIoError, "no temporary directory (" + ec.message() + "); give -o DIR"};
+  dir = (tmp / ("keygraph-demo-" + std::to_string(::getuid()))).string();
+  fs::create_directory(dir, ec);
+  struct stat info {};
+  if (::lstat(dir.c_str(), &info) != 0 || !S_ISDIR(info.st_mode) || info.st_uid != ::getuid())
+    return {StatusCode::kIoError, dir + " is not a directory of this user's; give -o DIR"};
+  return Status::ok();
+}
+
+}  // namespace
+
 int cmd_demo(const Args& args) {
-  std::string out_dir = ".";
+  std::string out_dir;
   std::string data_dir = KG_OPENCV_DATA_DIR;
-  Options options("demo", "[--out DIR] [--data DIR]",
+  Options options("demo", "[-o DIR] [--data DIR]",
                   "Builds an index of box.png from Debian's opencv-doc images, finds the box in\n"
                   "box_in_scene.png, prints where, and draws the outline (DIR/demo.png).");
-  options.text("--out", "DIR", out_dir, "where demo.kgi and demo.png are written")
+  options
+      .text("-o, --out, --output", "DIR", out_dir,
+            "where demo.kgi and demo.png are written, an existing directory (default:\n"
+            "keygraph-demo-<user id> in the temporary directory, made if missing)")
       .text("--data", "DIR", data_dir, "where box.png and box_in_scene.png are")
-      .example("keygraph demo --out /tmp");
+      .example("keygraph demo")
+      .example("keygraph demo -o /tmp");
   if (const int exit_code = options.parse(args); exit_code >= 0) return exit_code;
   const std::string model_path = data_dir + "/box.png";
   const std::string scene_path = data_dir + "/box_in_scene.png";
   std::error_code ec;
-  if (!std::filesystem::is_directory(out_dir, ec)) return fail("demo: no directory " + out_dir);
+  if (out_dir.empty()) {
+    if (Status s = default_demo_dir(out_dir); !s) return fail(s.message());
+  } else if (!std::filesystem::is_directory(out_dir, ec)) {
+    return fail("no directory " + out_dir);
+  }
 
   cv::Mat model_image, scene;
   Status s = load_image(model_path, model_image);
@@ -66,8 +100,10 @@ int cmd_demo(const Args& args) {
   }
   const std::string picture = out_dir + "/demo.png";
   std::string error;
-  if (!write_image_atomically(picture, draw_detections(scene, found), {model_path, scene_path},
-                              error))
+  cv::Mat picture_in_colour;
+  if (!load_color(scene_path, picture_in_colour)) picture_in_colour = scene;
+  if (!write_image_atomically(picture, draw_scene(picture_in_colour, found),
+                              {model_path, scene_path}, error))
     return fail(error);
   std::printf("wrote %s\n", picture.c_str());
   return found.empty() ? 1 : 0;

@@ -1,35 +1,47 @@
-// keygraph detect: its options are the Options table below (keygraph detect --help).
+// keygraph detect: its options are the Options table of detect_options()
+// (cli/device/cmd_detect_files.cpp; keygraph detect --help). The desktop
+// build's detect: any image format OpenCV reads, the index's own keypoint
+// detector (MSER through OpenCV), and pictures in colour.
 #include <chrono>
 #include <cstdio>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include "builder/desktop_detect.h"
 #include "builder/image_io.h"
 #include "cli/commands.h"
 #include "cli/device/device_commands.h"
-#include "cli/device/json.h"
+#include "cli/device/draw_targets.h"
+#include "cli/device/frame_output.h"
+#include "cli/device/scene_list.h"
 
 namespace kg::cli {
 
 int cmd_detect(const Args& args) {
   std::string index_path, draw;
   bool json = false;
-  std::vector<std::string> scenes;
-  const Options options = detect_options(index_path, draw, json, scenes, "any image format");
+  std::vector<std::string> scene_args, scenes;
+  const Options options = detect_options(index_path, draw, json, scene_args, "PNG, in colour");
   if (const int exit_code = options.parse(args); exit_code >= 0) return exit_code;
   if (index_path.empty()) return options.usage_error("no index given (--index I.kgi)");
-  if (scenes.empty()) return options.usage_error("no scene images given");
+  if (scene_args.empty()) return options.usage_error("no scene images given");
+  if (std::string error = expand_scene_paths(scene_args, scenes); !error.empty())
+    return fail(error);
+  std::vector<std::string> inputs = scenes;
+  inputs.push_back(index_path);
+  // Every picture is checked before the first scene (draw_targets.h).
   std::vector<std::string> drawn;
   if (!draw.empty()) {
-    if (std::string error = draw_paths(draw, scenes, drawn); !error.empty())
-      return fail("detect: " + error);
+    const auto writable = [](const std::string& path) { return cv::haveImageWriter(path); };
+    if (std::string error = plan_drawings(draw, scenes, ".png", writable, inputs, drawn);
+        !error.empty())
+      return fail(error);
   }
   // The index is read into memory (not mapped): a file changed in place
   // meanwhile cannot crash the process (model_index.h).
   ModelIndex index;
   Status s = ModelIndex::read(index_path, index);
   if (!s) return fail(s.message());
-  std::vector<std::string> inputs = scenes;
-  inputs.push_back(index_path);
   DesktopDetector detector(index);
   int exit_code = 0;
   DetectionList found;
@@ -38,7 +50,7 @@ int cmd_detect(const Args& args) {
     cv::Mat gray;
     s = load_image(scene, gray);
     if (!s) {
-      exit_code = fail(s.message());
+      exit_code = scene_failed(scene, s.message(), json);
       continue;
     }
     const auto start = std::chrono::steady_clock::now();
@@ -46,27 +58,18 @@ int cmd_detect(const Args& args) {
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     if (!s) {
-      exit_code = fail(scene + ": " + s.message());
+      exit_code = scene_failed(scene, scene + ": " + s.message(), json);
       continue;
     }
-    if (json) {
-      std::printf("%s\n",
-                  detection_json(scene, gray.cols, gray.rows, ms, found, detector.stats()).c_str());
-    } else {
-      std::printf("%s: %zu detection(s) in %.1f ms\n", scene.c_str(), found.size(), ms);
-      for (const Detection& d : found) {
-        std::printf("  %.*s: inliers %d, score %.3f, appearance %.2f, confidence %.2f, corners",
-                    static_cast<int>(d.model_name.size()), d.model_name.data(), d.inliers, d.score,
-                    d.appearance, d.confidence);
-        for (const Point2f& c : d.corners) std::printf(" (%.1f, %.1f)", c.x, c.y);
-        std::printf("\n");
-      }
-    }
+    print_detections(scene, view_of(gray), ms, found, detector.stats(), json);
     std::fflush(stdout);
     if (!draw.empty()) {
+      // The picture in the scene's colours (gray when they cannot be read).
+      cv::Mat picture;
+      if (!load_color(scene, picture) || picture.size() != gray.size()) picture = gray;
       std::string error;
-      if (!write_image_atomically(drawn[i], draw_detections(gray, found), inputs, error))
-        exit_code = fail("detect: --draw " + error);
+      if (!write_image_atomically(drawn[i], draw_scene(picture, found), inputs, error))
+        exit_code = fail("--draw " + error);
     }
   }
   return exit_code;

@@ -66,7 +66,7 @@ Options oxford_options(OxfordEvalOptions& o, std::string& out_dir, std::string& 
       "eval",
       "--dataset DIR [--subsets a,b] [--crops N] [--size S] [--centre] [--seed N]\n"
       "       [--set NAME=VALUE]... [--methods M,...|all] [--negatives] [--curves]\n"
-      "       [--out DIR] [--csv FILE]",
+      "       [-o DIR] [--csv FILE] [-q]",
       "The paper's second experiment on the Oxford layout: crops of img1 are the models,\n"
       "img2..img6 the scenes; a detection counts when its four corners are within 3\n"
       "(or 10) pixels of the ground truth.");
@@ -80,13 +80,13 @@ Options oxford_options(OxfordEvalOptions& o, std::string& out_dir, std::string& 
       .integer("--size", "S", o.crop_size, 32, Limits::kMaxSide, "crop side, pixels")
       .flag("--centre", o.centre_crop, "one crop, centred, instead of random ones")
       .unsigned64("--seed", "N", o.seed, "seed of the random crops")
-      .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h, repeatable",
-             set_param(o.params))
+      .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h", set_param(o.params))
+      .repeatable()
       .value("--methods", "M,...|all", kMethodsHelp, set_methods(o.methods), joined(o.methods))
       .flag("--negatives", o.negatives,
             "also run each crop on the next subset's scenes (false detections)")
       .flag("--curves", o.curves, "precision-recall of correspondences and RANSAC iterations")
-      .text("--out", "DIR", out_dir, "also write the report (tables, plots) into DIR")
+      .text("-o, --out, --output", "DIR", out_dir, "also write the report (tables, plots) into DIR")
       .text("--csv", "FILE", csv, "also write every case to FILE")
       .flag("-q, --quiet", quiet, kQuietHelp)
       .example("keygraph eval --dataset ../shared/data/oxford --subsets graf,boat --methods all");
@@ -96,7 +96,7 @@ Options oxford_options(OxfordEvalOptions& o, std::string& out_dir, std::string& 
 Options synth_options(SynthEvalOptions& o, std::string& out_dir, bool& quiet) {
   Options options("eval",
                   "--synth DIR [--sizes 1,10,50] [--frames N] [--methods M,...|all]\n"
-                  "       [--set NAME=VALUE]... [--out DIR]",
+                  "       [--set NAME=VALUE]... [-o DIR] [-q]",
                   "The sign benchmark written by keygraph synth: each frame searched with indexes\n"
                   "of N signs; found within 10 pixels, false detections, time, by sign scale.");
   options.text("--synth", "DIR", o.directory, "the benchmark's directory (required)")
@@ -127,9 +127,9 @@ Options synth_options(SynthEvalOptions& o, std::string& out_dir, bool& quiet) {
           },
           "every frame")
       .value("--methods", "M,...|all", kMethodsHelp, set_methods(o.methods), joined(o.methods))
-      .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h, repeatable",
-             set_param(o.params))
-      .text("--out", "DIR", out_dir, "also write the report (tables, plots) into DIR")
+      .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h", set_param(o.params))
+      .repeatable()
+      .text("-o, --out, --output", "DIR", out_dir, "also write the report (tables, plots) into DIR")
       .flag("-q, --quiet", quiet, kQuietHelp)
       .example("keygraph eval --synth signs-bench --sizes 1,50 --methods keygraph,sift-ransac");
   return options;

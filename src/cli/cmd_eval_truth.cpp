@@ -25,7 +25,7 @@ Options truth_options(TruthEvalOptions& o, std::string& out_dir, bool& quiet) {
   for (const std::string& m : o.methods) methods += (methods.empty() ? "" : ",") + m;
   Options options("eval",
                   "--truth MANIFEST (--models DIR|M.json | --index I.kgi) [--methods M,...|all]\n"
-                  "       [--tolerance PX] [--set NAME=VALUE]... [--out DIR] [--gallery]",
+                  "       [--tolerance PX] [--set NAME=VALUE]... [-o DIR] [--gallery] [-q]",
                   "Detectors scored against hand-marked ground truth (docs/EVAL.md): found, false\n"
                   "detections, by size, time. Every input is checked before the first detection.");
   options.text("--truth", "MANIFEST", o.manifest, "the ground-truth manifest (.jsonl; required)")
@@ -42,13 +42,15 @@ Options truth_options(TruthEvalOptions& o, std::string& out_dir, bool& quiet) {
           methods)
       .number("--tolerance", "PX", o.tolerance, 0, 1e6, true,
               "a detection is correct when every corner is within PX pixels")
-      .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h, repeatable (with --models)",
+      .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h (with --models)",
              [&o](const std::string& v) {
                const Status s = set_param(o.params, v);
                o.params_set = true;
                return s ? std::string() : s.message();
              })
-      .text("--out", "DIR", out_dir, "also write the report (tables, pictures) into DIR")
+      .repeatable()
+      .text("-o, --out, --output", "DIR", out_dir,
+            "also write the report (tables, pictures) into DIR")
       .flag("--gallery", o.gallery, "with --out: draw the scenes with a miss or a false detection")
       .flag("-q, --quiet", quiet,
             "no progress on stderr (by default one line rewritten in place on a\n"

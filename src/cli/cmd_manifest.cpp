@@ -31,7 +31,7 @@ int cmd_manifest(const Args& args) {
                     }
                     return {};
                   })
-      .text("-o, --output", "OUT.jsonl", output, "the manifest to write (required)")
+      .text("-o, --out, --output", "OUT.jsonl", output, "the manifest to write (required)")
       .text("--split", "dev|test|model-bursts", split,
             "exit-signs only: that split of the set (default: all of it)")
       .example("keygraph manifest exit-signs ../shared/data/real/exit-signs -o exit.jsonl");

@@ -50,9 +50,10 @@ int cmd_repeatability(const Args& args) {
   Params params;
   std::vector<std::string> detectors = {"hessian", "mser", "sift", "orb", "akaze"};
   std::string csv;
+  bool quiet = false;
   Options table("repeatability",
                 "--dataset DIR [--subsets a,b] [--detectors D,...] [--set NAME=VALUE]...\n"
-                "       [--max-keypoints N] [--tolerance PX] [--csv FILE]",
+                "       [--max-keypoints N] [--tolerance PX] [--csv FILE] [-q]",
                 "Keypoint repeatability img1 -> img2..img6 on the Oxford layout (ground-truth\n"
                 "homographies), keypoints per image, scene triangles that can be correct\n"
                 "keygraphs, and detection time per image on one thread.");
@@ -70,16 +71,20 @@ int cmd_repeatability(const Args& args) {
             return std::string();
           },
           "hessian,mser,sift,orb,akaze")
-      .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h, repeatable",
+      .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h",
              [&params](const std::string& v) {
                const Status s = set_param(params, v);
                return s ? std::string() : s.message();
              })
+      .repeatable()
       .integer("--max-keypoints", "N", options.limits.max_keypoints, 1, 1 << 24,
                "keypoints per image at most")
       .number("--tolerance", "PX", options.tolerance, 0, 100, true,
               "a keypoint is repeated within this many pixels")
       .text("--csv", "FILE", csv, "also write every case to FILE")
+      .flag("-q, --quiet", quiet,
+            "no progress on stderr (by default the detector and subset being measured,\n"
+            "rewritten in place)")
       .example("keygraph repeatability --dataset ../shared/data/oxford --detectors hessian,sift");
   if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
   if (options.dataset.empty()) return table.usage_error("--dataset DIR is required");
@@ -102,7 +107,7 @@ int cmd_repeatability(const Args& args) {
   cv::setNumThreads(1);  // detection times on one thread, for every detector
   std::vector<RepeatabilityCase> cases;
   std::vector<DetectionTiming> timings;
-  Status s = evaluate_repeatability(options, cases, timings, print_progress);
+  Status s = evaluate_repeatability(options, cases, timings, quiet ? nullptr : print_progress);
   clear_progress();
   if (!s) return fail("repeatability: " + s.message());
   std::fputs(repeatability_text(cases, timings, options).c_str(), stdout);

@@ -17,11 +17,13 @@ int cmd_synth(const Args& args) {
   SynthSetOptions options;
   options.backgrounds = KG_OPENCV_DATA_DIR;
   bool quiet = false;
-  Options table("synth", "-o DIR [--seed N] [--signs N] [--frames N] [--sign-free F]",
-                "Generates the labelled indoor-sign benchmark: signs drawn by the project,\n"
-                "composited into opencv-doc photos, ground truth in DIR/manifest.txt.");
+  Options table(
+      "synth",
+      "-o DIR [--seed N] [--signs N] [--frames N] [--sign-free F]\n       [--backgrounds DIR] [-q]",
+      "Generates the labelled indoor-sign benchmark: signs drawn by the project,\n"
+      "composited into opencv-doc photos, ground truth in DIR/manifest.txt.");
   table
-      .text("-o, --out", "DIR", options.directory,
+      .text("-o, --out, --output", "DIR", options.directory,
             "the directory to create (required; new or empty)")
       .unsigned64("--seed", "N", options.seed, "seed of the signs' style and of the frames")
       .integer("--signs", "N", options.signs, 1, sign_catalogue_size(),
@@ -41,8 +43,8 @@ int cmd_synth(const Args& args) {
   const Status s = write_synth_set(options, progress.callback());
   progress.finish();
   if (!s) return fail("synth: " + s.message());
-  std::printf("%s: %d signs, %d frames (%d sign-free), seed %llu\n", options.directory.c_str(),
-              options.signs, options.frames,
+  std::printf("%s: %s, %s (%d sign-free), seed %llu\n", options.directory.c_str(),
+              counted(options.signs, "sign").c_str(), counted(options.frames, "frame").c_str(),
               static_cast<int>(options.frames * options.sign_free_fraction + 0.5),
               static_cast<unsigned long long>(options.seed));
   return 0;

@@ -12,6 +12,7 @@
 #include "cli/device/command_line.h"
 #include "cli/device/options.h"
 #include "eval/truth_eval.h"
+#include "keygraph/detector.h"
 #include "keygraph/status.h"
 
 namespace kg::cli {
@@ -30,6 +31,19 @@ int cmd_repeatability(const Args& args);
 // load_gray() with image decoders' own stderr output held back when the
 // load fails, so the failure is reported as one line.
 Status load_image(const std::string& path, cv::Mat& gray);
+// The same file in colour (BGR; a gray file as three equal channels), with
+// the same checks, for pictures of what was found.
+Status load_color(const std::string& path, cv::Mat& bgr);
+// A model photo for keygraph build: load_image(), except that a JPEG over
+// the pixel limit is decoded at 1/2, 1/4 or 1/8 of its size (libjpeg scales
+// while decoding: the full image is never in memory), the first that fits;
+// `scale` is then 2, 4 or 8, else 1. An image over the limit that is not a
+// JPEG stays an error, with a hint.
+Status load_model_photo(const std::string& path, cv::Mat& gray, int& scale);
+
+// The scene with each detection's outline and model name in colour (a
+// colour scene stays in colour); names stay inside the picture.
+cv::Mat draw_scene(const cv::Mat& scene, const DetectionList& found);
 // Writes an image through a platform::OutputFile (a unique temporary
 // renamed into place: no partial output, never over a non-regular file or
 // one of `inputs`).

@@ -1,15 +1,55 @@
 // Image files for the desktop commands, through OpenCV (builder/image_io.h).
+#include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 
 #include "builder/image_io.h"
 #include "cli/commands.h"
+#include "platform/files/file_source.h"
 #include "platform/files/held_stderr.h"
+#include "platform/files/image_limits.h"
+#include "platform/files/jpeg_structure.h"
 #include "platform/files/output_file.h"
+#include "platform/files/pgm.h"
 
 namespace kg::cli {
+
+namespace {
+
+// Decodes `path` with `flags` (cv::IMREAD_*) under the checks of
+// load_gray(): a regular file, checked before decoding, within the pixel
+// limit (imgcodecs refuses larger before allocating). `bytes` is the file.
+Status decode(const std::string& path, const std::vector<std::uint8_t>& bytes, int flags,
+              cv::Mat& out) {
+  out.release();
+  platform::StderrHold decoder_messages;
+  decoder_messages.hold();
+  bool over_limit = false;
+  try {
+    const cv::Mat raw(1, static_cast<int>(bytes.size()), CV_8U,
+                      const_cast<std::uint8_t*>(bytes.data()));
+    out = cv::imdecode(raw, flags);
+  } catch (const cv::Exception& e) {
+    out.release();
+    over_limit = platform::is_size_limit_error(e.err);
+  }
+  decoder_messages.release(!out.empty());
+  if (over_limit) return {StatusCode::kResourceExhausted, platform::over_pixel_limit(path)};
+  if (out.empty()) return {StatusCode::kInvalidArgument, path + ": not a readable image"};
+  return Status::ok();
+}
+
+Status read_checked(const std::string& path, std::vector<std::uint8_t>& bytes) {
+  if (Status s = platform::read_file(path, bytes); !s) return s;
+  if (const std::string problem = platform::problem_before_decoding(bytes, path); !problem.empty())
+    return {StatusCode::kCorruptData, problem};
+  return Status::ok();
+}
+
+}  // namespace
 
 Status load_image(const std::string& path, cv::Mat& gray) {
   // Decoders' complaints are held: on failure our one line replaces them,
@@ -19,6 +59,34 @@ Status load_image(const std::string& path, cv::Mat& gray) {
   Status s = load_gray(path, gray);
   decoder_messages.release(s.is_ok());
   return s;
+}
+
+Status load_color(const std::string& path, cv::Mat& bgr) {
+  std::vector<std::uint8_t> bytes;
+  if (Status s = read_checked(path, bytes); !s) return s;
+  return decode(path, bytes, cv::IMREAD_COLOR, bgr);
+}
+
+Status load_model_photo(const std::string& path, cv::Mat& gray, int& scale) {
+  scale = 1;
+  Status s = load_image(path, gray);
+  if (s.code() != StatusCode::kResourceExhausted) return s;
+  std::vector<std::uint8_t> bytes;
+  if (Status r = read_checked(path, bytes); !r) return r;
+  if (!platform::is_jpeg(bytes.data(), bytes.size())) {
+    return {s.code(), s.message() + "; --max-side downsamples JPEG files only: make this one " +
+                          "smaller, or save it as JPEG"};
+  }
+  const std::pair<int, int> reduced[] = {{2, cv::IMREAD_REDUCED_GRAYSCALE_2},
+                                         {4, cv::IMREAD_REDUCED_GRAYSCALE_4},
+                                         {8, cv::IMREAD_REDUCED_GRAYSCALE_8}};
+  for (const auto& [factor, flags] : reduced) {
+    s = decode(path, bytes, flags, gray);
+    if (s.code() == StatusCode::kResourceExhausted) continue;
+    if (s) scale = factor;
+    return s;
+  }
+  return {s.code(), s.message() + " (also at 1/8 of its size)"};
 }
 
 bool write_image_atomically(const std::string& path, const cv::Mat& image,

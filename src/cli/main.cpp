@@ -12,6 +12,7 @@
 
 #include "cli/device/device_commands.h"
 #include "cli/device/options.h"
+#include "core/index/index_format.h"
 #include "keygraph/detector.h"
 #include "platform/files/file_source.h"
 #include "platform/files/image_limits.h"
@@ -61,6 +62,7 @@ void usage(std::FILE* out) {
   std::fprintf(out,
                "usage: keygraph COMMAND [options]\n"
                "       keygraph help COMMAND    (or keygraph COMMAND --help): its options\n"
+               "       keygraph --version       the version and the index formats it reads\n"
                "\n"
                "commands:\n");
   for (const Command& c : kCommands) std::fprintf(out, "  %-15s %s\n", c.name, c.summary);
@@ -71,7 +73,13 @@ void usage(std::FILE* out) {
                "checked on the size the file declares, before decoding) and %d pixels a\n"
                "side for detection; live and bench skip larger frames with a warning.\n"
                "Outputs (-o, --draw) are written whole or not at all and replace regular\n"
-               "files only, never an input. Exit codes: 0 done, 1 failed, 2 usage error.\n"
+               "files only, never an input; they are checked before the work starts.\n"
+               "-o (also --out, --output) names what a command writes: a file when it\n"
+               "writes one (build, manifest), a directory when it writes several (demo,\n"
+               "eval, synth). --draw DIR writes one picture per input into DIR.\n"
+               "An option that takes a value is given once unless its help says\n"
+               "repeatable; -- ends the options. -q (--quiet): no progress on stderr.\n"
+               "Exit codes: 0 done, 1 failed, 2 usage error.\n"
                "\n"
                "example:\n"
                "  keygraph demo --out /tmp\n",
@@ -90,7 +98,27 @@ int unknown_command(const std::string& name) {
   return kg::cli::kUsageError;
 }
 
+// keygraph --version: the library's version, the build, and the index
+// formats this keygraph reads (and, on the desktop, writes).
+int version() {
+  using kg::format::kVersionMajor;
+  using kg::format::kVersionMinor;
+#if KG_CLI_DESKTOP
+  std::printf("keygraph %s (desktop build, OpenCV %s)\n", KG_VERSION, CV_VERSION);
+  std::printf(
+      "index format: writes %u.%u; reads %u.0 to %u.%u (and later %u.x files, without what "
+      "they add)\n",
+      kVersionMajor, kVersionMinor, kVersionMajor, kVersionMajor, kVersionMinor, kVersionMajor);
+#else
+  std::printf("keygraph %s (device build, no OpenCV)\n", KG_VERSION);
+  std::printf("index format: reads %u.0 to %u.%u (and later %u.x files, without what they add)\n",
+              kVersionMajor, kVersionMajor, kVersionMinor, kVersionMajor);
+#endif
+  return 0;
+}
+
 int run_command(const Command& c, const kg::cli::Args& args) {
+  kg::cli::set_command_name(c.name);
   if (c.run == nullptr) {
     return kg::cli::fail(std::string(c.name) +
                          ": not in this build of keygraph (a device build, without "
@@ -105,6 +133,7 @@ int run(int argc, char** argv) {
     return kg::cli::kUsageError;
   }
   const std::string command = argv[1];
+  if (command == "--version") return version();
   if (command == "help" || command == "--help" || command == "-h") {
     if (argc < 3) {
       usage(stdout);

@@ -372,11 +372,14 @@ std::string synth_text(const std::vector<SynthRow>& rows,
   out += line;
   for (const SynthRow& r : rows) {
     const double signs = std::max(1, r.sign_frames), frames = std::max(1, r.frames);
-    std::snprintf(line, sizeof(line),
-                  "%-13s %5d %6d %7.1f%% %7.1f%% %9.2f %10.3f %5d/%-5d %10.1f\n", r.method.c_str(),
-                  r.index_size, r.frames, 100.0 * r.within3 / signs, 100.0 * r.within10 / signs,
-                  r.median_corner_error, r.false_detections / frames, r.sign_free_with_false,
-                  r.sign_free_frames, r.median_ms);
+    // No sign found: no median corner error (a dash, not "nan").
+    char median[16] = "-";
+    if (!std::isnan(r.median_corner_error))
+      std::snprintf(median, sizeof(median), "%.2f", r.median_corner_error);
+    std::snprintf(line, sizeof(line), "%-13s %5d %6d %7.1f%% %7.1f%% %9s %10.3f %5d/%-5d %10.1f\n",
+                  r.method.c_str(), r.index_size, r.frames, 100.0 * r.within3 / signs,
+                  100.0 * r.within10 / signs, median, r.false_detections / frames,
+                  r.sign_free_with_false, r.sign_free_frames, r.median_ms);
     out += line;
   }
   if (!by_confidence.empty()) {
@@ -421,8 +424,13 @@ std::string synth_text(const std::vector<SynthRow>& rows,
     std::snprintf(line, sizeof(line), "%-13s", r.method.c_str());
     out += line;
     for (std::size_t k = 0; k < b.size(); ++k) {
-      std::snprintf(line, sizeof(line), " %3d/%-3d %3.0f%%", r.found[k], r.frames[k],
-                    r.frames[k] > 0 ? 100.0 * r.found[k] / r.frames[k] : 0.0);
+      // A bin without frames has no rate: a dash, not "0/0 0%".
+      if (r.frames[k] > 0) {
+        std::snprintf(line, sizeof(line), " %3d/%-3d %3.0f%%", r.found[k], r.frames[k],
+                      100.0 * r.found[k] / r.frames[k]);
+      } else {
+        std::snprintf(line, sizeof(line), " %7s     ", "-");
+      }
       out += line;
     }
     out += "\n";
@@ -437,7 +445,12 @@ std::string synth_text(const std::vector<SynthRow>& rows,
     std::snprintf(line, sizeof(line), "%-13s", r.method.c_str());
     out += line;
     for (std::size_t k = 0; k < b.size(); ++k) {
-      std::snprintf(line, sizeof(line), " %5.1f %5.1f  ", r.keypoints[k], r.repeated[k]);
+      // An empty bin has no mean: dashes, not "nan nan".
+      if (std::isnan(r.keypoints[k]) || std::isnan(r.repeated[k])) {
+        std::snprintf(line, sizeof(line), " %5s %5s  ", "-", "-");
+      } else {
+        std::snprintf(line, sizeof(line), " %5.1f %5.1f  ", r.keypoints[k], r.repeated[k]);
+      }
       out += line;
     }
     out += "\n";

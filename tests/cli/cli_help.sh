@@ -37,17 +37,19 @@ run() {
 # if the help and the parser lost it together).
 known_options() {
   case $1 in
-    build) echo "-o --output --name --roi --detector --structure --vertex-descriptor --encoding
-                 --min-size --max-tilt --max-scale --set --quiet" ;;
+    build) echo "-o --out --output --name --roi --detector --structure --vertex-descriptor
+                 --encoding --min-size --max-tilt --max-scale --set --max-side --draw-model
+                 --no-look-alikes -j --jobs -q --quiet" ;;
     detect) echo "--index --json --draw" ;;
-    demo) echo "--out --data" ;;
+    demo) echo "-o --out --output --data" ;;
     eval) echo "--dataset --subsets --crops --size --centre --seed --set --methods --negatives
-                --curves --out --csv --synth --sizes --frames --truth --models --index
-                --tolerance --gallery --quiet" ;;
-    manifest) echo "-o --output --split" ;;
-    synth) echo "-o --out --seed --signs --frames --sign-free --backgrounds --quiet" ;;
-    repeatability) echo "--dataset --subsets --detectors --set --max-keypoints --tolerance --csv" ;;
-    live) echo "--index --v4l2 --libcamera --images --size --loop --json --draw --frames" ;;
+                --curves -o --out --output --csv --synth --sizes --frames --truth --models --index
+                --tolerance --gallery -q --quiet" ;;
+    manifest) echo "-o --out --output --split" ;;
+    synth) echo "-o --out --output --seed --signs --frames --sign-free --backgrounds -q --quiet" ;;
+    repeatability) echo "--dataset --subsets --detectors --set --max-keypoints --tolerance --csv
+                         -q --quiet" ;;
+    live) echo "--index --v4l2 --libcamera --images --size --loop --json --draw --frames -q --quiet" ;;
     bench) echo "--index --repeat --json" ;;
     inspect) echo "" ;;
   esac
@@ -97,7 +99,7 @@ for c in $commands; do
       bad "'$other': exit $rc or output differs from '$c --help'"
   done
   # The options the help lists: the first column of its option rows.
-  listed=$(grep -E '^  -' "$WORK/help" | awk '{print $1; if ($1 ~ /,$/) print $2}' |
+  listed=$(grep -E '^  -' "$WORK/help" | awk '{for (i = 1; i <= NF; i++) { print $i; if ($i !~ /,$/) break }}' |
     tr -d ',' | grep -v -e '^-h$' -e '^--help$' | sort -u)
   for o in $(known_options "$c"); do
     echo "$listed" | grep -qx -- "$o" || bad "$c --help does not list $o"
@@ -110,7 +112,9 @@ for c in $commands; do
       mode=$(echo "$rest" | awk '$2 ~ /^--(synth|truth|dataset)$/ {print $2}')
       continue
     fi
-    for o in $first $second; do
+    # The row's names: "-o, --out, --output DIR" gives -o --out --output.
+    names=$(echo "$first $second $rest" | awk '{for (i = 1; i <= NF; i++) { print $i; if ($i !~ /,$/) break }}')
+    for o in $names; do
       case $o in -*) ;; *) continue ;; esac
       o=${o%,}
       [ "$o" = -h ] || [ "$o" = --help ] && continue
@@ -126,7 +130,7 @@ for c in $commands; do
     done
   done
   # An option with a default shows it.
-  grep -Eq 'default: [^)]+\)' "$WORK/help" || [ "$c" = inspect ] || [ "$c" = detect ] ||
+  tr '\n' ' ' <"$WORK/help" | grep -Eq 'default: [^)]+\)' || [ "$c" = inspect ] || [ "$c" = detect ] ||
     [ "$c" = manifest ] ||
     bad "$c --help shows no default"
   # An unknown option: named, pointing to --help, exit 2, nothing on stdout.

@@ -770,13 +770,13 @@ TEST_F(ModelIndexTest, RejectsBadVertexDescriptorParameters) {
   p.descriptor.vertex_descriptor = static_cast<VertexDescriptor>(2);
   Bytes b = bytes();
   put_params(b, p);
-  EXPECT_TRUE(rejected(b, "parameter vertex_descriptor"));
+  EXPECT_TRUE(rejected(b, "parameter descriptor.vertex_descriptor"));
   for (float bad : {0.f, -0.5f, 2.5f, std::nanf("")}) {
     p = sift_params();
     p.descriptor.vertex_threshold = bad;
     b = sift_corpus().bytes;
     put_params(b, p);
-    EXPECT_TRUE(rejected(b, "parameter vertex_threshold")) << bad;
+    EXPECT_TRUE(rejected(b, "parameter descriptor.vertex_threshold")) << bad;
   }
   // Without vertex descriptors the threshold is unused and may be 0.
   p = paper_params();
@@ -1697,37 +1697,37 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
   p.graph.structure = static_cast<Structure>(7);
   Bytes b = bytes();
   put_params(b, p);
-  EXPECT_TRUE(rejected(b, "parameter structure"));
+  EXPECT_TRUE(rejected(b, "parameter graph.structure"));
 
   p = paper_params();
   p.keypoints.detector = static_cast<KeypointDetector>(9);
   b = bytes();
   put_params(b, p);
-  EXPECT_TRUE(rejected(b, "parameter detector"));
+  EXPECT_TRUE(rejected(b, "parameter keypoints.detector"));
 
   p = paper_params();
   p.descriptor.similarity_threshold = std::nanf("");
   b = bytes();
   put_params(b, p);
-  EXPECT_TRUE(rejected(b, "parameter similarity_threshold"));
+  EXPECT_TRUE(rejected(b, "parameter descriptor.similarity_threshold"));
 
   p = paper_params();
   p.graph.min_distance = 200.f;  // above max_distance
   b = bytes();
   put_params(b, p);
-  EXPECT_TRUE(rejected(b, "parameter min/max_distance"));
+  EXPECT_TRUE(rejected(b, "parameter graph.min_distance, graph.max_distance"));
 
   p = paper_params();
   p.ransac.max_instances = 0;
   b = bytes();
   put_params(b, p);
-  EXPECT_TRUE(rejected(b, "parameter max_instances"));
+  EXPECT_TRUE(rejected(b, "parameter ransac.max_instances"));
 
   p = paper_params();
   p.descriptor.encoding = static_cast<DescriptorEncoding>(3);
   b = bytes();
   put_params(b, p);
-  EXPECT_TRUE(rejected(b, "parameter encoding is unknown (3)"));
+  EXPECT_TRUE(rejected(b, "parameter descriptor.encoding is unknown (3)"));
   // A valid encoding that is not the one the sections hold.
   for (DescriptorEncoding e : kEncodings) {
     for (DescriptorEncoding other : kEncodings) {

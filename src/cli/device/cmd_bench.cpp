@@ -178,9 +178,11 @@ int cmd_bench(const Args& args) {
   std::vector<double> series(static_cast<std::size_t>(repeat));
 
   if (!json) {
-    std::printf("index %s: %d models, %u arcs, %s descriptors; %zu frames, %d runs each\n",
-                index_path.c_str(), index.model_count(), index.arc_count(),
-                encoding_name(index.descriptor_encoding()), frames.size(), repeat);
+    std::printf("index %s: %s, %u arcs, %s descriptors; %s, %s each\n", index_path.c_str(),
+                counted(index.model_count(), "model").c_str(), index.arc_count(),
+                encoding_name(index.descriptor_encoding()),
+                counted(static_cast<long long>(frames.size()), "frame").c_str(),
+                counted(repeat, "run").c_str());
     std::printf("detector workspace: %zu bytes (frames up to %dx%d)\n", *workspace, width, height);
   }
   std::fflush(stdout);

@@ -1,14 +1,17 @@
 // keygraph detect: its options are the Options table below (keygraph detect --help).
 // The device build's detect: scenes read by platform/files (binary PGM;
 // more formats when that library was built with OpenCV), the core detector,
-// and the same output as the desktop detect. --draw writes PGM.
+// and the same output as the desktop detect. --draw writes PGM (outlines,
+// no names: there is no font without OpenCV).
 #include <chrono>
 #include <filesystem>
 
 #include "cli/device/detector_fit.h"
 #include "cli/device/device_commands.h"
+#include "cli/device/draw_targets.h"
 #include "cli/device/frame_output.h"
 #include "cli/device/options.h"
+#include "cli/device/scene_list.h"
 #include "keygraph/detector.h"
 #include "platform/files/file_source.h"
 #include "platform/files/pgm.h"
@@ -17,49 +20,59 @@ namespace kg::cli {
 
 Options detect_options(std::string& index_path, std::string& draw, bool& json,
                        std::vector<std::string>& scenes, const std::string& draw_format) {
-  Options options("detect", "--index I.kgi [--json] [--draw OUT] SCENE...",
+  const bool pgm = draw_format == "PGM";
+  Options options("detect", "--index I.kgi [--json] [--draw DIR|OUT] SCENE...",
                   "Finds the index's models in scene images: per scene, the detections with their\n"
                   "inliers, score and corners (scene pixels), and the time.");
   options
-      .positional("SCENE...", "scene image files",
+      .positional("SCENE...", "scene image files, or directories of them (name order)",
                   [&scenes](const std::string& v) {
                     scenes.push_back(v);
                     return std::string();
                   })
       .text("--index", "I.kgi", index_path, "the model index (required)")
-      .flag("--json", json, "one JSON object per scene on stdout")
-      .text("--draw", "OUT", draw,
-            "draw the outlines found into OUT (" + draw_format +
-                "); with several scenes,\nOUT_<scene name> next to OUT")
-      .example("keygraph detect --index signs.kgi --draw found." +
-               std::string(draw_format == "PGM" ? "pgm" : "png") + " scene." +
-               std::string(draw_format == "PGM" ? "pgm" : "jpg"));
+      .flag("--json", json,
+            "one JSON object per scene on stdout; a scene that fails gives\n"
+            "{\"scene\": ..., \"error\": ...}")
+      .text("--draw", "DIR|OUT", draw,
+            "draw what was found (" + draw_format +
+                "): into DIR, an existing directory, one picture per scene named after it;\n"
+                "or into the file OUT for one scene (OUT_<scene name> beside it for several)")
+      .example(std::string("keygraph detect --index signs.kgi --draw found/ ") +
+               (pgm ? "frames/" : "photos/"))
+      .example("keygraph detect --index signs.kgi --json " +
+               std::string(pgm ? "scene.pgm" : "scene.jpg"));
   return options;
 }
 
 int cmd_detect_files(const Args& args) {
   std::string index_path, draw;
   bool json = false;
-  std::vector<std::string> scenes;
-  Options options = detect_options(index_path, draw, json, scenes, "PGM");
+  std::vector<std::string> scene_args, scenes;
+  Options options = detect_options(index_path, draw, json, scene_args, "PGM");
   if (const int exit_code = options.parse(args); exit_code >= 0) return exit_code;
   if (index_path.empty()) return options.usage_error("no index given (--index I.kgi)");
-  if (scenes.empty()) return options.usage_error("no scene images given");
-  if (!draw.empty() && std::filesystem::path(draw).extension() != ".pgm")
-    return fail("detect: --draw " + draw + ": this build writes PGM only (use a .pgm name)");
+  if (scene_args.empty()) return options.usage_error("no scene images given");
+  if (std::string error = expand_scene_paths(scene_args, scenes); !error.empty())
+    return fail(error);
+  std::vector<std::string> inputs = scenes;
+  inputs.push_back(index_path);
+  // Every picture is checked before the first scene (draw_targets.h).
   std::vector<std::string> drawn;
   if (!draw.empty()) {
-    if (std::string error = draw_paths(draw, scenes, drawn); !error.empty())
-      return fail("detect: " + error);
+    const auto writable = [](const std::string& path) {
+      return std::filesystem::path(path).extension() == ".pgm";
+    };
+    if (std::string error = plan_drawings(draw, scenes, ".pgm", writable, inputs, drawn);
+        !error.empty())
+      return fail(error + (writable(draw) ? "" : " (this build writes PGM only: a .pgm name)"));
   }
   // Read into memory, not mapped: an index changed in place meanwhile
   // cannot crash the process (model_index.h).
   ModelIndex index;
   if (Status s = ModelIndex::read(index_path, index); !s) return fail(s.message());
-  std::vector<std::string> inputs = scenes;
-  inputs.push_back(index_path);
   if (const std::string problem = core_detector_problem(index); !problem.empty())
-    return fail("detect: " + index_path + ": " + problem);
+    return fail(index_path + ": " + problem);
 
   Detector detector(index);
   DetectionList found;
@@ -68,12 +81,12 @@ int cmd_detect_files(const Args& args) {
   for (std::size_t i = 0; i < scenes.size(); ++i) {
     const std::string& scene = scenes[i];
     if (Status s = platform::read_image(scene, scene_image); !s) {
-      exit_code = fail(s.message());
+      exit_code = scene_failed(scene, s.message(), json);
       continue;
     }
     const ImageView view = scene_image.view();
     if (const Status fit = fit_detector(detector, view); !fit) {
-      exit_code = fail(scene + ": " + fit.message());
+      exit_code = scene_failed(scene, scene + ": " + fit.message(), json);
       continue;
     }
     const auto start = std::chrono::steady_clock::now();
@@ -81,7 +94,7 @@ int cmd_detect_files(const Args& args) {
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     if (!s) {
-      exit_code = fail(scene + ": " + s.message());
+      exit_code = scene_failed(scene, scene + ": " + s.message(), json);
       continue;
     }
     print_detections(scene, view, ms, found, detector.stats(), json);
@@ -89,7 +102,7 @@ int cmd_detect_files(const Args& args) {
     if (!draw.empty()) {
       draw_outlines(view, found, canvas);
       if (Status w = platform::write_pgm(drawn[i], canvas.view(), inputs); !w)
-        exit_code = fail("detect: --draw " + w.message());
+        exit_code = fail("--draw " + w.message());
     }
   }
   return exit_code;

@@ -159,10 +159,10 @@ void print_index(const ModelIndex& index) {
   }
   const double size = static_cast<double>(index.byte_size());
   std::printf(
-      "\ntotal: %d models, %u keypoints, %u arcs, %u tree nodes (depth %d), %s "
+      "\ntotal: %s, %u keypoints, %u arcs, %u tree nodes (depth %d), %s "
       "descriptors\n",
-      index.model_count(), index.keypoint_count(), index.arc_count(), index.tree_node_count(),
-      index.tree_depth(), encoding_name(encoding));
+      counted(index.model_count(), "model").c_str(), index.keypoint_count(), index.arc_count(),
+      index.tree_node_count(), index.tree_depth(), encoding_name(encoding));
   // The search's budget as the detector applies it (format 6.3 grows it
   // with the models).
   const int leaves = ArcSearch::leaves_for(index.params().descriptor,

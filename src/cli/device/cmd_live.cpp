@@ -57,6 +57,7 @@ struct LiveOptions {
   bool json = false;
   std::string draw_dir;
   int max_frames = 0;  // 0: no limit
+  bool quiet = false;  // no status lines on stderr (warnings stay)
 };
 
 double seconds(Clock::duration d) {
@@ -76,7 +77,7 @@ Options live_options(LiveOptions& o) {
   Options options(
       "live",
       "--index I.kgi (--v4l2 /dev/videoN | --libcamera [ID] | --images PATH)\n"
-      "       [--size WxH] [--loop] [--json] [--draw DIR] [--frames N]",
+      "       [--size WxH] [--loop] [--json] [--draw DIR] [--frames N] [-q]",
       "Detects on every frame of a camera or of image files: stdout gets the lines of\n"
       "keygraph detect, stderr the frames per second about once a second and a summary.\n"
       "Ctrl-C (SIGINT) or SIGTERM finishes the current frame and exits 0.");
@@ -112,6 +113,9 @@ Options live_options(LiveOptions& o) {
             return {};
           },
           "no limit")
+      .flag("-q, --quiet", o.quiet,
+            "no status on stderr: the source, the frames per second and the summary\n"
+            "(warnings and errors stay)")
       .example("keygraph live --index signs.kgi --v4l2 /dev/video0 --size 1280x720")
       .example("keygraph live --index signs.kgi --images frames/ --json --frames 100");
   return options;
@@ -246,8 +250,8 @@ class LiveIndex {
     loaded_ = now;
     failure_reported_ = false;
     index_ = std::move(fresh);
-    std::fprintf(stderr, "live: index %s changed: reloaded (%d models)\n", path_.c_str(),
-                 index_.model_count());
+    std::fprintf(stderr, "live: index %s changed: reloaded (%d model%s)\n", path_.c_str(),
+                 index_.model_count(), index_.model_count() == 1 ? "" : "s");
     return true;
   }
 
@@ -320,7 +324,7 @@ int cmd_live(const Args& args) {
                     "; give the images distinct names");
     }
   }
-  std::fprintf(stderr, "live: %s\n", source->description().c_str());
+  if (!o.quiet) std::fprintf(stderr, "live: %s\n", source->description().c_str());
 
   const Clock::time_point start = Clock::now();
   RateMeter meter(start);
@@ -438,17 +442,20 @@ int cmd_live(const Args& args) {
         break;
       }
     }
-    if (meter.frame(done, ms)) meter.report(done, frames);
+    if (meter.frame(done, ms) && !o.quiet) meter.report(done, frames);
   }
   source->stop();
 
   const double total_s = seconds(Clock::now() - start);
-  std::fprintf(stderr,
-               "live: %" PRIu64 " frames in %.1f s (%.1f fps), %" PRIu64
-               " with detections, %d bad frames skipped%s%s\n",
-               frames, total_s, total_s > 0 ? static_cast<double>(frames) / total_s : 0.0,
-               with_detections, bad_frames, stopped_by.empty() ? "" : "; stopped by ",
-               stopped_by.c_str());
+  if (!o.quiet) {
+    std::fprintf(stderr,
+                 "live: %" PRIu64 " frame%s in %.1f s (%.1f fps), %" PRIu64
+                 " with detections, %d bad frame%s skipped%s%s\n",
+                 frames, frames == 1 ? "" : "s", total_s,
+                 total_s > 0 ? static_cast<double>(frames) / total_s : 0.0, with_detections,
+                 bad_frames, bad_frames == 1 ? "" : "s", stopped_by.empty() ? "" : "; stopped by ",
+                 stopped_by.c_str());
+  }
   // Image files that could not be read are errors, as in `keygraph detect`;
   // a camera's occasional bad frame is not.
   if (exit_code == 0 && bad_frames > 0 && o.kind == SourceKind::kImages) exit_code = 1;

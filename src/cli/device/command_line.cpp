@@ -9,9 +9,23 @@
 
 namespace kg::cli {
 
+namespace {
+std::string g_command;
+}  // namespace
+
+void set_command_name(const std::string& name) {
+  g_command = name;
+}
+
 int fail(const std::string& message) {
-  std::fprintf(stderr, "keygraph: %s\n", message.c_str());
+  const std::string prefix = g_command.empty() ? std::string() : g_command + ": ";
+  const bool named = prefix.empty() || message.compare(0, prefix.size(), prefix) == 0;
+  std::fprintf(stderr, "keygraph: %s%s\n", named ? "" : prefix.c_str(), message.c_str());
   return 1;
+}
+
+std::string counted(long long n, const std::string& noun) {
+  return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
 }
 
 bool parse_int(const std::string& text, int min, int max, int& out) {

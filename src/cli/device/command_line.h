@@ -9,8 +9,16 @@ namespace kg::cli {
 
 using Args = std::vector<std::string>;
 
-// "keygraph: <message>" on stderr; returns 1.
+// The command being run ("build", "live"; main() sets it): every error line
+// names it, as "keygraph: build: ...".
+void set_command_name(const std::string& name);
+
+// "keygraph: <command>: <message>" on stderr (the command left out when the
+// message already starts with it, or none is set); returns 1.
 int fail(const std::string& message);
+
+// "1 model", "2 models": a count and its noun, plural unless it is one.
+std::string counted(long long n, const std::string& noun);
 
 // Whole-string decimal integers in [min, max]; false on anything else
 // (signs, spaces, trailing characters, overflow).

@@ -5,20 +5,31 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "cli/device/command_line.h"
 #include "cli/device/json.h"
 #include "platform/convert.h"
 
 namespace kg::cli {
 
 std::string core_detector_problem(const ModelIndex& index) {
+  // The desktop keygraph's live and bench (and every command of the device
+  // keygraph) detect with the core alone, as a device does: keypoints from
+  // its own detector (hessian), no vertex descriptors.
+#if KG_CLI_DEVICE_ONLY
+  const char* why = "which needs OpenCV (not in this build of keygraph)";
+  const char* instead = "";
+#else
+  const char* why = "which the core detector lacks (this command runs it alone, as a device does)";
+  const char* instead = ", or use keygraph detect";
+#endif
   const Params& p = index.params();
   if (p.keypoints.detector != KeypointDetector::kHessian) {
-    return "the index was built with --detector mser, which needs OpenCV; build it with the "
-           "default detector (hessian) to detect with the core";
+    return std::string("the index was built with --detector mser, ") + why +
+           "; build it with the default detector (hessian) to detect with the core" + instead;
   }
   if (p.descriptor.vertex_descriptor != VertexDescriptor::kNone) {
-    return "the index was built with --vertex-descriptor sift, which needs OpenCV; build it "
-           "without vertex descriptors to detect with the core";
+    return std::string("the index was built with --vertex-descriptor sift, ") + why +
+           "; build it without vertex descriptors to detect with the core" + instead;
   }
   return {};
 }
@@ -37,6 +48,32 @@ void print_detections(const std::string& name, const ImageView& frame, double ms
     for (const Point2f& c : d.corners) std::printf(" (%.1f, %.1f)", c.x, c.y);
     std::printf("\n");
   }
+}
+
+int scene_failed(const std::string& scene, const std::string& message, bool json) {
+  if (json) std::printf("%s\n", scene_error_json(scene, message).c_str());
+  return fail(message);
+}
+
+LabelPosition label_position(const Detection& d, int width, int height, int text_width,
+                             int text_height, int baseline) {
+  const Point2f* top = &d.corners[0];
+  for (const Point2f& c : d.corners) {
+    if (c.y < top->y || (c.y == top->y && c.x < top->x)) top = &c;
+  }
+  const int margin = 4;
+  const auto whole = [](float v) {
+    return static_cast<int>(std::lround(std::clamp(static_cast<double>(v), -1e6, 1e6)));
+  };
+  const int top_x = whole(top->x), top_y = whole(top->y);
+  int y = top_y - margin - baseline;                               // above the corner
+  if (y - text_height < margin) y = top_y + margin + text_height;  // or below it
+  // Inside the picture (at its left or top edge when the name is larger).
+  LabelPosition at;
+  at.x = std::clamp(top_x, margin, std::max(margin, width - text_width - margin));
+  at.y = std::clamp(y, margin + text_height,
+                    std::max(margin + text_height, height - baseline - margin));
+  return at;
 }
 
 namespace {

@@ -20,6 +20,11 @@ bool is_option(const std::string& arg) {
   return arg.size() > 1 && arg[0] == '-';
 }
 
+// The end of the options: every later argument is positional.
+bool is_end_of_options(const std::string& arg) {
+  return arg == "--";
+}
+
 bool is_help(const std::string& arg) {
   return arg == "-h" || arg == "--help";
 }
@@ -180,6 +185,11 @@ Options& Options::positional(const std::string& value_name, const std::string& h
   return *this;
 }
 
+Options& Options::repeatable() {
+  if (!options_.empty()) options_.back().repeatable = true;
+  return *this;
+}
+
 Options& Options::note(const std::string& text) {
   notes_.push_back(text);
   return *this;
@@ -200,9 +210,9 @@ const Options::Option* Options::find(const std::string& name) const {
 }
 
 int Options::parse(const Args& args) const {
-  // Help first, wherever it is (a value such as `--name -h` is not help):
-  // `keygraph build --bogus --help` shows the help, not an error.
-  for (std::size_t i = 0; i < args.size(); ++i) {
+  // Help first, wherever it is before `--` (a value such as `--name -h` is
+  // not help): `keygraph build --bogus --help` shows the help, not an error.
+  for (std::size_t i = 0; i < args.size() && !is_end_of_options(args[i]); ++i) {
     if (is_help(args[i])) {
       std::fputs(help().c_str(), stdout);
       return 0;
@@ -213,22 +223,32 @@ int Options::parse(const Args& args) const {
         (o->kind == Kind::kOptionalValue && i + 1 < args.size() && !is_option(args[i + 1])))
       ++i;
   }
+  std::vector<const Option*> given;  // the value options seen so far
+  bool options_ended = false;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     std::string error;
-    if (!is_option(a)) {
+    if (!options_ended && is_end_of_options(a)) {
+      options_ended = true;
+      continue;
+    }
+    if (options_ended || !is_option(a)) {
       if (!positional_) return usage_error("unexpected argument " + a);
       error = positional_(a);
     } else if (const Option* o = find(a); o == nullptr) {
       return usage_error("unknown option " + a);
     } else if (o->kind == Kind::kFlag) {
       error = o->apply({});
+    } else if (!o->repeatable && std::find(given.begin(), given.end(), o) != given.end()) {
+      return usage_error(a + " given twice (it takes one value)");
     } else if (o->kind == Kind::kOptionalValue) {
-      const bool given = i + 1 < args.size() && !is_option(args[i + 1]);
-      error = o->apply(given ? args[++i] : std::string());
+      given.push_back(o);
+      const bool value_given = i + 1 < args.size() && !is_option(args[i + 1]);
+      error = o->apply(value_given ? args[++i] : std::string());
     } else if (i + 1 >= args.size()) {
       error = a + " needs a value";
     } else {
+      given.push_back(o);
       error = o->apply(args[++i]);
     }
     if (!error.empty()) {
@@ -260,6 +280,7 @@ std::string Options::help() const {
     if (o.kind == Kind::kValue) left += " " + o.value_name;
     if (o.kind == Kind::kOptionalValue) left += " [" + o.value_name + "]";
     std::string help = o.help;
+    if (o.repeatable) help += " (repeatable)";
     if (!o.range.empty() || !o.default_text.empty()) {
       help += " (";
       if (!o.range.empty()) help += o.range + (o.default_text.empty() ? "" : "; ");
@@ -267,6 +288,10 @@ std::string Options::help() const {
       help += ")";
     }
     rows.push_back({left, help});
+  }
+  if (positional_) {
+    rows.push_back({"--", "end of the options: every later argument is " + positional_name_ +
+                              ", also one that starts with '-'"});
   }
   rows.push_back({"-h, --help", "print this help and exit"});
   std::size_t width = 0;
@@ -299,6 +324,7 @@ std::string Options::help() const {
 
 bool asks_for_help(const Args& args) {
   for (const std::string& a : args) {
+    if (is_end_of_options(a)) break;
     if (is_help(a)) return true;
   }
   return false;

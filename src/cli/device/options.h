@@ -6,9 +6,13 @@
 //
 // Arguments are taken in order, so that an option may apply to the
 // positional argument that follows it (`keygraph build --name N M.png`).
-// A usage error (an unknown option, a missing or bad value) is one line on
-// stderr and exit code 2; -h or --help anywhere prints the help on stdout
-// and exit code 0.
+// An option that takes a value may be given once, unless it is declared
+// repeatable() (--set; build's --name and --roi, which apply to the next
+// model); a flag given twice is the same as once. `--` ends the options:
+// every later argument is positional, also one that starts with '-'.
+// A usage error (an unknown option, a missing or bad value, a value option
+// given twice) is one line on stderr and exit code 2; -h or --help anywhere
+// before `--` prints the help on stdout and exit code 0.
 #pragma once
 
 #include <cstdint>
@@ -54,6 +58,9 @@ class Options {
   // start with '-'.
   Options& optional_value(const std::string& names, const std::string& value_name,
                           const std::string& help, Apply apply);
+  // Marks the option declared last as repeatable: each use applies its value
+  // (the help says "repeatable").
+  Options& repeatable();
   // Every argument that is not an option, in order (none when not set).
   Options& positional(const std::string& value_name, const std::string& help, Apply apply);
   // A paragraph after the options, and example command lines.
@@ -77,6 +84,7 @@ class Options {
     Kind kind = Kind::kFlag;
     Apply apply;
     std::string range;  // of a number: "1..20", "(0, 100]"
+    bool repeatable = false;
   };
   Options& add(const std::string& names, Kind kind, const std::string& value_name,
                const std::string& help, Apply apply, const std::string& default_text);

@@ -107,15 +107,17 @@ Status parse_params(const std::uint8_t* in, std::size_t size, Params& params) {
 
 Status validate_params(const Params& p) {
   const auto detector = static_cast<unsigned>(p.keypoints.detector);
-  if (detector > 1) return bad("detector", "is unknown (" + std::to_string(detector) + ")");
+  if (detector > 1)
+    return bad("keypoints.detector", "is unknown (" + std::to_string(detector) + ")");
   const int k = static_cast<int>(p.graph.structure);
-  if (k < 2 || k > 4) return bad("structure", "must have 2, 3 or 4 vertices");
-  if (static_cast<unsigned>(p.graph.scene_sampling) > 1) return bad("scene_sampling", "is unknown");
+  if (k < 2 || k > 4) return bad("graph.structure", "must have 2, 3 or 4 vertices");
+  if (static_cast<unsigned>(p.graph.scene_sampling) > 1)
+    return bad("graph.scene_sampling", "is unknown");
   if (!(std::isfinite(p.graph.max_scale_error) && p.graph.max_scale_error >= 0.f &&
         p.graph.max_scale_error <= 10.f))
-    return bad("max_scale_error", "must be in [0, 10]");
+    return bad("graph.max_scale_error", "must be in [0, 10]");
   if (!(std::isfinite(p.graph.max_relative_length) && p.graph.max_relative_length >= 0.f))
-    return bad("max_relative_length", "must be >= 0");
+    return bad("graph.max_relative_length", "must be >= 0");
   if (p.descriptor.max_search_leaves < 0)
     return bad("descriptor.max_search_leaves", "must be >= 0");
   if (!(std::isfinite(p.ransac.min_triangle_correlation) &&
@@ -130,45 +132,46 @@ Status validate_params(const Params& p) {
   if (p.descriptor.search_reference_models < 0)
     return bad("descriptor.search_reference_models", "must be >= 0 (0: a fixed search budget)");
   if (!(std::isfinite(p.keypoints.hessian_threshold) && p.keypoints.hessian_threshold >= 0.f))
-    return bad("hessian_threshold", "must be >= 0");
+    return bad("keypoints.hessian_threshold", "must be >= 0");
   if (p.keypoints.hessian_octaves < 1 || p.keypoints.hessian_octaves > 8)
-    return bad("hessian_octaves", "must be in 1..8");
+    return bad("keypoints.hessian_octaves", "must be in 1..8");
   if (p.keypoints.hessian_levels < 1 || p.keypoints.hessian_levels > 8)
-    return bad("hessian_levels", "must be in 1..8");
+    return bad("keypoints.hessian_levels", "must be in 1..8");
   if (p.keypoints.mser_delta < 1 || p.keypoints.mser_min_area < 1 ||
       p.keypoints.mser_max_area < p.keypoints.mser_min_area)
-    return bad("mser", "delta/areas out of range");
+    return bad("keypoints.mser_delta, keypoints.mser_min_area, keypoints.mser_max_area",
+               "delta/areas out of range");
   if (p.keypoints.scene_upsample < 1 || p.keypoints.scene_upsample > 3)
-    return bad("scene_upsample", "must be 1 (the frame), 2 (upsampled 2x) or 3 (both)");
+    return bad("keypoints.scene_upsample", "must be 1 (the frame), 2 (upsampled 2x) or 3 (both)");
   if (p.keypoints.model_scales < 1 || p.keypoints.model_scales > 8)
-    return bad("model_scales", "must be in 1..8");
+    return bad("keypoints.model_scales", "must be in 1..8");
   if (!(std::isfinite(p.keypoints.model_merge_distance) && p.keypoints.model_merge_distance >= 0.f))
-    return bad("model_merge_distance", "must be >= 0");
+    return bad("keypoints.model_merge_distance", "must be >= 0");
   if (p.keypoints.max_model_keypoints < 4 || p.keypoints.max_model_keypoints > kMaxModelKeypoints)
-    return bad("max_model_keypoints", "must be in 4..32768");
+    return bad("keypoints.max_model_keypoints", "must be in 4..32768");
   if (!finite_positive(p.graph.min_distance) || !finite_positive(p.graph.max_distance) ||
       p.graph.max_distance < p.graph.min_distance)
-    return bad("min/max_distance", "must be positive with min <= max");
+    return bad("graph.min_distance, graph.max_distance", "must be positive with min <= max");
   if (!(std::isfinite(p.graph.max_anisotropy) &&
         (p.graph.max_anisotropy == 0.f || p.graph.max_anisotropy >= 1.f)))
-    return bad("max_anisotropy", "must be 0 (off) or >= 1");
+    return bad("graph.max_anisotropy", "must be 0 (off) or >= 1");
   if (!finite_positive(p.graph.scene_sample_distance))
-    return bad("scene_sample_distance", "must be positive");
+    return bad("graph.scene_sample_distance", "must be positive");
   if (!(std::isfinite(p.descriptor.blur_sigma) && p.descriptor.blur_sigma >= 0.f &&
         p.descriptor.blur_sigma <= 20.f))
-    return bad("blur_sigma", "must be in [0, 20]");
+    return bad("descriptor.blur_sigma", "must be in [0, 20]");
   if (p.descriptor.profile_length < 4 || p.descriptor.profile_length > 256)
-    return bad("profile_length", "must be in 4..256");
+    return bad("descriptor.profile_length", "must be in 4..256");
   if (p.descriptor.coefficients < 1 || p.descriptor.coefficients > kMaxCoefficients ||
       2 * p.descriptor.coefficients >= p.descriptor.profile_length)
-    return bad("coefficients", "must be in 1.." + std::to_string(kMaxCoefficients));
+    return bad("descriptor.coefficients", "must be in 1.." + std::to_string(kMaxCoefficients));
   if (p.descriptor.parallel_offset < 0 || p.descriptor.parallel_offset > 8)
-    return bad("parallel_offset", "must be in 0..8");
+    return bad("descriptor.parallel_offset", "must be in 0..8");
   if (!finite_positive(p.descriptor.similarity_threshold) ||
       p.descriptor.similarity_threshold > 2.f)
-    return bad("similarity_threshold", "must be in (0, 2]");
+    return bad("descriptor.similarity_threshold", "must be in (0, 2]");
   if (static_cast<unsigned>(p.descriptor.vertex_descriptor) > 1)
-    return bad("vertex_descriptor",
+    return bad("descriptor.vertex_descriptor",
                "is unknown (" +
                    std::to_string(static_cast<unsigned>(p.descriptor.vertex_descriptor)) + ")");
   // 0 is allowed without vertex descriptors (the value is then unused).
@@ -176,9 +179,10 @@ Status validate_params(const Params& p) {
         p.descriptor.vertex_threshold <= 2.f) ||
       (p.descriptor.vertex_descriptor != VertexDescriptor::kNone &&
        p.descriptor.vertex_threshold == 0.f))
-    return bad("vertex_threshold", "must be in (0, 2]");
+    return bad("descriptor.vertex_threshold", "must be in (0, 2]");
   const auto encoding = static_cast<unsigned>(p.descriptor.encoding);
-  if (encoding > 2) return bad("encoding", "is unknown (" + std::to_string(encoding) + ")");
+  if (encoding > 2)
+    return bad("descriptor.encoding", "is unknown (" + std::to_string(encoding) + ")");
   // The similarity radius must fit the integer search's squared distances.
   std::int64_t scaled = 0;
   const std::int64_t limit = p.descriptor.encoding == DescriptorEncoding::kInt8
@@ -186,22 +190,23 @@ Status validate_params(const Params& p) {
                                  : std::numeric_limits<KdTraits<std::int16_t>::Dist>::max();
   if (p.descriptor.encoding != DescriptorEncoding::kFloat32 &&
       !scaled_radius2(p.descriptor.similarity_threshold, p.descriptor.encoding, limit, scaled))
-    return bad("similarity_threshold", "overflows the encoding's squared distances");
+    return bad("descriptor.similarity_threshold", "overflows the encoding's squared distances");
   if (!(p.ransac.confidence > 0.0 && p.ransac.confidence < 1.0))
-    return bad("confidence", "must be in (0, 1)");
+    return bad("ransac.confidence", "must be in (0, 1)");
   if (p.ransac.max_iterations < 1 || p.ransac.max_iterations > 10000000)
-    return bad("max_iterations", "must be in 1..10^7");
+    return bad("ransac.max_iterations", "must be in 1..10^7");
   if (!finite_positive(p.ransac.inlier_threshold))
-    return bad("inlier_threshold", "must be positive");
-  if (p.ransac.min_inliers < 4) return bad("min_inliers", "must be >= 4");
-  if (p.ransac.min_inlier_keygraphs < 1) return bad("min_inlier_keygraphs", "must be >= 1");
+    return bad("ransac.inlier_threshold", "must be positive");
+  if (p.ransac.min_inliers < 4) return bad("ransac.min_inliers", "must be >= 4");
+  if (p.ransac.min_inlier_keygraphs < 1) return bad("ransac.min_inlier_keygraphs", "must be >= 1");
   if (!(std::isfinite(p.ransac.max_scale_change) && p.ransac.max_scale_change >= 1.0))
-    return bad("max_scale_change", "must be >= 1");
-  if (!finite_positive(p.ransac.max_perspective)) return bad("max_perspective", "must be positive");
+    return bad("ransac.max_scale_change", "must be >= 1");
+  if (!finite_positive(p.ransac.max_perspective))
+    return bad("ransac.max_perspective", "must be positive");
   if (!(std::isfinite(p.ransac.min_verification_z) && p.ransac.min_verification_z >= 0.0))
-    return bad("min_verification_z", "must be >= 0");
+    return bad("ransac.min_verification_z", "must be >= 0");
   if (p.ransac.max_instances < 1 || p.ransac.max_instances > 64)
-    return bad("max_instances", "must be in 1..64");
+    return bad("ransac.max_instances", "must be in 1..64");
   if (!(std::isfinite(p.views.min_size) && p.views.min_size >= 0.f && p.views.min_size <= 100000.f))
     return bad("views.min_size", "must be in [0, 100000] (0: no views)");
   if (!(std::isfinite(p.views.scale_step) && p.views.scale_step >= 0.3f &&
