@@ -86,6 +86,10 @@ struct DetectStats {
   bool truncated_detections = false;
   // Time per stage, milliseconds (steady clock).
   double ms_keypoints = 0, ms_graph = 0, ms_describe = 0, ms_select = 0, ms_pose = 0;
+  // DetectOptions::time_budget_ms ran out: the stage it ran out in
+  // ("keypoints", "keygraphs", "description", "selection", "pose"), whose
+  // work and every later stage's was cut short; nullptr when it did not.
+  const char* stopped_early = nullptr;
 };
 
 // Detections of one frame: a fixed-capacity list (no heap), filled by

@@ -104,6 +104,13 @@ struct DetectOptions {
   // this are dropped: 0 keeps every detection that passed the checks; 0.5
   // keeps those more likely right than wrong.
   double min_confidence = 0.0;
+  // A time budget for one detect(), milliseconds (steady clock, from the
+  // call): when it is spent the detector stops at the next check (between
+  // stages, every few dozen keygraphs of the selection, between models of
+  // the pose), returns what it found so far and sets
+  // DetectStats::stopped_early. 0: no budget. What a frame finds within a
+  // budget depends on the machine's speed (and, with threads, on timing).
+  double time_budget_ms = 0.0;
   // The models to look for: `model_count` ids of ModelIndex::model(), read
   // by set_options() and the constructor (the array is not kept). nullptr
   // (the default) looks for every model. Correspondences with other models

@@ -61,13 +61,13 @@ DetectOptions DetectOptions::from(const ModelIndex& index) {
 }
 
 Status set_detect_option(DetectOptions& options, std::string_view name, std::string_view value) {
-  if (name == "min_confidence") {
+  if (name == "min_confidence" || name == "time_budget_ms") {
     const std::string text(value);
     char* end = nullptr;
     const double v = std::strtod(text.c_str(), &end);
     if (text.empty() || end != text.c_str() + text.size())
-      return {StatusCode::kInvalidArgument, "bad value '" + text + "' for min_confidence"};
-    options.min_confidence = v;
+      return {StatusCode::kInvalidArgument, "bad value '" + text + "' for " + std::string(name)};
+    (name == "min_confidence" ? options.min_confidence : options.time_budget_ms) = v;
     return Status::ok();
   }
   if (!is_detect_option(name)) {
@@ -95,6 +95,7 @@ std::vector<std::string> detect_option_names() {
   for (std::string& n : param_names())
     if (is_detect_option(n)) names.push_back(std::move(n));
   names.emplace_back("min_confidence");
+  names.emplace_back("time_budget_ms");
   return names;
 }
 

@@ -158,6 +158,49 @@ TEST(DetectOptions, SearchEffortAndSeedTakeEffect) {
   EXPECT_EQ(a.options().ransac.seed, 12345u);
 }
 
+TEST(DetectOptions, TimeBudget) {
+  const Fixture& f = fixture();
+  const ModelIndex& index = f.built.index;
+  const Limits limits = limits_for(f.box_scene, f.graf_scene);
+  Detector plain(index, limits);
+  DetectionList reference;
+  ASSERT_TRUE(plain.detect(test::view(f.box_scene), reference));
+  ASSERT_EQ(reference.size(), 1u);
+  EXPECT_EQ(plain.stats().stopped_early, nullptr);
+
+  // A budget no frame can meet: stopped after the keypoints, nothing found,
+  // not an error, and nothing allocated.
+  DetectOptions o = DetectOptions::from(index);
+  o.time_budget_ms = 1e-6;
+  Detector hurried(index, limits, o);
+  DetectionList found;
+  {
+    const test::AllocationCounter counter;
+    ASSERT_TRUE(hurried.detect(test::view(f.box_scene), found));
+    EXPECT_EQ(counter.count(), 0);
+  }
+  EXPECT_TRUE(found.empty());
+  ASSERT_NE(hurried.stats().stopped_early, nullptr);
+  EXPECT_STREQ(hurried.stats().stopped_early, "keypoints");
+  EXPECT_EQ(hurried.stats().correspondences, 0);
+
+  // A budget every frame meets: the same detection as without one.
+  o.time_budget_ms = 1e6;
+  ASSERT_TRUE(hurried.set_options(o));
+  ASSERT_TRUE(hurried.detect(test::view(f.box_scene), found));
+  EXPECT_EQ(hurried.stats().stopped_early, nullptr);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].homography, reference[0].homography);
+
+  o.time_budget_ms = -1.0;
+  EXPECT_EQ(hurried.set_options(o).code(), StatusCode::kInvalidArgument);
+  o.time_budget_ms = std::nan("");
+  EXPECT_EQ(hurried.set_options(o).code(), StatusCode::kInvalidArgument);
+  DetectOptions named;
+  EXPECT_TRUE(set_detect_option(named, "time_budget_ms", "33"));
+  EXPECT_EQ(named.time_budget_ms, 33.0);
+}
+
 TEST(DetectOptions, BadOptionsAreRefusedAndLeaveTheOldOnes) {
   const Fixture& f = fixture();
   const ModelIndex& index = f.built.index;

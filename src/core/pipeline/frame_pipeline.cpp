@@ -166,6 +166,9 @@ Status FramePipeline::check_options(const ModelIndex& index, const DetectOptions
     return {StatusCode::kInvalidArgument, "detect options: " + s.message()};
   if (!(options.min_confidence >= 0.0 && options.min_confidence <= 1.0))
     return {StatusCode::kInvalidArgument, "detect options: min_confidence must be in [0, 1]"};
+  if (!(options.time_budget_ms >= 0.0 && std::isfinite(options.time_budget_ms)))
+    return {StatusCode::kInvalidArgument,
+            "detect options: time_budget_ms must be a finite number >= 0 (0: no budget)"};
   if (options.models == nullptr && options.model_count > 0)
     return {StatusCode::kInvalidArgument, "detect options: model_count without models"};
   for (std::size_t i = 0; options.models != nullptr && i < options.model_count; ++i) {
@@ -196,9 +199,26 @@ bool FramePipeline::searches_model(int id) const {
          model_searched_[static_cast<std::size_t>(id)] != 0;
 }
 
+void FramePipeline::start_budget() {
+  budgeted_ = options_.time_budget_ms > 0.0;
+  if (budgeted_)
+    deadline_ =
+        Clock::now() +
+        std::chrono::duration_cast<Clock::duration>(
+            std::chrono::duration<double, std::milli>(std::min(options_.time_budget_ms, 1e9)));
+}
+
+bool FramePipeline::out_of_time(const char* stage) {
+  if (stats_.stopped_early != nullptr) return true;
+  if (!budgeted_ || Clock::now() <= deadline_) return false;
+  stats_.stopped_early = stage;
+  return true;
+}
+
 Status FramePipeline::detect(ImageView frame, DetectionList& out) {
   out.clear();
   stats_ = DetectStats{};
+  start_budget();
   if (Status s = check_frame(frame, caller_limits_); !s) return s;
   if (wants_vertex_descriptors(params_)) return missing_vertex_descriptors();
   if (params_.keypoints.detector != KeypointDetector::kHessian)
@@ -208,7 +228,7 @@ Status FramePipeline::detect(ImageView frame, DetectionList& out) {
   const int mode = upsample_mode();
   Status s = Status::ok();
   if (mode != 2) s = detect_keypoints_and_run(frame, out);
-  if (mode >= 2 && s) {
+  if (mode >= 2 && s && !out_of_time("keypoints")) {
     DetectionList& up = mode == 3 ? upsampled_found_ : out;
     up.clear();
     s = detect_keypoints_and_run(work_frame(frame), up);
@@ -223,6 +243,7 @@ Status FramePipeline::detect(ImageView frame, const Keypoint* keypoints, int cou
                              const std::uint8_t* vertex_descriptors, DetectionList& out) {
   out.clear();
   stats_ = DetectStats{};
+  start_budget();
   if (Status s = check_frame(frame, caller_limits_); !s) return s;
   if (count < 0 || (count > 0 && keypoints == nullptr))
     return {StatusCode::kInvalidArgument, "bad keypoint array"};
@@ -279,15 +300,19 @@ Status FramePipeline::run(ImageView frame, const Keypoint* keypoints, int count,
     if (descriptors != nullptr) descriptors = detected_descriptors_.data();
     count = limits_.max_keypoints;
   }
+  if (out_of_time("keypoints")) return Status::ok();
   // 5. Sampling: a maximal subset, no two closer than scene_sample_distance.
   sample(keypoints, count, descriptors);
   // 6. Scene keygraphs from the Delaunay triangulation of the sample.
   build_keygraphs();
   stats_.ms_graph = ms_since(start);
+  if (out_of_time("keygraphs")) return Status::ok();
   // 7. Arc descriptors, on the frame blurred once.
   describe_arcs(frame);
+  if (out_of_time("description")) return Status::ok();
   // 8. Keygraph correspondences through keytuples, then the triangle check.
   select_correspondences();
+  if (out_of_time("selection")) return Status::ok();
   // 9. Pose per model: RANSAC over its keygraph correspondences.
   estimate_poses(frame, keypoints, count, out);
   if (stats_.truncated_keypoints || stats_.truncated_arc_matches ||
@@ -384,7 +409,10 @@ void FramePipeline::select_correspondences() {
   }
   if (completes_circuits(params_)) in.adjacency = &adjacency_;
   if (workers_.threads() > 1) in.workers = &workers_;
+  if (budgeted_) in.deadline = &deadline_;
   selector_.select(in, limits_, matches_, stats_);
+  if (selector_.ran_out_of_time() && stats_.stopped_early == nullptr)
+    stats_.stopped_early = "selection";
   stats_.arcs_described = arcs_.described_count();
   stats_.patch_rejections =
       check_triangle_patches(*index_, params_, arcs_.blurred(), scene_points_.data(), matches_);
@@ -414,6 +442,7 @@ void FramePipeline::estimate_poses(ImageView frame, const Keypoint* keypoints, i
     grouped_[model_begin_[static_cast<std::size_t>(m.model_id)]++] = m;
   std::size_t begin = 0;
   while (begin < grouped_.size()) {
+    if (out_of_time("pose")) break;
     std::size_t end = begin;
     const int model = grouped_[begin].model_id;
     while (end < grouped_.size() && grouped_[end].model_id == model) ++end;

@@ -77,6 +77,10 @@ class FramePipeline {
   void select_correspondences();
   void estimate_poses(ImageView frame, const Keypoint* keypoints, int count, DetectionList& out);
   void apply_confidence_floor(DetectionList& out) const;
+  // DetectOptions::time_budget_ms: starts the frame's clock; then whether
+  // it ran out (recording the stage in the stats the first time).
+  void start_budget();
+  bool out_of_time(const char* stage);
 
   // Upsampled frames (scene_upsample.cpp).
   int upsample_mode() const { return params_.keypoints.scene_upsample; }
@@ -92,6 +96,8 @@ class FramePipeline {
   Params params_;         // the index's, with options_ applied
   DetectOptions options_;
   DetectStats stats_;
+  Clock::time_point deadline_{};
+  bool budgeted_ = false;
   WorkerPool workers_;  // Limits::threads, started with the pipeline
   ArcSearch search_;
   WorkVector<std::uint8_t> model_searched_;  // per model: 1 when searched

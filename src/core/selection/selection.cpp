@@ -220,6 +220,10 @@ void Selector::search_chosen(const SelectionInput& in, const Limits& limits, Det
   std::atomic<bool> overflow{false};
   constexpr int kBlock = 16;
   auto search_block = [&](int block, int worker) {
+    if (in.deadline != nullptr && std::chrono::steady_clock::now() > *in.deadline) {
+      out_of_time_.store(true, std::memory_order_relaxed);
+      return;
+    }
     JoinScratch& s = scratch_[static_cast<std::size_t>(worker)];
     const int end = std::min(n, (block + 1) * kBlock);
     for (int i = block * kBlock; i < end; ++i) {
@@ -617,6 +621,12 @@ bool Selector::join(const SelectionInput& in, const Limits& limits, const SceneK
   };
 
   for (const SceneKeygraph* gi = first; gi != last; ++gi) {
+    // The time budget, every 32 keygraphs.
+    if (in.deadline != nullptr && ((gi - first) & 31) == 31 &&
+        std::chrono::steady_clock::now() > *in.deadline) {
+      out_of_time_.store(true, std::memory_order_relaxed);
+      return true;
+    }
     const SceneKeygraph& g = *gi;
     ArcList lists[kMaxVertices];
     bool room = true;
@@ -703,6 +713,7 @@ bool Selector::join(const SelectionInput& in, const Limits& limits, const SceneK
 void Selector::select(const SelectionInput& in, const Limits& limits,
                       WorkVector<KeygraphMatch>& matches, DetectStats& stats) {
   matches.clear();
+  out_of_time_.store(false, std::memory_order_relaxed);
   const std::size_t edges = in.triangulation->triangles().size();
   state_.assign(edges, kUnseen);
   begin_.resize(edges);

@@ -17,6 +17,8 @@
 #pragma once
 
 #include <array>
+#include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <vector>
 
@@ -63,6 +65,9 @@ struct SelectionInput {
   // Threads for the look-ups and joins (with circuit completion); nullptr:
   // the caller's only.
   WorkerPool* workers = nullptr;
+  // The frame's time budget (DetectOptions::time_budget_ms): the look-ups
+  // and joins stop once the steady clock passes it; nullptr: none.
+  const std::chrono::steady_clock::time_point* deadline = nullptr;
 };
 
 class Selector {
@@ -91,6 +96,8 @@ class Selector {
   // every keygraph and as the next keygraph needs it: a flag left set would
   // only cost time (the join checks every arc), so no output shows one.
   bool join_state_clear() const;
+  // Whether the last select() stopped at in.deadline.
+  bool ran_out_of_time() const { return out_of_time_.load(std::memory_order_relaxed); }
 
  private:
   // The model-arc keys (from << 32 | to) similar to one half-edge:
@@ -198,6 +205,7 @@ class Selector {
   // One per thread (Limits::threads), the caller's first.
   WorkVector<JoinScratch> scratch_;
   WorkVector<Chunk> chunks_;
+  std::atomic<bool> out_of_time_{false};
 };
 
 }  // namespace kg
