@@ -445,10 +445,9 @@ std::string synth_text(const std::vector<SynthRow>& rows,
   return out;
 }
 
-Status write_synth_report(const std::string& dir, const SynthEvalOptions& options,
-                          const std::vector<SynthCase>& cases) {
-  Status s = ensure_directory(dir);
-  if (!s) return s;
+Status write_synth_report(platform::OutputSet& out, const std::string& dir,
+                          const SynthEvalOptions& options, const std::vector<SynthCase>& cases) {
+  Status s;
   std::ostringstream csv;
   csv << "method,index_size,group,frame,sign,found,corner_error,detections,false_detections,"
          "time_ms,scale,occluded,blur_sigma,motion_blur,noise_sigma,sign_keypoints,"
@@ -460,7 +459,7 @@ Status write_synth_report(const std::string& dir, const SynthEvalOptions& option
         << c.blur_sigma << ',' << c.motion_blur << ',' << c.noise_sigma << ',' << c.sign_keypoints
         << ',' << c.repeated_keypoints << '\n';
   }
-  if (s = write_text_file(dir + "/synth-cases.csv", csv.str()); !s) return s;
+  if (s = out.add(dir + "/synth-cases.csv", csv.str()); !s) return s;
   // Every detection with its support, for precision-recall by confidence.
   std::ostringstream det;
   det << "method,index_size,frame,sign,model,right,corner_error,inliers,inlier_keygraphs,"
@@ -474,7 +473,7 @@ Status write_synth_report(const std::string& dir, const SynthEvalOptions& option
           << ',' << (c.has_confidence ? d.support.confidence : -1.0) << '\n';
     }
   }
-  if (s = write_text_file(dir + "/synth-detections.csv", det.str()); !s) return s;
+  if (s = out.add(dir + "/synth-detections.csv", det.str()); !s) return s;
   const std::vector<SynthRow> rows = synth_tallies(cases, options);
   std::ostringstream j;
   j << "{\n  \"protocol\": \"synth\",\n  \"directory\": " << json_quote(options.directory)
@@ -502,7 +501,7 @@ Status write_synth_report(const std::string& dir, const SynthEvalOptions& option
       << (i + 1 < confidence.size() ? ",\n" : "\n");
   }
   j << "  ]\n}\n";
-  return write_text_file(dir + "/synth-summary.json", j.str());
+  return out.add(dir + "/synth-summary.json", j.str());
 }
 
 }  // namespace kg
