@@ -238,7 +238,7 @@ class LiveIndex {
       failure_reported_ = true;
       std::fprintf(stderr,
                    "keygraph: live: index changed but not reloaded (keeping the loaded one): %s\n",
-                   s.message().c_str());
+                   one_line(s.message()).c_str());
       return false;
     }
     // The file may have changed again while it was read: compare with what
@@ -246,7 +246,7 @@ class LiveIndex {
     loaded_ = now;
     failure_reported_ = false;
     index_ = std::move(fresh);
-    std::fprintf(stderr, "live: index %s changed: reloaded (%d models)\n", path_.c_str(),
+    std::fprintf(stderr, "live: index %s changed: reloaded (%d models)\n", one_line(path_).c_str(),
                  index_.model_count());
     return true;
   }
@@ -320,7 +320,7 @@ int cmd_live(const Args& args) {
                     "; give the images distinct names");
     }
   }
-  std::fprintf(stderr, "live: %s\n", source->description().c_str());
+  std::fprintf(stderr, "live: %s\n", one_line(source->description()).c_str());
 
   const Clock::time_point start = Clock::now();
   RateMeter meter(start);
@@ -335,7 +335,7 @@ int cmd_live(const Args& args) {
   // of the image files had no usable frame (the loop would never end).
   auto skip_frame = [&](const std::string& why) {
     if (++bad_frames <= kShownBadFrames) {
-      std::fprintf(stderr, "keygraph: live: %s (frame skipped%s)\n", why.c_str(),
+      std::fprintf(stderr, "keygraph: live: %s (frame skipped%s)\n", one_line(why).c_str(),
                    bad_frames == kShownBadFrames ? "; further bad frames are only counted" : "");
     }
     return files != nullptr && o.loop && ++bad_in_a_row >= files->files().size();

@@ -9,8 +9,12 @@ namespace kg::cli {
 
 using Args = std::vector<std::string>;
 
-// "keygraph: <message>" on stderr; returns 1.
+// "keygraph: <message>" on stderr, on one line (one_line()); returns 1.
 int fail(const std::string& message);
+// `message` with control characters escaped as in JSON (\n, \u001b): a
+// name from an input file or the command line that holds a newline keeps
+// an error on one line.
+std::string one_line(const std::string& message);
 
 // Whole-string decimal integers in [min, max]; false on anything else
 // (signs, spaces, trailing characters, overflow).
@@ -20,8 +24,9 @@ bool parse_size(const std::string& text, int& width, int& height);
 
 // The --draw file of each scene: `draw` itself for one scene; with several,
 // OUT_<scene stem><ext> for --draw OUT<ext>. Returns an error message when
-// two scenes would be drawn to one file (same stem in two directories),
-// else empty.
+// two scenes would be drawn to one file (same stem in two directories), or
+// a picture's path is a scene or not a regular file (checked before the
+// first scene), else empty.
 std::string draw_paths(const std::string& draw, const std::vector<std::string>& scenes,
                        std::vector<std::string>& out);
 
