@@ -1,5 +1,7 @@
 #include "eval/synth_eval.h"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -114,11 +116,15 @@ Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& c
       options.max_frames > 0
           ? std::min(options.max_frames, static_cast<int>(manifest.frames.size()))
           : static_cast<int>(manifest.frames.size());
-  std::vector<cv::Mat> frames(static_cast<std::size_t>(frame_count));
+  // The frames are read when they are searched (memory does not grow with
+  // their count; 100000 frames took 30 GB); each is checked here to be a
+  // regular file first, so a missing one fails before any work.
   for (int i = 0; i < frame_count; ++i) {
-    s = load_gray(options.directory + "/" + manifest.frames[static_cast<std::size_t>(i)].file,
-                  frames[static_cast<std::size_t>(i)]);
-    if (!s) return s;
+    const std::string path =
+        options.directory + "/" + manifest.frames[static_cast<std::size_t>(i)].file;
+    struct stat info {};
+    if (::stat(path.c_str(), &info) != 0 || !S_ISREG(info.st_mode))
+      return {StatusCode::kNotFound, path + ": no such frame file (named by the manifest)"};
   }
 
   cv::setNumThreads(1);  // every method on one thread
@@ -183,7 +189,8 @@ Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& c
       for (int f = 0; f < frame_count; ++f) {
         if (group_of[static_cast<std::size_t>(f)] != g) continue;
         const SynthFrameEntry& entry = manifest.frames[static_cast<std::size_t>(f)];
-        const cv::Mat& frame = frames[static_cast<std::size_t>(f)];
+        cv::Mat frame;
+        if (s = load_gray(options.directory + "/" + entry.file, frame); !s) return s;
         const SynthSign* sign = entry.info.sign >= 0
                                     ? &manifest.signs[static_cast<std::size_t>(entry.info.sign)]
                                     : nullptr;

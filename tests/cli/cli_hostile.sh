@@ -707,10 +707,15 @@ if [ "$MODE" = desktop ]; then make_png "$CASE/flat.png" 1024 1024 flat; else
     "$CASE/flat.pgm"
 fi
 for i in $(seq -w 1 60); do ln -s "../flat.$EXT" "$CASE/frames/f$i.$EXT"; done
-one=$(peak_kb "$KG" bench --index "$INDEX" --repeat 1 --json "$CASE/frames/f01.$EXT")
-all=$(peak_kb "$KG" bench --index "$INDEX" --repeat 1 --json "$CASE/frames")
-[ $((all - one)) -lt 30000 ] ||
-  bad "40 row 5: bench of 60 frames peaks at $all KB, one frame at $one KB: frames held in memory"
+if [ -n "$AS_LIMIT" ]; then
+  one=$(peak_kb "$KG" bench --index "$INDEX" --repeat 1 --json "$CASE/frames/f01.$EXT")
+  all=$(peak_kb "$KG" bench --index "$INDEX" --repeat 1 --json "$CASE/frames")
+  [ $((all - one)) -lt 30000 ] ||
+    bad "40 row 5: bench of 60 frames peaks at $all KB, one frame at $one KB: frames held in memory"
+else
+  # AddressSanitizer keeps freed memory in quarantine: the peak says nothing.
+  skip "40 row 5: bench's peak memory over 60 frames (AddressSanitizer build)"
+fi
 
 # --- row 11: the index's reserved bytes, sections and outlines --------------------
 # Each change with every CRC repaired: only the format's promises can refuse it.
@@ -862,6 +867,8 @@ if [ "$MODE" = desktop ]; then
   if [ -n "$AS_LIMIT" ]; then
     expect_failure "40 row 5: build of 2000 models" "build them in smaller sets" \
       "$KG" build "$CASE"/many/m*.png -o "$CASE/many.kgi"
+  else
+    skip "40 row 5: build of 2000 models within 4 GB (AddressSanitizer build: no address-space limit)"
   fi
   python3 -c "import json, sys; json.dump({'m%d' % i: 'box.png' for i in range(10000)}, open(sys.argv[1], 'w'))" \
     "$CASE/many.json"
