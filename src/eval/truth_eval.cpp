@@ -6,7 +6,6 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <map>
 #include <memory>
 #include <new>
 
@@ -98,8 +97,32 @@ struct Method {
   BaselineOptions baseline;
   Params params;                  // keygraph methods: how the models were built
   std::vector<BuiltModel> built;  // keygraph methods from model images
-  std::map<std::string, MethodDetectors> by_search;
+  // The detectors of the searched model sets met most recently, the
+  // latest last: at most kCachedSearches (each holds an index and a
+  // workspace, so a manifest of many distinct "search" sets would
+  // otherwise grow without bound); an evicted set is built again if it
+  // comes back, with the same results.
+  std::vector<std::pair<std::string, std::unique_ptr<MethodDetectors>>> by_search;
 };
+
+constexpr std::size_t kCachedSearches = 8;
+
+// The detectors for `key`, found or made (empty: to be filled), now the
+// most recent.
+MethodDetectors& detectors_for(Method& m, const std::string& key) {
+  auto it = std::find_if(m.by_search.begin(), m.by_search.end(),
+                         [&](const auto& entry) { return entry.first == key; });
+  std::pair<std::string, std::unique_ptr<MethodDetectors>> entry;
+  if (it != m.by_search.end()) {
+    entry = std::move(*it);
+    m.by_search.erase(it);
+  } else {
+    entry = {key, std::make_unique<MethodDetectors>()};
+    if (m.by_search.size() >= kCachedSearches) m.by_search.erase(m.by_search.begin());
+  }
+  m.by_search.push_back(std::move(entry));
+  return *m.by_search.back().second;
+}
 
 std::string search_key(const std::vector<int>& models) {
   std::string key;
@@ -475,7 +498,7 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
     searched.erase(std::unique(searched.begin(), searched.end()), searched.end());
 
     for (Method& m : methods) {
-      MethodDetectors& d = m.by_search[search_key(searched)];
+      MethodDetectors& d = detectors_for(m, search_key(searched));
       if (d.models.empty()) {
         d.models = searched;
         // The workspace for this scene's size now, not inside the timed detect().
