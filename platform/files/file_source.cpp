@@ -61,6 +61,9 @@ Status decode_with_opencv(std::vector<std::uint8_t>& bytes, const std::string& p
   const bool ok = !gray.empty() && gray.type() == CV_8UC1;
   decoder_messages.release(ok);
   if (too_large) return {kBadFrameCode, "files: " + over_pixel_limit(path)};
+  if (!gray.empty() && !ok) {
+    return {kBadFrameCode, "files: " + not_8bit_gray(path, gray.channels(), gray.depth())};
+  }
   if (!ok) return {kBadFrameCode, "files: " + path + ": not an image OpenCV can decode"};
   return Status::ok();
 }
@@ -99,6 +102,15 @@ bool is_size_limit_error(const std::string& opencv_error) {
 std::string over_pixel_limit(const std::string& path) {
   return path + ": image over " + std::to_string(kMaxImagePixels) +
          " pixels (the limit), not decoded";
+}
+
+std::string not_8bit_gray(const std::string& path, int channels, int opencv_depth) {
+  static const char* const kDepths[] = {"8-bit",         "8-bit signed",   "16-bit",
+                                        "16-bit signed", "32-bit integer", "32-bit float",
+                                        "64-bit float",  "16-bit float"};
+  const char* depth = opencv_depth >= 0 && opencv_depth < 8 ? kDepths[opencv_depth] : "unknown";
+  return path + ": decodes to " + std::to_string(channels) + " channel(s) of " + depth +
+         " values, not 8-bit gray (a Radiance HDR, say): convert it to PNG or JPEG";
 }
 
 std::string problem_before_decoding(const std::vector<std::uint8_t>& bytes,

@@ -50,6 +50,11 @@ std::string problem_before_decoding(const std::vector<std::uint8_t>& bytes,
 // size limits (limit_image_decoders(), image_limits.h), and the message for it.
 bool is_size_limit_error(const std::string& opencv_error);
 std::string over_pixel_limit(const std::string& path);
+// The message for a file a decoder turns into something other than 8-bit
+// gray (OpenCV decodes a Radiance HDR to 3 channels of float even when
+// asked for gray): `channels` of OpenCV's element depth `opencv_depth`
+// (CV_8U 0 ... CV_64F 6, CV_16F 7).
+std::string not_8bit_gray(const std::string& path, int channels, int opencv_depth);
 
 // The image files of `dir` as described above, sorted. Errors: missing
 // directory (kNotFound), not a directory or unreadable (kIoError).

@@ -1,72 +1,20 @@
 #include "platform/files/output_file.h"
 
 #include <fcntl.h>
-#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
-#include <climits>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
 
 #include "platform/files/regular_file.h"
+#include "platform/files/signal_cleanup.h"
 
 namespace kg::platform {
 
-namespace {
-
-// Temporaries to remove on SIGINT/SIGTERM. A slot's path is written before
-// its flag is set and the flag cleared before the path changes, so the
-// handler only ever reads complete paths.
-constexpr int kSlots = 8;
-char g_paths[kSlots][PATH_MAX];
-volatile sig_atomic_t g_used[kSlots];
-bool g_handlers_installed = false;
-
-extern "C" void remove_temporaries(int signal) {
-  for (int i = 0; i < kSlots; ++i) {
-    if (g_used[i]) ::unlink(g_paths[i]);
-  }
-  // The signal's default action, so the exit status says how it ended.
-  ::signal(signal, SIG_DFL);
-  ::raise(signal);
-}
-
-// Installs the handler for SIGINT and SIGTERM where they have their default
-// action (a program with its own handlers keeps them).
-void install_handlers() {
-  if (g_handlers_installed) return;
-  g_handlers_installed = true;
-  for (const int sig : {SIGINT, SIGTERM}) {
-    struct sigaction old {};
-    if (::sigaction(sig, nullptr, &old) != 0 || old.sa_handler != SIG_DFL) continue;
-    struct sigaction sa {};
-    sa.sa_handler = remove_temporaries;
-    sigemptyset(&sa.sa_mask);
-    ::sigaction(sig, &sa, nullptr);
-  }
-}
-
-int register_temporary(const std::string& path) {
-  if (path.size() >= PATH_MAX) return -1;
-  install_handlers();
-  for (int i = 0; i < kSlots; ++i) {
-    if (g_used[i]) continue;
-    std::memcpy(g_paths[i], path.c_str(), path.size() + 1);
-    g_used[i] = 1;
-    return i;
-  }
-  return -1;
-}
-
-void unregister_temporary(int slot) {
-  if (slot >= 0) g_used[slot] = 0;
-}
-
-// An error unless `target` is absent or a regular file.
-Status check_target(const std::string& target) {
+Status check_output_target(const std::string& target) {
   struct stat info {};
   if (::stat(target.c_str(), &info) != 0) {
     const int err = errno;
@@ -83,6 +31,8 @@ Status check_target(const std::string& target) {
   }
   return Status::ok();
 }
+
+namespace {
 
 std::string directory_of(const std::string& path) {
   const std::size_t slash = path.rfind('/');
@@ -113,7 +63,7 @@ Status OutputFile::create(const std::string& target, const std::vector<std::stri
   discard();
   if (target.empty() || target.back() == '/')
     return {StatusCode::kInvalidArgument, "'" + target + "': not a file name"};
-  if (Status s = check_target(target); !s) return s;
+  if (Status s = check_output_target(target); !s) return s;
   for (const std::string& input : inputs) {
     if (same_file(target, input)) {
       return {StatusCode::kInvalidArgument,
@@ -134,7 +84,7 @@ Status OutputFile::create(const std::string& target, const std::vector<std::stri
   target_ = target;
   temp_ = temp;
   fd_ = fd;
-  slot_ = register_temporary(temp_);
+  slot_ = cleanup::register_file(temp_);
   return Status::ok();
 }
 
@@ -166,14 +116,14 @@ Status OutputFile::commit() {
   if (temp_.empty()) return {StatusCode::kInvalidArgument, target_ + ": output not open"};
   Status s = close();
   // The target may have changed since create(): replace regular files only.
-  if (s) s = check_target(target_);
+  if (s) s = check_output_target(target_);
   if (s && ::rename(temp_.c_str(), target_.c_str()) != 0)
     s = {StatusCode::kIoError, target_ + ": cannot rename into place: " + std::strerror(errno)};
   if (!s) {
     discard();
     return s;
   }
-  unregister_temporary(slot_);
+  cleanup::unregister_file(slot_);
   slot_ = -1;
   temp_.clear();
   return Status::ok();
@@ -183,7 +133,7 @@ void OutputFile::discard() {
   if (fd_ >= 0) ::close(fd_);
   fd_ = -1;
   if (!temp_.empty()) ::unlink(temp_.c_str());
-  unregister_temporary(slot_);
+  cleanup::unregister_file(slot_);
   slot_ = -1;
   temp_.clear();
 }

@@ -6,9 +6,9 @@
 // Refused before anything is written: a target that exists and is not a
 // regular file (a device node, a FIFO, a directory: never replaced), and a
 // target that is one of the command's inputs (same device and inode).
-// While a temporary exists, SIGINT and SIGTERM remove it before the process
-// ends (unless the program has its own handlers, as `live` does: it finishes
-// the file and stops).
+// While a temporary exists, SIGINT, SIGTERM, SIGHUP and SIGPIPE remove it
+// before the process ends (signal_cleanup.h; unless the program has its own
+// handlers, as `live` does: it finishes the file and stops).
 #pragma once
 
 #include <string>
@@ -48,6 +48,10 @@ class OutputFile {
   int fd_ = -1;
   int slot_ = -1;  // in the signal handler's list of temporaries
 };
+
+// An error naming `target` unless it is absent or a regular file (a link
+// to one counts as one: a rename replaces the link, never what it points to).
+Status check_output_target(const std::string& target);
 
 // Whether `a` and `b` name the same file (device and inode); false when
 // either does not exist.

@@ -74,4 +74,27 @@ Status read_regular_file(const std::string& path, std::vector<std::uint8_t>& byt
   return Status::ok();
 }
 
+std::string byte_size_text(std::size_t bytes) {
+  if (bytes >= (std::size_t{1} << 20) && bytes % (std::size_t{1} << 20) == 0)
+    return std::to_string(bytes >> 20) + " MiB";
+  if (bytes >= 1024 && bytes % 1024 == 0) return std::to_string(bytes >> 10) + " KiB";
+  return std::to_string(bytes) + " bytes";
+}
+
+Status read_text_file(const std::string& path, std::string& text, std::size_t max_bytes,
+                      const char* kind) {
+  std::vector<std::uint8_t> bytes;
+  Status s = read_regular_file(path, bytes, max_bytes);
+  if (s.code() == StatusCode::kResourceExhausted) {
+    struct stat info {};
+    const long long size = ::stat(path.c_str(), &info) == 0 ? info.st_size : -1;
+    return {StatusCode::kResourceExhausted,
+            path + ": " + (size >= 0 ? std::to_string(size) + " bytes" : "too large") +
+                ", over the " + byte_size_text(max_bytes) + " " + kind + " may have"};
+  }
+  if (!s) return s;
+  text.assign(bytes.begin(), bytes.end());
+  return Status::ok();
+}
+
 }  // namespace kg::platform

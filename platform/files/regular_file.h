@@ -32,4 +32,13 @@ Status open_regular_file(const std::string& path, int& fd, struct stat& info);
 Status read_regular_file(const std::string& path, std::vector<std::uint8_t>& bytes,
                          std::size_t max_bytes);
 
+// The same for the tools' text inputs (manifests, models.json, corners.txt,
+// homography files): the whole file into `text`. A file over `max_bytes` is
+// refused before anything is read, with a message naming `kind` and the
+// limit: "PATH: 70000000 bytes, over the 64 MiB a manifest may have".
+Status read_text_file(const std::string& path, std::string& text, std::size_t max_bytes,
+                      const char* kind);
+// "64 MiB", "4 KiB", "100 bytes": a byte count for messages.
+std::string byte_size_text(std::size_t bytes);
+
 }  // namespace kg::platform

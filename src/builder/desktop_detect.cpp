@@ -3,17 +3,17 @@
 #include <algorithm>
 
 #include "builder/image_io.h"
+#include "platform/files/frame_limits.h"
 
 namespace kg {
 
 Status DesktopDetector::detect(const cv::Mat& gray, DetectionList& out) {
-  // Desktop frames come in any size: grow the core's workspace to fit.
+  // Desktop frames come in any size: grow the core's workspace to fit
+  // (by the frame, never to the product of two thin frames' sides).
   const Limits& current = detector_.limits();
-  if (gray.cols > current.max_width || gray.rows > current.max_height) {
+  if (gray.cols > current.max_width || gray.rows > current.max_height)
     detector_ =
-        Detector(detector_.index(), current.for_frame(std::max(gray.cols, current.max_width),
-                                                      std::max(gray.rows, current.max_height)));
-  }
+        Detector(detector_.index(), platform::limits_for_frame(current, gray.cols, gray.rows));
   const Params& params = detector_.index().params();
   if (params.descriptor.vertex_descriptor == VertexDescriptor::kSift) {
     if (gray.empty() || gray.type() != CV_8UC1)

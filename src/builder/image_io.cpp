@@ -29,6 +29,11 @@ Status load_gray(const std::string& path, cv::Mat& out) {
       return {StatusCode::kResourceExhausted, platform::over_pixel_limit(path)};
   }
   if (out.empty()) return {StatusCode::kInvalidArgument, path + ": not a readable image"};
+  if (out.type() != CV_8UC1) {
+    const int channels = out.channels(), depth = out.depth();
+    out.release();
+    return {StatusCode::kInvalidArgument, platform::not_8bit_gray(path, channels, depth)};
+  }
   if (out.cols < 16 || out.rows < 16)
     return {StatusCode::kInvalidArgument, path + ": image too small (" + std::to_string(out.cols) +
                                               "x" + std::to_string(out.rows) + ")"};

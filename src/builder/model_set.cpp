@@ -1,23 +1,52 @@
 #include "builder/model_set.h"
 
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <cstdint>
+#include <cstdio>
 
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
 #include <mutex>
 #include <set>
-#include <sstream>
 
-#include <nlohmann/json.hpp>
-
+#include "builder/model_views.h"
 #include "builder/parallel.h"
+#include "platform/files/regular_file.h"
 
 namespace kg {
 
 namespace {
 
 namespace fs = std::filesystem;
+
+// Bytes this process may still take: the address-space limit (ulimit -v)
+// less what it has mapped, and at most the machine's memory.
+std::uint64_t memory_left() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
+  std::uint64_t left =
+      pages > 0 && page > 0 ? static_cast<std::uint64_t>(pages) * page : std::uint64_t{1} << 34;
+  struct rlimit limit {};
+  if (::getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY) {
+    std::uint64_t mapped = 0;
+    if (std::FILE* statm = std::fopen("/proc/self/statm", "r")) {
+      unsigned long long size_pages = 0;
+      if (std::fscanf(statm, "%llu", &size_pages) == 1 && page > 0)
+        mapped = size_pages * static_cast<std::uint64_t>(page);
+      std::fclose(statm);
+    }
+    const std::uint64_t cap = limit.rlim_cur;
+    left = std::min(left, cap > mapped ? cap - mapped : 0);
+  }
+  return left;
+}
+
+std::string gigabytes(std::uint64_t bytes) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.1f GB", static_cast<double>(bytes) / 1e9);
+  return text;
+}
 
 std::string rect_text(const cv::Rect& r) {
   return std::to_string(r.x) + "," + std::to_string(r.y) + "," + std::to_string(r.width) + "," +
@@ -36,40 +65,20 @@ bool is_image_file(const fs::path& p) {
 }
 
 Status read_models_json(const std::string& path, std::vector<ModelSource>& out) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return {StatusCode::kNotFound, path + ": cannot open"};
-  std::stringstream text;
-  text << in.rdbuf();
-  const nlohmann::json doc = nlohmann::json::parse(text.str(), nullptr, false);
-  const auto bad = [&](const std::string& what) {
-    return Status{StatusCode::kCorruptData, path + ": " + what};
-  };
-  if (doc.is_discarded()) return bad("not valid JSON");
-  if (!doc.is_object() || doc.empty())
-    return bad("expected an object mapping model names to image files");
+  std::string text;
+  if (Status s = platform::read_text_file(path, text, kMaxModelsJsonBytes, "a models.json"); !s)
+    return s;
+  std::vector<ModelEntry> entries;
+  std::string error;
+  if (!parse_models_json(text, entries, error))
+    return {StatusCode::kCorruptData, path + ": " + error};
   const fs::path base = fs::path(path).parent_path();
-  for (const auto& [name, value] : doc.items()) {
+  for (ModelEntry& e : entries) {
     ModelSource s;
-    s.name = name;
-    const nlohmann::json* file = &value;
-    if (value.is_object()) {
-      if (!value.contains("file")) return bad("model \"" + name + "\" has no \"file\"");
-      file = &value["file"];
-      if (value.contains("roi")) {
-        const nlohmann::json& r = value["roi"];
-        if (!r.is_array() || r.size() != 4 ||
-            !std::all_of(r.begin(), r.end(), [](auto& v) { return v.is_number_integer(); }))
-          return bad("model \"" + name + "\": \"roi\" must be [x, y, width, height] in pixels");
-        const cv::Rect roi(r[0].get<int>(), r[1].get<int>(), r[2].get<int>(), r[3].get<int>());
-        if (roi.x < 0 || roi.y < 0 || roi.width <= 0 || roi.height <= 0)
-          return bad("model \"" + name + "\": bad \"roi\" " + rect_text(roi));
-        s.roi = roi;
-      }
-    }
-    if (!file->is_string() || file->get<std::string>().empty())
-      return bad("model \"" + name + "\": expected an image file name");
-    const fs::path p(file->get<std::string>());
+    s.name = std::move(e.name);
+    const fs::path p(e.file);
     s.path = p.is_absolute() ? p.string() : (base / p).string();
+    if (e.has_roi) s.roi = cv::Rect(e.roi[0], e.roi[1], e.roi[2], e.roi[3]);
     out.push_back(std::move(s));
   }
   return Status::ok();
@@ -90,26 +99,57 @@ Status load_model_image(const ModelSource& source, ImageLoader load, cv::Mat& gr
   return Status::ok();
 }
 
-Status build_model_set(const std::vector<ModelSource>& sources, const ModelBuildOptions& options,
-                       ImageLoader load, std::vector<cv::Mat>& grays,
-                       std::vector<BuiltModel>& models, const ProgressFn& progress) {
+Status load_model_images(const std::vector<ModelSource>& sources, const ViewParams* views,
+                         ImageLoader load, std::vector<cv::Mat>& grays) {
   grays.clear();
-  models.clear();
+  if (sources.size() > static_cast<std::size_t>(kMaxModels))
+    return {StatusCode::kResourceExhausted, std::to_string(sources.size()) + " models, over the " +
+                                                std::to_string(kMaxModels) +
+                                                " one set may have; build them in smaller sets"};
   std::set<std::string> seen;
-  // Names and images first, on this thread (a loader may redirect the
-  // process's stderr while it decodes): a bad input fails before any build.
   for (const ModelSource& source : sources) {
     if (source.name.empty())
       return {StatusCode::kInvalidArgument, "empty model name for " + source.path};
     if (!seen.insert(source.name).second)
       return {StatusCode::kInvalidArgument, "duplicate model name '" + source.name + "'"};
+  }
+  // Then the images, on this thread (a loader may redirect the process's
+  // stderr while it decodes): a set too large for memory fails before it
+  // has taken it.
+  const std::uint64_t room = memory_left() / 4 * 3;  // the rest: libraries, threads, slack
+  long long pixels = 0;
+  for (const ModelSource& source : sources) {
     cv::Mat gray;
-    if (Status s = load_model_image(source, load, gray); !s) {
+    Status s = load_model_image(source, load, gray);
+    if (s && views != nullptr) {
+      if (s = check_view_canvas(gray.cols, gray.rows, *views); !s)
+        s = {s.code(), source.path + ": " + s.message()};
+    }
+    pixels += static_cast<long long>(gray.cols) * gray.rows;
+    const std::uint64_t need = static_cast<std::uint64_t>(pixels) * kBuildBytesPerModelPixel;
+    if (s && need > room) {
+      s = {StatusCode::kResourceExhausted,
+           "the models would need about " + gigabytes(need) + " to build (" +
+               std::to_string(kBuildBytesPerModelPixel) + " bytes per model pixel; reached at " +
+               source.path + ", model " + std::to_string(grays.size() + 1) + " of " +
+               std::to_string(sources.size()) + "), more than the " + gigabytes(room) +
+               " this process may use: build them in smaller sets, or from smaller images"};
+    }
+    if (!s) {
       grays.clear();
       return s;
     }
     grays.push_back(gray);
   }
+  return Status::ok();
+}
+
+Status build_model_set(const std::vector<ModelSource>& sources, const ModelBuildOptions& options,
+                       ImageLoader load, std::vector<cv::Mat>& grays,
+                       std::vector<BuiltModel>& models, const ProgressFn& progress) {
+  models.clear();
+  // Every name and image before any build: a bad input fails first.
+  if (Status s = load_model_images(sources, &options.params.views, load, grays); !s) return s;
   // Each model is built alone from its own image, so the threads only
   // share the progress line; the models come out in source order.
   std::vector<BuiltModel> built(sources.size());
@@ -142,17 +182,21 @@ Status read_model_sources(const std::string& path, std::vector<ModelSource>& out
   std::error_code ec;
   if (fs::is_directory(path, ec)) {
     const fs::path json = fs::path(path) / "models.json";
-    if (fs::exists(json, ec)) return read_models_json(json.string(), out);
+    if (fs::exists(fs::symlink_status(json, ec))) return read_models_json(json.string(), out);
     std::vector<fs::path> files;
     for (const fs::directory_entry& e : fs::directory_iterator(path, ec)) {
       if (e.is_regular_file(ec) && is_image_file(e.path())) files.push_back(e.path());
     }
+    if (files.size() > static_cast<std::size_t>(kMaxModels))
+      return {StatusCode::kResourceExhausted, path + ": " + std::to_string(files.size()) +
+                                                  " model images, over the " +
+                                                  std::to_string(kMaxModels) + " one set may have"};
     std::sort(files.begin(), files.end());
     for (const fs::path& f : files) out.push_back({f.stem().string(), f.string(), std::nullopt});
     if (out.empty()) return {StatusCode::kNotFound, path + ": no model images in the directory"};
     return Status::ok();
   }
-  if (fs::is_regular_file(path, ec)) return read_models_json(path, out);
+  if (fs::exists(fs::symlink_status(path, ec))) return read_models_json(path, out);
   return {StatusCode::kNotFound, path + ": no such models directory or models.json"};
 }
 

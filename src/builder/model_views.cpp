@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 #include <opencv2/imgproc.hpp>
 
@@ -97,6 +99,35 @@ std::vector<ModelView> model_views(int width, int height, const ViewParams& para
     views.push_back(v);
   }
   return views;
+}
+
+Status check_view_canvas(int width, int height, const ViewParams& params) {
+  const double bound =
+      std::max(kViewCanvasFactor * static_cast<double>(width) * height, kMinViewCanvasBound);
+  for (const ModelView& v : model_views(width, height, params, 1)) {
+    if (v.tilt == 1.0 && v.longitude == 0.0) continue;  // frontal: at most the model's scale
+    cv::Size canvas = v.size;
+    if (v.longitude != 0.0) {
+      cv::Size rotated;
+      (void)view_map(width, height, 1.0, 1.0, v.longitude, rotated);
+      if (static_cast<double>(rotated.width) * rotated.height >
+          static_cast<double>(canvas.width) * canvas.height)
+        canvas = rotated;
+    }
+    if (static_cast<double>(canvas.width) * canvas.height > bound) {
+      char angle[32];
+      std::snprintf(angle, sizeof(angle), "%.0f", v.longitude);
+      return {StatusCode::kInvalidArgument,
+              "a " + std::to_string(width) + "x" + std::to_string(height) +
+                  " model is too thin for tilted views: the one at longitude " + angle +
+                  " degrees would take a " + std::to_string(canvas.width) + "x" +
+                  std::to_string(canvas.height) + " canvas, over " +
+                  std::to_string(static_cast<long long>(bound)) +
+                  " pixels; crop it nearer to square, or build it without tilted views "
+                  "(--max-tilt 0)"};
+    }
+  }
+  return Status::ok();
 }
 
 int asift_tilt_levels(float max_tilt) {

@@ -13,6 +13,7 @@
 #include <opencv2/core.hpp>
 
 #include "keygraph/params.h"
+#include "keygraph/status.h"
 
 namespace kg {
 
@@ -34,6 +35,21 @@ struct ModelView {
 // 1/sqrt(2) smaller.
 std::vector<ModelView> model_views(int width, int height, const ViewParams& params,
                                    int legacy_scales);
+
+// The most pixels a tilted view's canvas may take: the view, or the
+// rotated model image it is squeezed from (render_view()), at most 16 times
+// the model's own pixels or kMinViewCanvasBound, whichever is more. A model
+// at most about 30 times longer than it is wide stays within it at any
+// longitude (a square one takes twice its pixels at 45 degrees); a strip
+// such as 16384 x 16 would take 134 million pixels at 45 degrees, for
+// minutes and gigabytes.
+inline constexpr double kViewCanvasFactor = 16.0;
+inline constexpr double kMinViewCanvasBound = 16777216.0;
+
+// An error naming the size when a tilted view of a width x height model
+// would take more than the bound above (the model is then refused, with
+// what to do instead); ok otherwise, and for any model without tilted views.
+Status check_view_canvas(int width, int height, const ViewParams& params);
 
 // Renders `view` of `gray` (8-bit), with pixels outside the model taken
 // from its nearest border (no edges that a wall behind a sign would not

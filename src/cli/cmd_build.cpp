@@ -41,9 +41,11 @@
 #include "cli/commands.h"
 #include "cli/device/options.h"
 #include "cli/device/quality_report.h"
+#include "core/index/index_format.h"
 #include "core/params/param_names.h"
 #include "keygraph/param_text.h"
 #include "platform/files/output_file.h"
+#include "platform/files/output_set.h"
 
 namespace kg::cli {
 
@@ -70,35 +72,25 @@ std::string picture_name(const std::string& model) {
   return name + ".png";
 }
 
-// One PNG per model into `dir` (created if missing), each written to a
-// temporary name and renamed: no half-written picture is left behind.
+// One PNG per model into `dir` (created if missing), all or nothing
+// (platform::OutputSet: never over an input, no fixed temporary names).
 Status draw_models(const std::string& dir, const std::vector<BuiltModel>& models,
-                   const std::vector<cv::Mat>& grays) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (!fs::is_directory(dir, ec))
-    return {StatusCode::kIoError, "--draw-model " + dir + ": not a directory"};
+                   const std::vector<cv::Mat>& grays, const std::vector<std::string>& inputs) {
+  platform::OutputSet out(dir, inputs);
   for (std::size_t m = 0; m < models.size(); ++m) {
-    const fs::path target = fs::path(dir) / picture_name(models[m].name);
-    const fs::path temporary = fs::path(dir) / (".kg-tmp-" + picture_name(models[m].name));
-    bool written = false;
+    const std::string target = (std::filesystem::path(dir) / picture_name(models[m].name)).string();
+    std::vector<std::uint8_t> png;
+    bool encoded = false;
     try {
-      written = cv::imwrite(temporary.string(), draw_model(grays[m], models[m]));
+      encoded = cv::imencode(".png", draw_model(grays[m], models[m]), png);
     } catch (const cv::Exception&) {
-      written = false;
+      encoded = false;
     }
-    if (!written) {
-      fs::remove(temporary, ec);
-      return {StatusCode::kIoError, "--draw-model: cannot write " + target.string()};
-    }
-    fs::rename(temporary, target, ec);
-    if (ec) {
-      fs::remove(temporary, ec);
-      return {StatusCode::kIoError, "--draw-model: cannot write " + target.string()};
-    }
+    if (!encoded) return {StatusCode::kIoError, "--draw-model: cannot write " + target};
+    if (Status s = out.add(target, png.data(), png.size()); !s)
+      return {s.code(), "--draw-model " + s.message()};
   }
-  return Status::ok();
+  return out.commit();
 }
 
 // Whether a MODEL argument names a set of models (a directory, or a
@@ -334,6 +326,8 @@ int cmd_build(const Args& args) {
   if (tilt_given && !tilt_levels_given)
     params.views.tilt_levels =
         params.views.max_tilt > 0.f ? asift_tilt_levels(params.views.max_tilt) : 0;
+  // Parameters out of range are the command line's fault.
+  if (Status s = format::validate_params(params); !s) return table.usage_error(s.message());
   if (pending_roi) return table.usage_error("--roi must come before the model image it applies to");
   if (pending_name)
     return table.usage_error("--name must come before the model image it applies to");
@@ -361,12 +355,15 @@ int cmd_build(const Args& args) {
   // nothing behind (the temporary is removed on SIGINT and SIGTERM).
   platform::OutputFile out;
   if (Status s = out.create(output, paths); !s) return fail("-o " + s.message());
-  // So is a --draw-model that cannot be a directory (checked again when drawing).
+  // So is a --draw-model that cannot be a directory or holds a picture's
+  // name in the way (made, and written, only when the build succeeds).
   if (!draw_dir.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(draw_dir, ec);
-    if (!std::filesystem::is_directory(draw_dir, ec))
-      return fail("--draw-model " + draw_dir + ": not a directory");
+    platform::OutputSet pictures(draw_dir, paths);
+    Status s = platform::check_output_directory(draw_dir);
+    for (std::size_t i = 0; s && i < sources.size(); ++i)
+      s = pictures.check(
+          (std::filesystem::path(draw_dir) / picture_name(sources[i].name)).string());
+    if (!s) return fail("--draw-model " + s.message());
   }
 
   if (max_side > 0) {
@@ -416,7 +413,8 @@ int cmd_build(const Args& args) {
   if (Status s = view_aligned_copy(bytes, storage, index); !s) return fail("build: " + s.message());
   print_quality_report(index, false, stdout);
   if (!draw_dir.empty()) {
-    if (Status s = draw_models(draw_dir, models, grays); !s) return fail("build: " + s.message());
+    if (Status s = draw_models(draw_dir, models, grays, paths); !s)
+      return fail("build: " + s.message());
   }
   Status s = out.write(bytes.data(), bytes.size());
   if (s) s = out.commit();

@@ -9,6 +9,7 @@
 // --synth: the sign benchmark written by `keygraph synth` (--frames: the
 // first N frames only).
 #include <cstdio>
+#include <filesystem>
 #include <sstream>
 
 #include "builder/progress.h"
@@ -47,12 +48,24 @@ Options::Apply set_param(Params& params) {
   };
 }
 
-Options::Apply set_methods(std::vector<std::string>& methods) {
-  return [&methods](const std::string& v) {
+}  // namespace
+
+Options::Apply method_list_option(std::vector<std::string>& methods, bool* given) {
+  return [&methods, given](const std::string& v) -> std::string {
     methods = method_list(v);
-    return methods.empty() ? std::string("--methods is empty") : std::string();
+    if (methods.empty()) return "--methods is empty";
+    for (const std::string& m : methods) {
+      BaselineOptions baseline;
+      if (m != "keygraph" && m != "keygraph-mser" && !parse_baseline(m, baseline))
+        return "--methods: unknown method '" + m + "' (keygraph, keygraph-mser, " +
+               joined(baseline_names()) + " or all)";
+    }
+    if (given != nullptr) *given = true;
+    return {};
   };
 }
+
+namespace {
 
 const char* const kQuietHelp =
     "no progress on stderr (by default one line rewritten in place on a\n"
@@ -82,7 +95,8 @@ Options oxford_options(OxfordEvalOptions& o, std::string& out_dir, std::string& 
       .unsigned64("--seed", "N", o.seed, "seed of the random crops")
       .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h", set_param(o.params))
       .repeatable()
-      .value("--methods", "M,...|all", kMethodsHelp, set_methods(o.methods), joined(o.methods))
+      .value("--methods", "M,...|all", kMethodsHelp, method_list_option(o.methods, nullptr),
+             joined(o.methods))
       .flag("--negatives", o.negatives,
             "also run each crop on the next subset's scenes (false detections)")
       .flag("--curves", o.curves, "precision-recall of correspondences and RANSAC iterations")
@@ -126,7 +140,8 @@ Options synth_options(SynthEvalOptions& o, std::string& out_dir, bool& quiet) {
             return {};
           },
           "every frame")
-      .value("--methods", "M,...|all", kMethodsHelp, set_methods(o.methods), joined(o.methods))
+      .value("--methods", "M,...|all", kMethodsHelp, method_list_option(o.methods, nullptr),
+             joined(o.methods))
       .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h", set_param(o.params))
       .repeatable()
       .text("-o, --out, --output", "DIR", out_dir, "also write the report (tables, plots) into DIR")
@@ -172,10 +187,20 @@ int cmd_eval(const Args& args) {
         "give one of --dataset DIR (Oxford layout), --synth DIR (keygraph synth) or --truth "
         "MANIFEST");
   if (synth_mode) options.params = synth.params;
-  if (Status s = format::validate_params(options.params); !s) return fail("eval: " + s.message());
-  // The output directory before the (long) run, so that a bad one fails at once.
+  // Parameters out of range (--set) are the command line's fault.
+  if (Status s = format::validate_params(options.params); !s) return table.usage_error(s.message());
+  // The outputs before the (long) run, so that a bad one fails at once;
+  // written all or nothing after it, never over a file of the data set.
+  const std::vector<std::string> inputs =
+      files_under(synth_mode ? synth.directory : options.dataset, 2);
+  platform::OutputSet outputs(
+      out_dir.empty() ? std::filesystem::path(csv).parent_path().string() : out_dir, inputs);
   if (!out_dir.empty()) {
-    if (Status s = ensure_directory(out_dir); !s) return fail("eval: " + s.message());
+    if (Status s = platform::check_output_directory(out_dir); !s)
+      return fail("eval: --out " + s.message());
+  }
+  if (!csv.empty()) {
+    if (Status s = outputs.check(csv); !s) return fail("eval: --csv " + s.message());
   }
 
   if (synth_mode) {
@@ -189,7 +214,8 @@ int cmd_eval(const Args& args) {
     std::fputs(synth_text(rows, synth_by_scale(cases, synth), synth_by_confidence(cases)).c_str(),
                stdout);
     if (!out_dir.empty()) {
-      if (s = write_synth_report(out_dir, synth, cases); !s) return fail("eval: " + s.message());
+      if (s = write_synth_report(outputs, out_dir, synth, cases); s) s = outputs.commit();
+      if (!s) return fail("eval: " + s.message());
     }
     return 0;
   }
@@ -205,7 +231,8 @@ int cmd_eval(const Args& args) {
       stdout);
   std::fputs(oxford_wrong_poses_text(cases).c_str(), stdout);
   if (!out_dir.empty()) {
-    if (s = write_oxford_report(out_dir, options, cases); !s) return fail("eval: " + s.message());
+    if (s = write_oxford_report(outputs, out_dir, options, cases); !s)
+      return fail("eval: " + s.message());
   }
   if (!csv.empty()) {
     std::ostringstream out;
@@ -219,8 +246,9 @@ int cmd_eval(const Args& args) {
           << c.ransac_iterations << ',' << c.time_ms << ',' << c.truth_correlation << ','
           << c.found_correlation << '\n';
     }
-    if (s = write_text_file(csv, out.str()); !s) return fail("eval: " + s.message());
+    if (s = outputs.add(csv, out.str()); !s) return fail("eval: " + s.message());
   }
+  if (s = outputs.commit(); !s) return fail("eval: " + s.message());
   return 0;
 }
 

@@ -5,7 +5,6 @@
 // is checked before the first detection, and nothing is written unless the
 // whole run succeeds.
 #include <cstdio>
-#include <filesystem>
 
 #include "builder/progress.h"
 #include "cli/commands.h"
@@ -17,8 +16,6 @@
 #include "keygraph/param_text.h"
 
 namespace kg::cli {
-
-namespace {}  // namespace
 
 Options truth_options(TruthEvalOptions& o, std::string& out_dir, bool& quiet) {
   std::string methods;
@@ -32,14 +29,10 @@ Options truth_options(TruthEvalOptions& o, std::string& out_dir, bool& quiet) {
       .text("--models", "DIR|M.json", o.models,
             "model images: a directory (each image a model) or a models.json")
       .text("--index", "I.kgi", o.index, "or a built index (keygraph methods only)")
-      .value(
-          "--methods", "M,...|all",
-          "keygraph, keygraph-mser and/or baselines (sift-magsac, ...); all: every one",
-          [&o](const std::string& v) {
-            o.methods = method_list(v);
-            return o.methods.empty() ? std::string("--methods is empty") : std::string();
-          },
-          methods)
+      .value("--methods", "M,...|all",
+             "keygraph, keygraph-mser and/or baselines (sift-magsac, ...); all: every one\n"
+             "(with --index: keygraph)",
+             method_list_option(o.methods, &o.methods_set), methods)
       .number("--tolerance", "PX", o.tolerance, 0, 1e6, true,
               "a detection is correct when every corner is within PX pixels")
       .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h (with --models)",
@@ -51,7 +44,9 @@ Options truth_options(TruthEvalOptions& o, std::string& out_dir, bool& quiet) {
       .repeatable()
       .text("-o, --out, --output", "DIR", out_dir,
             "also write the report (tables, pictures) into DIR")
-      .flag("--gallery", o.gallery, "with --out: draw the scenes with a miss or a false detection")
+      .flag("--gallery", o.gallery,
+            "with --out: draw the scenes with a miss or a false detection (replacing an\n"
+            "earlier run's gallery)")
       .flag("-q, --quiet", quiet,
             "no progress on stderr (by default one line rewritten in place on a\n"
             "terminal, otherwise a line every 10 %)")
@@ -66,19 +61,17 @@ int cmd_eval_truth(const Args& args) {
   const Options table = truth_options(options, out_dir, quiet);
   if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
   if (options.manifest.empty()) return table.usage_error("--truth needs a manifest");
-  if (Status s = format::validate_params(options.params); !s) return fail("eval: " + s.message());
-  if (!out_dir.empty()) {
-    // A bad output directory fails now, not after the run.
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    const fs::path out(out_dir);
-    const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
-    if (fs::exists(out, ec) ? !fs::is_directory(out, ec) : !fs::is_directory(parent, ec))
-      return fail("eval: --out " + out_dir + ": not a directory (nor one that can be created)");
-  }
+  if (options.gallery && out_dir.empty())
+    return table.usage_error("--gallery draws into the report: give --out DIR");
+  // Parameters out of range (--set) are the command line's fault.
+  if (Status s = format::validate_params(options.params); !s) return table.usage_error(s.message());
   TruthResults results;
   ProgressReporter progress({"eval", "case", is_terminal(stderr), false}, quiet ? nullptr : stderr);
-  Status s = evaluate_truth(options, results, progress.callback());
+  // Every output path once the inputs are known, before any model is built.
+  const auto check_outputs = [&](const TruthResults& known) {
+    return out_dir.empty() ? Status::ok() : check_truth_report(out_dir, options, known);
+  };
+  Status s = evaluate_truth(options, results, progress.callback(), check_outputs);
   progress.finish();
   if (!s) return fail("eval: " + s.message());
   std::fputs(truth_text(truth_tallies(results), options, results).c_str(), stdout);

@@ -10,7 +10,7 @@
 #include "cli/commands.h"
 #include "cli/device/options.h"
 #include "eval/real_sets.h"
-#include "eval/report_io.h"
+#include "platform/files/output_set.h"
 
 namespace kg::cli {
 
@@ -32,8 +32,14 @@ int cmd_manifest(const Args& args) {
                     return {};
                   })
       .text("-o, --out, --output", "OUT.jsonl", output, "the manifest to write (required)")
-      .text("--split", "dev|test|model-bursts", split,
-            "exit-signs only: that split of the set (default: all of it)")
+      .value("--split", "dev|test|model-bursts",
+             "exit-signs only: that split of the set (default: all of it)",
+             [&split](const std::string& v) -> std::string {
+               if (v != "dev" && v != "test" && v != "model-bursts")
+                 return "--split '" + v + "': not dev, test or model-bursts";
+               split = v;
+               return {};
+             })
       .example("keygraph manifest exit-signs ../shared/data/real/exit-signs -o exit.jsonl");
   if (const int exit_code = options.parse(args); exit_code >= 0) return exit_code;
   if (set.empty() || dir.empty()) return options.usage_error("give a set and its directory");
@@ -42,8 +48,6 @@ int cmd_manifest(const Args& args) {
     return options.usage_error("unknown set '" + set + "' (exit-signs, planar-pairs or negatives)");
   if (!split.empty() && set != "exit-signs")
     return options.usage_error("--split is for exit-signs");
-  if (!split.empty() && split != "dev" && split != "test" && split != "model-bursts")
-    return options.usage_error("--split takes dev, test or model-bursts, got '" + split + "'");
   ConvertedSet converted;
   std::string models_name;
   Status s;
@@ -59,14 +63,18 @@ int cmd_manifest(const Args& args) {
     return fail("manifest: unknown set '" + set + "' (exit-signs, planar-pairs or negatives)");
   }
   if (!s) return fail("manifest: " + s.message());
+  // Both files, checked before either is written, then written together
+  // (never over an input of the set, whole or not at all).
   const std::filesystem::path out(output);
-  if (!converted.models_json.empty()) {
-    const std::string models = (out.parent_path() / models_name).string();
-    if (s = write_text_file(models, converted.models_json); !s)
-      return fail("manifest: " + s.message());
-    std::printf("wrote %s\n", models.c_str());
-  }
-  if (s = write_text_file(output, converted.manifest); !s) return fail("manifest: " + s.message());
+  platform::OutputSet files(out.parent_path().string(), converted.inputs);
+  const std::string models = (out.parent_path() / models_name).string();
+  if (!converted.models_json.empty()) s = files.check(models);
+  if (s) s = files.check(output);
+  if (s && !converted.models_json.empty()) s = files.add(models, converted.models_json);
+  if (s) s = files.add(output, converted.manifest);
+  if (s) s = files.commit();
+  if (!s) return fail("manifest: " + s.message());
+  if (!converted.models_json.empty()) std::printf("wrote %s\n", models.c_str());
   std::printf("%s\nwrote %s\n", converted.summary.c_str(), output.c_str());
   return 0;
 }

@@ -88,14 +88,19 @@ int cmd_repeatability(const Args& args) {
       .example("keygraph repeatability --dataset ../shared/data/oxford --detectors hessian,sift");
   if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
   if (options.dataset.empty()) return table.usage_error("--dataset DIR is required");
-  if (Status s = format::validate_params(params); !s) return fail("repeatability: " + s.message());
+  // Parameters out of range (--set) are the command line's fault.
+  if (Status s = format::validate_params(params); !s) return table.usage_error(s.message());
   if (detectors.empty()) return table.usage_error("--detectors is empty");
-  // A CSV that cannot be written fails now, not after the run.
+  // A CSV that cannot be written fails now, not after the run (and never
+  // replaces a file of the data set).
+  const std::vector<std::string> inputs = files_under(options.dataset, 2);
+  platform::OutputSet outputs(std::filesystem::path(csv).parent_path().string(), inputs);
   if (!csv.empty()) {
     const std::filesystem::path parent = std::filesystem::path(csv).parent_path();
     std::error_code ec;
     if (!parent.empty() && !std::filesystem::is_directory(parent, ec))
       return fail("repeatability: " + parent.string() + ": no such directory (for --csv)");
+    if (Status s = outputs.check(csv); !s) return fail("repeatability: --csv " + s.message());
   }
   for (const std::string& d : detectors) {
     RepeatabilityDetector parsed;
@@ -112,8 +117,8 @@ int cmd_repeatability(const Args& args) {
   if (!s) return fail("repeatability: " + s.message());
   std::fputs(repeatability_text(cases, timings, options).c_str(), stdout);
   if (!csv.empty()) {
-    if (s = write_text_file(csv, repeatability_csv(cases, timings)); !s)
-      return fail("repeatability: " + s.message());
+    if (s = outputs.add(csv, repeatability_csv(cases, timings)); s) s = outputs.commit();
+    if (!s) return fail("repeatability: " + s.message());
   }
   return 0;
 }

@@ -25,6 +25,9 @@ int cmd_eval_truth(const Args& args);  // eval --truth (cmd_eval passes it on)
 // The options of eval --truth, bound to `options` and `out_dir`.
 Options truth_options(TruthEvalOptions& options, std::string& out_dir, bool& quiet);
 int cmd_manifest(const Args& args);
+// The --methods option of eval: every name checked (a usage error names
+// the unknown one); `given` (may be null) is set when the option is used.
+Options::Apply method_list_option(std::vector<std::string>& methods, bool* given);
 int cmd_synth(const Args& args);
 int cmd_repeatability(const Args& args);
 

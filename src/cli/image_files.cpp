@@ -101,13 +101,20 @@ bool write_image_atomically(const std::string& path, const cv::Mat& image,
   Status s = out.create(path, inputs, ext);
   if (s) s = out.close();
   if (s) {
+    // The encoder's own complaint (on several lines) is held: our one line
+    // replaces it.
+    platform::StderrHold encoder_messages;
+    encoder_messages.hold();
     bool written = false;
     try {
       written = cv::imwrite(out.temp_path(), image);
     } catch (const cv::Exception&) {
       written = false;
     }
-    if (!written) s = {StatusCode::kIoError, "cannot write image " + path};
+    encoder_messages.release(written);
+    if (!written)
+      s = {StatusCode::kIoError,
+           "cannot write image " + path + " (OpenCV cannot write this picture as " + ext + ")"};
   }
   if (s) s = out.commit();
   if (!s) error = s.message();

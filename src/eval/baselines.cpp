@@ -8,6 +8,13 @@
 
 namespace kg {
 
+std::string over_baseline_limit(int width, int height) {
+  return std::to_string(width) + "x" + std::to_string(height) + " is over the " +
+         std::to_string(kMaxBaselinePixels) +
+         " pixels the OpenCV baselines take (SIFT alone would need gigabytes): downscale it, or "
+         "use the keygraph methods only (--methods keygraph)";
+}
+
 bool parse_baseline(const std::string& name, BaselineOptions& out) {
   const std::size_t dash = name.find('-');
   if (dash == std::string::npos) return false;

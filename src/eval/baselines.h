@@ -22,6 +22,16 @@
 
 namespace kg {
 
+// The largest image (width x height) the baselines take, model or scene:
+// OpenCV's SIFT builds its pyramid from the image upsampled 2x in float, so
+// a 4096 x 4096 scene takes 3.9 GB (AKAZE's scale space is not far behind).
+// At 4 megapixels SIFT stays near 1 GB; the real photo sets' largest image
+// is 2.3 megapixels. Evaluations refuse larger images with
+// over_baseline_limit()'s reason instead of running out of memory.
+inline constexpr long long kMaxBaselinePixels = 1LL << 22;
+// "4096x4096 is over the 4194304 pixels the OpenCV baselines take (...)".
+std::string over_baseline_limit(int width, int height);
+
 enum class BaselineFeatures { kSift, kOrb, kAkaze };
 enum class BaselineEstimator { kRansac, kMagsac };
 

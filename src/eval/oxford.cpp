@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 
 #include <opencv2/imgproc.hpp>
@@ -18,17 +17,12 @@
 #include "core/support/rng.h"
 #include "eval/baselines.h"
 #include "eval/correspondence_pr.h"
+#include "eval/set_files.h"
 
 namespace kg {
 
 Status read_homography(const std::string& path, Homography& h) {
-  std::ifstream in(path);
-  if (!in) return {StatusCode::kNotFound, path + ": no such file"};
-  for (double& v : h) {
-    if (!(in >> v) || !std::isfinite(v))
-      return {StatusCode::kInvalidArgument, path + ": expected 9 numbers"};
-  }
-  return Status::ok();
+  return read_homography_file(path, h);
 }
 
 namespace {

@@ -413,11 +413,9 @@ std::string oxford_wrong_poses_text(const std::vector<OxfordCase>& cases) {
   return out;
 }
 
-Status write_oxford_report(const std::string& dir, const OxfordEvalOptions& options,
-                           const std::vector<OxfordCase>& cases) {
-  Status s = ensure_directory(dir);
-  if (s) s = ensure_directory(dir + "/curves");
-  if (!s) return s;
+Status write_oxford_report(platform::OutputSet& out, const std::string& dir,
+                           const OxfordEvalOptions& options, const std::vector<OxfordCase>& cases) {
+  Status s;
   const OxfordCurveGrids grids = oxford_curve_grids();
   const std::vector<std::string> methods = methods_of(cases);
   const std::vector<OxfordRow> rows = oxford_tallies(cases, methods);
@@ -450,7 +448,7 @@ Status write_oxford_report(const std::string& dir, const OxfordEvalOptions& opti
     }
     csv << ',' << c.truth_correlation << ',' << c.found_correlation << '\n';
   }
-  if (s = write_text_file(dir + "/cases.csv", csv.str()); !s) return s;
+  if (s = out.add(dir + "/cases.csv", csv.str()); !s) return s;
 
   // Curves and plots.
   std::string curve_json;
@@ -463,8 +461,7 @@ Status write_oxford_report(const std::string& dir, const OxfordEvalOptions& opti
       const std::vector<CurveSet> sets = curve_sets(curves, options, grids);
       for (const CurveSet& set : sets) {
         const std::string file = "curves/" + method + "-" + group + "-" + set.name + ".csv";
-        if (s = write_text_file(dir + "/" + file, csv_of(*set.curve, set.h, confidence)); !s)
-          return s;
+        if (s = out.add(dir + "/" + file, csv_of(*set.curve, set.h, confidence)); !s) return s;
         curve_json += std::string(curve_json.empty() ? "" : ",\n") +
                       "    {\"method\": " + json_quote(method) +
                       ", \"group\": " + json_quote(group) + ", \"curve\": " + json_quote(set.name) +
@@ -475,10 +472,10 @@ Status write_oxford_report(const std::string& dir, const OxfordEvalOptions& opti
       const std::string title =
           method + ", " + group + " (" + std::to_string(curves.keygraph.cases) + " cases)";
       if (group == "all") {
-        if (s = write_png_file(dir + "/pr-" + method + ".png", pr_plot(sets, title, 640, 480)); !s)
+        if (s = add_png(out, dir + "/pr-" + method + ".png", pr_plot(sets, title, 640, 480)); !s)
           return s;
-        s = write_png_file(dir + "/iterations-" + method + ".png",
-                           iterations_plot(sets, confidence, title, 640, 480));
+        s = add_png(out, dir + "/iterations-" + method + ".png",
+                    iterations_plot(sets, confidence, title, 640, 480));
         if (!s) return s;
       } else if (group.rfind("img", 0) == 0 && group.size() == 4) {
         pr_degrees.push_back(pr_plot(sets, title, 420, 330));
@@ -497,7 +494,7 @@ Status write_oxford_report(const std::string& dir, const OxfordEvalOptions& opti
       if (panels->empty()) continue;
       char name[128];
       std::snprintf(name, sizeof(name), pattern, method.c_str());
-      if (s = write_png_file(dir + "/" + name, tile_plots(*panels, panels->size() > 6 ? 4 : 3)); !s)
+      if (s = add_png(out, dir + "/" + name, tile_plots(*panels, panels->size() > 6 ? 4 : 3)); !s)
         return s;
     }
   }
@@ -561,7 +558,7 @@ Status write_oxford_report(const std::string& dir, const OxfordEvalOptions& opti
       << "}" << (i + 1 < limits.size() ? ",\n" : "\n");
   }
   j << "  ],\n  \"curves\": [\n" << curve_json << (curve_json.empty() ? "" : "\n") << "  ]\n}\n";
-  return write_text_file(dir + "/summary.json", j.str());
+  return out.add(dir + "/summary.json", j.str());
 }
 
 }  // namespace kg

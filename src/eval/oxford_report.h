@@ -16,6 +16,7 @@
 
 #include "eval/oxford.h"
 #include "eval/pr_curves.h"
+#include "platform/files/output_set.h"
 
 namespace kg {
 
@@ -92,7 +93,9 @@ std::string oxford_text(const std::vector<OxfordRow>& rows,
 // there is none.
 std::string oxford_wrong_poses_text(const std::vector<OxfordCase>& cases);
 
-Status write_oxford_report(const std::string& dir, const OxfordEvalOptions& options,
-                           const std::vector<OxfordCase>& cases);
+// Stages the report's files into `out` (its root `dir`, output_set.h); the
+// caller commits: all or nothing.
+Status write_oxford_report(platform::OutputSet& out, const std::string& dir,
+                           const OxfordEvalOptions& options, const std::vector<OxfordCase>& cases);
 
 }  // namespace kg

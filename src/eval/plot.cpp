@@ -61,6 +61,38 @@ void line(cv::Mat& img, cv::Point2d a, cv::Point2d b, const cv::Scalar& c, int t
   }
 }
 
+// The legend's box size: a line sample and the label per series.
+constexpr int kLegendRow = 18;
+cv::Size legend_size(const PlotSpec& spec) {
+  if (spec.series.empty()) return {0, 0};
+  int w = 0;
+  for (const PlotSeries& s : spec.series) w = std::max(w, text_size(s.label, kTickScale).width);
+  return {w + 50, kLegendRow * static_cast<int>(spec.series.size()) + 8};
+}
+
+void point_marker(cv::Mat& img, cv::Point p, int shape, const cv::Scalar& c) {
+  constexpr int r = 4;
+  switch (shape % 4) {
+    case 0:
+      cv::circle(img, p, r, c, cv::FILLED, cv::LINE_AA);
+      break;
+    case 1:
+      cv::rectangle(img, cv::Rect(p.x - r, p.y - r, 2 * r + 1, 2 * r + 1), c, cv::FILLED);
+      break;
+    case 2: {
+      const cv::Point t[] = {{p.x, p.y - r - 1}, {p.x + r + 1, p.y + r}, {p.x - r - 1, p.y + r}};
+      cv::fillConvexPoly(img, t, 3, c, cv::LINE_AA);
+      break;
+    }
+    default: {
+      const cv::Point d[] = {
+          {p.x, p.y - r - 1}, {p.x + r + 1, p.y}, {p.x, p.y + r + 1}, {p.x - r - 1, p.y}};
+      cv::fillConvexPoly(img, d, 4, c, cv::LINE_AA);
+      break;
+    }
+  }
+}
+
 }  // namespace
 
 cv::Scalar plot_colour(int i) {
@@ -76,7 +108,10 @@ PlotFrame::PlotFrame(const PlotSpec& spec)
   y_hi_ = log_y_ ? std::log10(std::max(spec.y_max, 1e-300)) : spec.y_max;
   if (!(x_max_ > x_min_)) x_max_ = x_min_ + 1;
   if (!(y_hi_ > y_lo_)) y_hi_ = y_lo_ + 1;
-  area_ = cv::Rect(kLeft, kTop, std::max(10, spec.width - kLeft - kRight),
+  const int legend = spec.legend == LegendCorner::kOutsideRight && !spec.series.empty()
+                         ? legend_size(spec).width + 12
+                         : 0;
+  area_ = cv::Rect(kLeft, kTop, std::max(10, spec.width - kLeft - kRight - legend),
                    std::max(10, spec.height - kTop - kBottom));
 }
 
@@ -160,33 +195,42 @@ cv::Mat render_plot(const PlotSpec& spec) {
         have_prev = false;
         continue;
       }
-      const cv::Point2d p = frame.to_pixel(s.x[i], s.y[i]);
+      const cv::Point2d p = frame.to_pixel(s.x[i], s.y[i]) + cv::Point2d(0, s.offset_y);
       if (have_prev) line(img, prev, p, s.colour, 2, s.dashed, a);
       if (static_cast<int>(i) == s.marker && a.contains(cv::Point(cvRound(p.x), cvRound(p.y))))
         cv::circle(img, cv::Point(cvRound(p.x), cvRound(p.y)), 5, s.colour, cv::FILLED,
                    cv::LINE_AA);
+      if (s.point_shape >= 0 && a.contains(cv::Point(cvRound(p.x), cvRound(p.y))))
+        point_marker(img, cv::Point(cvRound(p.x), cvRound(p.y)), s.point_shape, s.colour);
       prev = p;
       have_prev = true;
     }
   }
 
-  // Legend: a line sample and the label per series, in a boxed corner.
+  // Legend: a line sample and the label per series, in a boxed corner (or
+  // right of the axes).
   if (!spec.series.empty()) {
-    int w = 0;
-    for (const PlotSeries& s : spec.series) w = std::max(w, text_size(s.label, kTickScale).width);
-    const int row = 18, box_w = w + 50, box_h = row * static_cast<int>(spec.series.size()) + 8;
+    const int row = kLegendRow;
+    const cv::Size size = legend_size(spec);
+    const int box_w = size.width, box_h = size.height;
     const bool left =
         spec.legend == LegendCorner::kTopLeft || spec.legend == LegendCorner::kBottomLeft;
-    const bool top =
-        spec.legend == LegendCorner::kTopLeft || spec.legend == LegendCorner::kTopRight;
-    const cv::Rect box(left ? a.x + 8 : right - 8 - box_w, top ? a.y + 8 : bottom - 8 - box_h,
-                       box_w, box_h);
+    const bool top = spec.legend == LegendCorner::kTopLeft ||
+                     spec.legend == LegendCorner::kTopRight ||
+                     spec.legend == LegendCorner::kOutsideRight;
+    const cv::Rect box(
+        spec.legend == LegendCorner::kOutsideRight ? right + 12
+        : left                                     ? a.x + 8
+                                                   : right - 8 - box_w,
+        top ? a.y + (spec.legend == LegendCorner::kOutsideRight ? 0 : 8) : bottom - 8 - box_h,
+        box_w, box_h);
     cv::rectangle(img, box, kWhite, cv::FILLED);
     cv::rectangle(img, box, kBlack, 1);
     for (std::size_t i = 0; i < spec.series.size(); ++i) {
       const PlotSeries& s = spec.series[i];
       const int y = box.y + 4 + row * static_cast<int>(i) + row / 2;
       line(img, {box.x + 6.0, y + 0.0}, {box.x + 36.0, y + 0.0}, s.colour, 2, s.dashed, box);
+      if (s.point_shape >= 0) point_marker(img, {box.x + 21, y}, s.point_shape, s.colour);
       text(img, s.label, {box.x + 42, y + 5}, kTickScale);
     }
   }

@@ -17,11 +17,20 @@ struct PlotSeries {
   std::vector<double> x, y;    // NaN or non-finite points break the line
   cv::Scalar colour{0, 0, 0};  // BGR
   bool dashed = false;
+  // Drawn this many pixels lower (negative: higher) than its data, so that
+  // series with equal values stay visible side by side; a few pixels only.
+  int offset_y = 0;
   // A marker (filled circle) at one point, e.g. the default threshold; -1: none.
   int marker = -1;
+  // A marker at every point, of this shape (0 circle, 1 square, 2 triangle,
+  // 3 diamond, then again), also in the legend; -1: none. Series that
+  // coincide stay told apart by their markers.
+  int point_shape = -1;
 };
 
-enum class LegendCorner { kTopRight, kTopLeft, kBottomLeft, kBottomRight };
+// Where the legend goes: a corner inside the axes, or to their right
+// (the axes then narrow to make room: the legend never covers the data).
+enum class LegendCorner { kTopRight, kTopLeft, kBottomLeft, kBottomRight, kOutsideRight };
 
 struct PlotSpec {
   std::string title, x_label, y_label;

@@ -141,4 +141,28 @@ double longest_side(const Point2f (&q)[4]) {
   return best;
 }
 
+namespace {
+
+double determinant(const Homography& h) {
+  return h[0] * (h[4] * h[8] - h[5] * h[7]) - h[1] * (h[3] * h[8] - h[5] * h[6]) +
+         h[2] * (h[3] * h[7] - h[4] * h[6]);
+}
+
+bool finite_and_invertible(const Homography& h) {
+  for (const double v : h) {
+    if (!std::isfinite(v)) return false;
+  }
+  const double det = determinant(h);
+  return std::isfinite(det) && det != 0;
+}
+
+}  // namespace
+
+bool normalise_homography(Homography& h) {
+  if (!finite_and_invertible(h) || h[8] == 0) return false;
+  const double h33 = h[8];
+  for (double& v : h) v /= h33;
+  return finite_and_invertible(h);
+}
+
 }  // namespace kg

@@ -27,4 +27,9 @@ double quad_iou(const Point2f (&a)[4], const Point2f (&b)[4]);
 // The longest of the four sides, pixels.
 double longest_side(const Point2f (&q)[4]);
 
+// `h` divided by h33: false (and `h` unspecified) unless it is finite and
+// invertible before and after (h33 = 0, or so near 0 that the division
+// overflows, is not).
+bool normalise_homography(Homography& h);
+
 }  // namespace kg

@@ -3,13 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <sstream>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "eval/set_files.h"
 namespace kg {
 
 namespace {
@@ -50,30 +50,26 @@ Status convert_exit_signs(const std::string& dir, const std::string& manifest_pa
     return {StatusCode::kInvalidArgument,
             "--split takes dev, test or model-bursts, got '" + split + "'"};
   const fs::path root(dir), corners = root / "corners.txt", images = root / "images";
+  std::error_code ec;
   for (const fs::path& p :
        {corners, images, root / "model-exit-left.png", root / "model-exit-right.png"}) {
-    if (!fs::exists(p)) return missing(p);
+    if (!fs::exists(fs::symlink_status(p, ec))) return missing(p);
   }
-  // corners.txt: image sign_index x1 y1 ... x4 y4
+  if (!fs::is_directory(images, ec))
+    return {StatusCode::kInvalidArgument, images.string() + ": not a directory"};
+  std::vector<MarkedSign> marked;
+  if (Status s = read_corners_file(corners.string(), marked); !s) return s;
+  out.inputs = {corners.string(), (root / "model-exit-left.png").string(),
+                (root / "model-exit-right.png").string()};
   std::map<std::string, Json> signs;  // image (relative to dir) -> instances
-  std::ifstream in(corners);
-  std::string text;
-  for (int number = 1; std::getline(in, text); ++number) {
-    if (text.find_first_not_of(" \t\r") == std::string::npos) continue;
-    std::istringstream line(text);
-    std::string image;
-    int index = 0;
-    double v[8];
-    line >> image >> index;
-    for (double& x : v) line >> x;
-    if (!line)
-      return {StatusCode::kCorruptData, corners.string() + ":" + std::to_string(number) +
-                                            ": expected 'image index x1 y1 x2 y2 x3 y3 x4 y4'"};
+  for (const MarkedSign& m : marked) {
     Json instance = Json::object();
     instance["model"] = Json::array({"exit-left", "exit-right"});
-    instance["corners"] = Json::array({Json::array({v[0], v[1]}), Json::array({v[2], v[3]}),
-                                       Json::array({v[4], v[5]}), Json::array({v[6], v[7]})});
-    signs[image].push_back(instance);
+    Json points = Json::array();
+    for (int c = 0; c < 4; ++c)
+      points.push_back(Json::array({m.corners[2 * c], m.corners[2 * c + 1]}));
+    instance["corners"] = points;
+    signs[m.image].push_back(instance);
   }
   struct Frame {
     double time;
@@ -81,8 +77,9 @@ Status convert_exit_signs(const std::string& dir, const std::string& manifest_pa
   };
   std::vector<Frame> frames;
   int excluded = 0;
-  for (const fs::directory_entry& e : fs::directory_iterator(images)) {
-    if (!e.is_regular_file() || !is_image(e.path())) continue;
+  for (const fs::directory_entry& e : fs::directory_iterator(images, ec)) {
+    if (!e.is_regular_file(ec) || !is_image(e.path())) continue;
+    out.inputs.push_back(e.path().string());
     double time = 0;
     try {
       time = std::stod(e.path().stem().string());
@@ -118,6 +115,7 @@ Status convert_exit_signs(const std::string& dir, const std::string& manifest_pa
     line["instances"] = it == signs.end() ? Json::array() : it->second;
     manifest << line.dump() << '\n';
   }
+  if (ec) return {StatusCode::kIoError, images.string() + ": cannot list: " + ec.message()};
   out.manifest = manifest.str();
   Json models = Json::object();
   models["exit-left"] = relative_to(root / "model-exit-left.png", manifest_path);
@@ -145,9 +143,10 @@ Status convert_exit_signs(const std::string& dir, const std::string& manifest_pa
 Status convert_planar_pairs(const std::string& dir, const std::string& manifest_path,
                             ConvertedSet& out) {
   const fs::path root(dir);
-  if (!fs::is_directory(root)) return missing(root);
+  std::error_code ec;
+  if (!fs::is_directory(root, ec)) return missing(root);
   std::vector<std::string> names;
-  for (const fs::directory_entry& e : fs::directory_iterator(root)) {
+  for (const fs::directory_entry& e : fs::directory_iterator(root, ec)) {
     const std::string f = e.path().filename().string();
     const std::string suffix = "_H_A_to_B.txt";
     if (f.size() > suffix.size() && f.compare(f.size() - suffix.size(), suffix.size(), suffix) == 0)
@@ -158,7 +157,7 @@ Status convert_planar_pairs(const std::string& dir, const std::string& manifest_
   auto image_of = [&](const std::string& stem) -> fs::path {
     for (const char* ext : {".png", ".jpg", ".jpeg", ".JPG", ".PNG"}) {
       const fs::path p = root / (stem + ext);
-      if (fs::exists(p)) return p;
+      if (fs::exists(p, ec)) return p;
     }
     return {};
   };
@@ -169,10 +168,9 @@ Status convert_planar_pairs(const std::string& dir, const std::string& manifest_
     if (a.empty()) return missing(root / (name + "A.*"));
     if (b.empty()) return missing(root / (name + "B.*"));
     const fs::path h_path = root / (name + "_H_A_to_B.txt");
-    std::ifstream in(h_path);
-    std::vector<double> h(9);
-    for (double& v : h) in >> v;
-    if (!in) return {StatusCode::kCorruptData, h_path.string() + ": expected 9 numbers"};
+    Homography h{};
+    if (Status s = read_homography_file(h_path.string(), h); !s) return s;
+    out.inputs.insert(out.inputs.end(), {h_path.string(), a.string(), b.string()});
     models[name] = relative_to(a, manifest_path);
     Json instance = Json::object();
     instance["model"] = name;
@@ -193,11 +191,13 @@ Status convert_planar_pairs(const std::string& dir, const std::string& manifest_
 Status convert_negatives(const std::string& dir, const std::string& manifest_path,
                          ConvertedSet& out) {
   const fs::path root(dir);
-  if (!fs::is_directory(root)) return missing(root);
+  std::error_code ec;
+  if (!fs::is_directory(root, ec)) return missing(root);
   std::vector<fs::path> files;
-  for (const fs::directory_entry& e : fs::directory_iterator(root)) {
-    if (e.is_regular_file() && is_image(e.path())) files.push_back(e.path());
+  for (const fs::directory_entry& e : fs::directory_iterator(root, ec)) {
+    if (e.is_regular_file(ec) && is_image(e.path())) files.push_back(e.path());
   }
+  for (const fs::path& f : files) out.inputs.push_back(f.string());
   if (files.empty()) return {StatusCode::kNotFound, dir + ": no images"};
   std::sort(files.begin(), files.end());
   std::ostringstream manifest;

@@ -5,17 +5,21 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "keygraph/status.h"
 
 namespace kg {
 
 struct ConvertedSet {
-  std::string manifest;     // JSON lines
-  std::string models_json;  // models.json for the set's models (empty: none)
-  std::string summary;      // what was kept, for the user
+  std::string manifest;             // JSON lines
+  std::string models_json;          // models.json for the set's models (empty: none)
+  std::string summary;              // what was kept, for the user
+  std::vector<std::string> inputs;  // every file the set's conversion read or names
 };
 
+// Each reads its set's text files within the bounds of eval/set_files.h.
+//
 // exit-signs/: corners.txt, every sign acceptable as "exit-left" or
 // "exit-right" (the arrow is not annotated). Frames within 30 s of the two
 // model source frames are left out. split "dev" / "test" keeps alternate

@@ -3,11 +3,10 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <system_error>
-#include <vector>
 
 #include <opencv2/imgcodecs.hpp>
+
+#include "platform/files/output_file.h"
 
 namespace kg {
 
@@ -18,7 +17,7 @@ std::string json_quote(std::string_view s) {
     if (c == '"' || c == '\\') {
       out += '\\';
       out += ch;
-    } else if (c < 0x20) {
+    } else if (c < 0x20 || c == 0x7f) {
       char buf[8];
       std::snprintf(buf, sizeof(buf), "\\u%04x", c);
       out += buf;
@@ -36,45 +35,45 @@ std::string json_value(double v) {
   return buf;
 }
 
-Status write_text_file(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out << text;
-    out.flush();
-    if (!out) {
-      std::error_code ec;
-      std::filesystem::remove(tmp, ec);
-      return {StatusCode::kIoError, "cannot write " + path};
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    return {StatusCode::kIoError, "cannot write " + path};
-  }
-  return Status::ok();
+Status write_text_file(const std::string& path, const std::string& text,
+                       const std::vector<std::string>& inputs) {
+  platform::OutputFile out;
+  Status s = out.create(path, inputs);
+  if (s) s = out.write(text.data(), text.size());
+  if (s) s = out.commit();
+  return s;
 }
 
-Status write_png_file(const std::string& path, const cv::Mat& image) {
-  std::vector<std::uint8_t> bytes;
+Status encode_png(const cv::Mat& image, const std::string& path, std::vector<std::uint8_t>& png) {
   bool ok = false;
   try {
-    ok = !image.empty() && cv::imencode(".png", image, bytes, {cv::IMWRITE_PNG_COMPRESSION, 9});
+    ok = !image.empty() && cv::imencode(".png", image, png, {cv::IMWRITE_PNG_COMPRESSION, 9});
   } catch (const cv::Exception&) {
     ok = false;
   }
-  if (!ok) return {StatusCode::kIoError, "cannot encode " + path};
-  return write_text_file(path, std::string(bytes.begin(), bytes.end()));
+  if (!ok) return {StatusCode::kIoError, path + ": cannot encode the picture as PNG"};
+  return Status::ok();
 }
 
-Status ensure_directory(const std::string& path) {
+Status add_png(platform::OutputSet& out, const std::string& path, const cv::Mat& image) {
+  std::vector<std::uint8_t> png;
+  if (Status s = encode_png(image, path, png); !s) return s;
+  return out.add(path, png.data(), png.size());
+}
+
+std::vector<std::string> files_under(const std::string& dir, int depth) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> out;
+  if (dir.empty() || depth < 1) return out;
   std::error_code ec;
-  std::filesystem::create_directories(path, ec);
-  if (ec || !std::filesystem::is_directory(path, ec))
-    return {StatusCode::kIoError, "cannot create directory " + path};
-  return Status::ok();
+  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+    if (e.is_regular_file(ec)) {
+      out.push_back(e.path().string());
+    } else if (e.is_directory(ec)) {
+      for (std::string& f : files_under(e.path().string(), depth - 1)) out.push_back(std::move(f));
+    }
+  }
+  return out;
 }
 
 }  // namespace kg

@@ -1,5 +1,7 @@
 #include "eval/synth_eval.h"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -114,11 +116,15 @@ Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& c
       options.max_frames > 0
           ? std::min(options.max_frames, static_cast<int>(manifest.frames.size()))
           : static_cast<int>(manifest.frames.size());
-  std::vector<cv::Mat> frames(static_cast<std::size_t>(frame_count));
+  // The frames are read when they are searched (memory does not grow with
+  // their count; 100000 frames took 30 GB); each is checked here to be a
+  // regular file first, so a missing one fails before any work.
   for (int i = 0; i < frame_count; ++i) {
-    s = load_gray(options.directory + "/" + manifest.frames[static_cast<std::size_t>(i)].file,
-                  frames[static_cast<std::size_t>(i)]);
-    if (!s) return s;
+    const std::string path =
+        options.directory + "/" + manifest.frames[static_cast<std::size_t>(i)].file;
+    struct stat info {};
+    if (::stat(path.c_str(), &info) != 0 || !S_ISREG(info.st_mode))
+      return {StatusCode::kNotFound, path + ": no such frame file (named by the manifest)"};
   }
 
   cv::setNumThreads(1);  // every method on one thread
@@ -183,7 +189,8 @@ Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& c
       for (int f = 0; f < frame_count; ++f) {
         if (group_of[static_cast<std::size_t>(f)] != g) continue;
         const SynthFrameEntry& entry = manifest.frames[static_cast<std::size_t>(f)];
-        const cv::Mat& frame = frames[static_cast<std::size_t>(f)];
+        cv::Mat frame;
+        if (s = load_gray(options.directory + "/" + entry.file, frame); !s) return s;
         const SynthSign* sign = entry.info.sign >= 0
                                     ? &manifest.signs[static_cast<std::size_t>(entry.info.sign)]
                                     : nullptr;
@@ -458,10 +465,9 @@ std::string synth_text(const std::vector<SynthRow>& rows,
   return out;
 }
 
-Status write_synth_report(const std::string& dir, const SynthEvalOptions& options,
-                          const std::vector<SynthCase>& cases) {
-  Status s = ensure_directory(dir);
-  if (!s) return s;
+Status write_synth_report(platform::OutputSet& out, const std::string& dir,
+                          const SynthEvalOptions& options, const std::vector<SynthCase>& cases) {
+  Status s;
   std::ostringstream csv;
   csv << "method,index_size,group,frame,sign,found,corner_error,detections,false_detections,"
          "time_ms,scale,occluded,blur_sigma,motion_blur,noise_sigma,sign_keypoints,"
@@ -473,7 +479,7 @@ Status write_synth_report(const std::string& dir, const SynthEvalOptions& option
         << c.blur_sigma << ',' << c.motion_blur << ',' << c.noise_sigma << ',' << c.sign_keypoints
         << ',' << c.repeated_keypoints << '\n';
   }
-  if (s = write_text_file(dir + "/synth-cases.csv", csv.str()); !s) return s;
+  if (s = out.add(dir + "/synth-cases.csv", csv.str()); !s) return s;
   // Every detection with its support, for precision-recall by confidence.
   std::ostringstream det;
   det << "method,index_size,frame,sign,model,right,corner_error,inliers,inlier_keygraphs,"
@@ -487,7 +493,7 @@ Status write_synth_report(const std::string& dir, const SynthEvalOptions& option
           << ',' << (c.has_confidence ? d.support.confidence : -1.0) << '\n';
     }
   }
-  if (s = write_text_file(dir + "/synth-detections.csv", det.str()); !s) return s;
+  if (s = out.add(dir + "/synth-detections.csv", det.str()); !s) return s;
   const std::vector<SynthRow> rows = synth_tallies(cases, options);
   std::ostringstream j;
   j << "{\n  \"protocol\": \"synth\",\n  \"directory\": " << json_quote(options.directory)
@@ -515,7 +521,7 @@ Status write_synth_report(const std::string& dir, const SynthEvalOptions& option
       << (i + 1 < confidence.size() ? ",\n" : "\n");
   }
   j << "  ]\n}\n";
-  return write_text_file(dir + "/synth-summary.json", j.str());
+  return out.add(dir + "/synth-summary.json", j.str());
 }
 
 }  // namespace kg

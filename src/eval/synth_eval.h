@@ -19,6 +19,7 @@
 #include "keygraph/detector.h"
 #include "keygraph/params.h"
 #include "keygraph/status.h"
+#include "platform/files/output_set.h"
 
 namespace kg {
 
@@ -126,7 +127,9 @@ std::string synth_text(const std::vector<SynthRow>& rows,
                        const std::vector<SynthConfidenceRow>& by_confidence = {});
 
 // synth-summary.json, synth-cases.csv and synth-detections.csv in `dir`.
-Status write_synth_report(const std::string& dir, const SynthEvalOptions& options,
-                          const std::vector<SynthCase>& cases);
+// Stages the report's files into `out` (its root `dir`, output_set.h); the
+// caller commits: all or nothing.
+Status write_synth_report(platform::OutputSet& out, const std::string& dir,
+                          const SynthEvalOptions& options, const std::vector<SynthCase>& cases);
 
 }  // namespace kg

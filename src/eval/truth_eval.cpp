@@ -1,11 +1,13 @@
 #include "eval/truth_eval.h"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <map>
 #include <memory>
+#include <new>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -22,6 +24,7 @@
 #include "eval/baselines.h"
 #include "eval/quad_geometry.h"
 #include "keygraph/model_index.h"
+#include "platform/files/regular_file.h"
 
 namespace kg {
 
@@ -63,6 +66,19 @@ double grid_error(const Homography& truth, const Homography& found, const TruthM
   return median_of(errors);
 }
 
+// Runs an OpenCV call, its exception (out of memory, above all) as a status.
+template <typename Call>
+Status opencv_call(Call call) {
+  try {
+    call();
+  } catch (const cv::Exception& e) {
+    return {StatusCode::kResourceExhausted, "OpenCV: " + e.err};
+  } catch (const std::bad_alloc&) {
+    return {StatusCode::kResourceExhausted, "out of memory"};
+  }
+  return Status::ok();
+}
+
 bool accepts(const TruthQuad& q, int model) {
   return std::find(q.models.begin(), q.models.end(), model) != q.models.end();
 }
@@ -81,40 +97,37 @@ struct Method {
   BaselineOptions baseline;
   Params params;                  // keygraph methods: how the models were built
   std::vector<BuiltModel> built;  // keygraph methods from model images
-  std::map<std::string, MethodDetectors> by_search;
+  // The detectors of the searched model sets met most recently, the
+  // latest last: at most kCachedSearches (each holds an index and a
+  // workspace, so a manifest of many distinct "search" sets would
+  // otherwise grow without bound); an evicted set is built again if it
+  // comes back, with the same results.
+  std::vector<std::pair<std::string, std::unique_ptr<MethodDetectors>>> by_search;
 };
+
+constexpr std::size_t kCachedSearches = 8;
+
+// The detectors for `key`, found or made (empty: to be filled), now the
+// most recent.
+MethodDetectors& detectors_for(Method& m, const std::string& key) {
+  auto it = std::find_if(m.by_search.begin(), m.by_search.end(),
+                         [&](const auto& entry) { return entry.first == key; });
+  std::pair<std::string, std::unique_ptr<MethodDetectors>> entry;
+  if (it != m.by_search.end()) {
+    entry = std::move(*it);
+    m.by_search.erase(it);
+  } else {
+    entry = {key, std::make_unique<MethodDetectors>()};
+    if (m.by_search.size() >= kCachedSearches) m.by_search.erase(m.by_search.begin());
+  }
+  m.by_search.push_back(std::move(entry));
+  return *m.by_search.back().second;
+}
 
 std::string search_key(const std::vector<int>& models) {
   std::string key;
   for (const int m : models) key += std::to_string(m) + ",";
   return key;
-}
-
-cv::Mat draw_scene(const cv::Mat& gray, const std::vector<TruthQuad>& truth,
-                   const std::vector<FoundQuad>& found, const std::vector<DetectionKind>& kinds,
-                   const std::vector<TruthModel>& models) {
-  cv::Mat canvas;
-  cv::cvtColor(gray, canvas, cv::COLOR_GRAY2BGR);
-  const int thickness = std::max(1, std::max(gray.cols, gray.rows) / 400);
-  auto quad = [&](const Point2f(&c)[4], const cv::Scalar& colour, const std::string& label) {
-    std::vector<cv::Point> pts;
-    for (const Point2f& p : c) {
-      pts.emplace_back(cvRound(std::clamp(p.x, -1e5f, 1e5f)),
-                       cvRound(std::clamp(p.y, -1e5f, 1e5f)));
-    }
-    cv::polylines(canvas, pts, true, colour, thickness, cv::LINE_AA);
-    cv::putText(canvas, label, pts[0] + cv::Point(3, -3), cv::FONT_HERSHEY_SIMPLEX, 0.4 * thickness,
-                colour, thickness, cv::LINE_AA);
-  };
-  for (const TruthQuad& t : truth) quad(t.corners, {0, 200, 0}, "truth");  // green
-  for (std::size_t i = 0; i < found.size(); ++i) {
-    const cv::Scalar colour =
-        kinds[i] == DetectionKind::kTrue ? cv::Scalar(255, 120, 0) : cv::Scalar(0, 0, 255);
-    quad(found[i].corners, colour,
-         models[static_cast<std::size_t>(found[i].model)].name + " (" +
-             detection_kind_name(kinds[i]) + ")");
-  }
-  return canvas;
 }
 
 // The support of each truth instance's pose (TruthCase::truth_*) among
@@ -215,6 +228,60 @@ void measure_truth_support(const Detector& detector, const std::vector<int>& det
 
 }  // namespace
 
+cv::Mat draw_truth_scene(const cv::Mat& gray, const std::vector<TruthQuad>& truth,
+                         const std::vector<FoundQuad>& found,
+                         const std::vector<DetectionKind>& kinds,
+                         const std::vector<TruthModel>& models) {
+  cv::Mat canvas;
+  cv::cvtColor(gray, canvas, cv::COLOR_GRAY2BGR);
+  const int thickness = std::max(1, std::max(gray.cols, gray.rows) / 400);
+  auto quad = [&](const Point2f(&c)[4], const cv::Scalar& colour, const std::string& label) {
+    std::vector<cv::Point> pts;
+    for (const Point2f& p : c) {
+      pts.emplace_back(cvRound(std::clamp(p.x, -1e5f, 1e5f)),
+                       cvRound(std::clamp(p.y, -1e5f, 1e5f)));
+    }
+    cv::polylines(canvas, pts, true, colour, thickness, cv::LINE_AA);
+    cv::putText(canvas, label, pts[0] + cv::Point(3, -3), cv::FONT_HERSHEY_SIMPLEX, 0.4 * thickness,
+                colour, thickness, cv::LINE_AA);
+  };
+  for (const TruthQuad& t : truth) quad(t.corners, {0, 200, 0}, "truth");  // green
+  for (std::size_t i = 0; i < found.size(); ++i) {
+    const cv::Scalar colour =
+        kinds[i] == DetectionKind::kTrue ? cv::Scalar(255, 120, 0) : cv::Scalar(0, 0, 255);
+    quad(found[i].corners, colour,
+         models[static_cast<std::size_t>(found[i].model)].name + " (" +
+             detection_kind_name(kinds[i]) + ")");
+  }
+  return canvas;
+}
+
+std::vector<TruthQuad> truth_quads(const TruthResults& results, int scene) {
+  auto model_id = [&](const std::string& name) {
+    for (std::size_t i = 0; i < results.models.size(); ++i) {
+      if (results.models[i].name == name) return static_cast<int>(i);
+    }
+    return -1;
+  };
+  std::vector<TruthQuad> truth;
+  for (const TruthInstance& instance :
+       results.manifest.scenes[static_cast<std::size_t>(scene)].instances) {
+    TruthQuad q;
+    for (const std::string& n : instance.models) q.models.push_back(model_id(n));
+    q.has_homography = instance.has_homography;
+    q.homography = instance.homography;
+    if (instance.has_homography) {
+      Point2f outline[4];
+      model_outline(results.models[static_cast<std::size_t>(q.models.front())], outline);
+      for (int c = 0; c < 4; ++c) q.corners[c] = kg::apply(instance.homography, outline[c]);
+    } else {
+      std::copy(instance.corners, instance.corners + 4, q.corners);
+    }
+    truth.push_back(q);
+  }
+  return truth;
+}
+
 const char* detection_kind_name(DetectionKind kind) {
   switch (kind) {
     case DetectionKind::kTrue:
@@ -291,7 +358,8 @@ void score_truth_scene(const std::vector<FoundQuad>& found, const std::vector<Tr
 }
 
 Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
-                      const ProgressFn& progress) {
+                      const ProgressFn& progress,
+                      const std::function<Status(const TruthResults&)>& before_work) {
   results = TruthResults{};
   Status s = read_truth_manifest(options.manifest, results.manifest);
   if (!s) return s;
@@ -300,6 +368,7 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
     return Status{StatusCode::kInvalidArgument,
                   manifest.path + ":" + std::to_string(scene.line) + ": " + what};
   };
+  results.inputs.push_back(options.manifest);
 
   // The models: images, or an index.
   if (options.models.empty() == options.index.empty())
@@ -308,11 +377,14 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
   ModelIndex file_index;
   if (!options.models.empty()) {
     if (s = read_model_sources(options.models, sources); !s) return s;
+    results.inputs.push_back(options.models);  // a models.json (a directory is no output)
+    for (const ModelSource& m : sources) results.inputs.push_back(m.path);
   } else {
     if (options.params_set)
       return {StatusCode::kInvalidArgument,
               "--set changes how models are built; an --index keeps its own parameters"};
     if (s = ModelIndex::open(options.index, file_index); !s) return s;
+    results.inputs.push_back(options.index);
     for (int i = 0; i < file_index.model_count(); ++i) {
       const ModelInfo info = file_index.model(i);
       results.models.push_back(
@@ -327,13 +399,22 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
   for (const TruthScene& scene : manifest.scenes) {
     std::string error;
     if (!check_truth_models(scene, names, error)) return at_line(scene, error);
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(scene.path, ec))
+    struct stat info {};
+    if (::stat(scene.path.c_str(), &info) != 0)
       return at_line(scene, "scene " + scene.path + ": no such file");
+    if (!S_ISREG(info.st_mode))
+      return at_line(scene,
+                     "scene " + scene.path + ": is " + platform::file_type_name(info.st_mode));
+    results.inputs.push_back(scene.path);
   }
 
+  // With an index the baselines have no images: keygraph alone by default.
+  const std::vector<std::string> method_names = !options.methods_set && !options.index.empty()
+                                                    ? std::vector<std::string>{"keygraph"}
+                                                    : options.methods;
   std::vector<Method> methods;
-  for (const std::string& name : options.methods) {
+  bool any_baseline = false;
+  for (const std::string& name : method_names) {
     Method m;
     m.name = name;
     if (name == "keygraph" || name == "keygraph-mser") {
@@ -346,11 +427,18 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
     } else if (!options.index.empty()) {
       return {StatusCode::kInvalidArgument,
               name + " needs the model images: use --models, not --index"};
+    } else {
+      any_baseline = true;
     }
+    if (std::find(results.methods.begin(), results.methods.end(), name) != results.methods.end())
+      continue;  // named twice: once is enough
     results.methods.push_back(name);
     methods.push_back(std::move(m));
   }
   if (methods.empty()) return {StatusCode::kInvalidArgument, "no methods"};
+  if (before_work) {
+    if (s = before_work(results); !s) return s;
+  }
 
   // Build the models (after every check: building is the slow part).
   std::vector<cv::Mat> grays;
@@ -364,20 +452,30 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
     m.params = build.params;
   }
   if (!sources.empty() && grays.empty()) {
-    for (const ModelSource& source : sources) {
-      cv::Mat gray;
-      if (s = load_model_image(source, load_gray, gray); !s) return s;
-      grays.push_back(gray);
-    }
+    if (s = load_model_images(sources, nullptr, load_gray, grays); !s) return s;
   }
-  for (std::size_t i = 0; i < sources.size(); ++i)
+  for (std::size_t i = 0; i < sources.size(); ++i) {
+    if (any_baseline && static_cast<long long>(grays[i].cols) * grays[i].rows > kMaxBaselinePixels)
+      return {StatusCode::kResourceExhausted,
+              sources[i].path + ": " + over_baseline_limit(grays[i].cols, grays[i].rows)};
     results.models.push_back({sources[i].name, grays[i].cols, grays[i].rows});
+  }
   auto model_id = [&](const std::string& name) {
     for (std::size_t i = 0; i < results.models.size(); ++i) {
       if (results.models[i].name == name) return static_cast<int>(i);
     }
     return -1;
   };
+  // Homography truth through the models' outlines: a pose that maps the
+  // outline through infinity has no size or scale to score by.
+  for (std::size_t si = 0; si < manifest.scenes.size(); ++si) {
+    for (const TruthQuad& q : truth_quads(results, static_cast<int>(si))) {
+      if (q.has_homography && !is_simple_quad(q.corners))
+        return at_line(manifest.scenes[si],
+                       "\"homography\" does not map the model's outline to a quadrilateral in "
+                       "the scene");
+    }
+  }
 
   using Clock = std::chrono::steady_clock;
   KeypointExtractor extractor;  // the frame's keypoints for measure_truth_support()
@@ -386,21 +484,10 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
     const TruthScene& scene = manifest.scenes[static_cast<std::size_t>(si)];
     cv::Mat gray;
     if (s = load_gray(scene.path, gray); !s) return at_line(scene, s.message());
-    std::vector<TruthQuad> truth;
-    for (const TruthInstance& instance : scene.instances) {
-      TruthQuad q;
-      for (const std::string& n : instance.models) q.models.push_back(model_id(n));
-      q.has_homography = instance.has_homography;
-      q.homography = instance.homography;
-      if (instance.has_homography) {
-        Point2f outline[4];
-        model_outline(results.models[static_cast<std::size_t>(q.models.front())], outline);
-        for (int c = 0; c < 4; ++c) q.corners[c] = kg::apply(instance.homography, outline[c]);
-      } else {
-        std::copy(instance.corners, instance.corners + 4, q.corners);
-      }
-      truth.push_back(q);
-    }
+    if (any_baseline && static_cast<long long>(gray.cols) * gray.rows > kMaxBaselinePixels)
+      return at_line(scene,
+                     "scene " + scene.path + ": " + over_baseline_limit(gray.cols, gray.rows));
+    const std::vector<TruthQuad> truth = truth_quads(results, si);
     std::vector<int> searched;
     for (const std::string& n : scene.search) searched.push_back(model_id(n));
     if (searched.empty()) {
@@ -411,7 +498,7 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
     searched.erase(std::unique(searched.begin(), searched.end()), searched.end());
 
     for (Method& m : methods) {
-      MethodDetectors& d = m.by_search[search_key(searched)];
+      MethodDetectors& d = detectors_for(m, search_key(searched));
       if (d.models.empty()) {
         d.models = searched;
         // The workspace for this scene's size now, not inside the timed detect().
@@ -430,7 +517,8 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
           std::vector<cv::Mat> subset;
           for (const int id : searched) subset.push_back(grays[static_cast<std::size_t>(id)]);
           d.baseline = std::make_unique<BaselineDetector>(m.baseline);
-          d.baseline->set_models(subset);
+          if (s = opencv_call([&] { d.baseline->set_models(subset); }); !s)
+            return at_line(scene, m.name + ": " + s.message());
         }
       }
       std::vector<FoundQuad> found;
@@ -449,7 +537,8 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
         }
       } else {
         std::vector<BaselineDetection> list;
-        d.baseline->detect(gray, list);
+        if (s = opencv_call([&] { d.baseline->detect(gray, list); }); !s)
+          return at_line(scene, m.name + ": " + s.message());
         for (const BaselineDetection& det : list) {
           FoundQuad f;
           f.model = d.models[static_cast<std::size_t>(det.model_id)];
@@ -511,15 +600,7 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
         interesting = interesting || kinds[i] != DetectionKind::kTrue;
         results.detections.push_back(t);
       }
-      if (options.gallery && interesting) {
-        char prefix[16];
-        std::snprintf(prefix, sizeof(prefix), "%04d_", si);
-        std::vector<unsigned char> png;
-        cv::imencode(".png", draw_scene(gray, truth, found, kinds, results.models), png);
-        results.gallery.emplace_back(
-            m.name + "/" + prefix + std::filesystem::path(scene.scene).stem().string() + ".png",
-            std::move(png));
-      }
+      if (options.gallery && interesting) results.gallery.push_back({m.name, si});
     }
   }
   return Status::ok();

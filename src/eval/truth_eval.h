@@ -11,8 +11,11 @@
 // names a model that instance does not accept) or a false one.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
+
+#include <opencv2/core.hpp>
 
 #include "builder/progress.h"
 #include "eval/truth_manifest.h"
@@ -27,7 +30,10 @@ struct TruthEvalOptions {
   std::string models;  // a directory of model images or a models.json
   std::string index;   // or a built .kgi (keygraph methods only)
   // "keygraph", "keygraph-mser" and/or baseline names (eval/baselines.h).
+  // Unless methods_set, with an index: keygraph alone (the others need
+  // the model images).
   std::vector<std::string> methods = {"keygraph", "sift-magsac", "orb-magsac", "akaze-magsac"};
+  bool methods_set = false;
   double tolerance = 10;  // px, every corner
   double min_iou = 0.5;
   Params params;            // for building the keygraph models
@@ -104,15 +110,38 @@ struct TruthDetection {
   int instance = -1;  // the instance it lies on, if any
 };
 
+// A scene to draw into the gallery (with options.gallery): one with a
+// missed instance or a wrong or false detection, for one method. Drawn when
+// the report is written (truth_report.h), from the scene file and the
+// results, so that memory does not grow with the gallery.
+struct TruthGalleryEntry {
+  std::string method;
+  int scene = 0;
+};
+
 struct TruthResults {
   TruthManifest manifest;
   std::vector<TruthModel> models;
   std::vector<std::string> methods;
   std::vector<TruthCase> cases;
   std::vector<TruthDetection> detections;
-  // With options.gallery: "METHOD/NNNN_stem.png" and its PNG bytes.
-  std::vector<std::pair<std::string, std::vector<unsigned char>>> gallery;
+  std::vector<TruthGalleryEntry> gallery;
+  // Every file the evaluation reads (manifest, models.json, model images,
+  // index, scenes): no output may be one of them.
+  std::vector<std::string> inputs;
 };
+
+// The outline of a scene's truth instances in the scene (corners, or the
+// model outline through the homography), acceptable models as indexes
+// into results.models.
+std::vector<TruthQuad> truth_quads(const TruthResults& results, int scene);
+
+// Draws the scene: truth in green, true detections in blue, the others in
+// red, each labelled (the gallery's pictures).
+cv::Mat draw_truth_scene(const cv::Mat& gray, const std::vector<TruthQuad>& truth,
+                         const std::vector<FoundQuad>& found,
+                         const std::vector<DetectionKind>& kinds,
+                         const std::vector<TruthModel>& models);
 
 // Scores one scene for one method: fills found..iou, homography_error
 // (scene_size: the scene's width and height) and the detections' kinds.
@@ -123,8 +152,14 @@ void score_truth_scene(const std::vector<FoundQuad>& found, const std::vector<Tr
                        std::vector<DetectionKind>& kinds, std::vector<int>& instance_of);
 
 // Checks everything (manifest, model names, scene files, methods) before
-// the first detection: a bad input fails before any work.
+// the first model is built, then calls `before_work` (when given; the
+// CLI checks its output paths against results.inputs there) and stops on
+// its error; then the model images (sizes, outlines of homography truth)
+// before the first detection: a bad input fails before any work. Scenes
+// over kMaxBaselinePixels (eval/baselines.h) fail when a baseline method
+// is to search them.
 Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
-                      const ProgressFn& progress = {});
+                      const ProgressFn& progress = {},
+                      const std::function<Status(const TruthResults&)>& before_work = {});
 
 }  // namespace kg

@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 
+#include "builder/strict_json.h"
 #include "eval/quad_geometry.h"
+#include "platform/files/regular_file.h"
 
 namespace kg {
 
@@ -28,8 +28,10 @@ bool read_names(const Json& value, const char* field, std::vector<std::string>& 
     }
     if (out.size() != value.size()) out.clear();
   }
-  if (out.empty() || std::any_of(out.begin(), out.end(), [](auto& s) { return s.empty(); })) {
-    error = std::string("\"") + field + "\" must be a model name or a list of names";
+  if (out.empty() || std::any_of(out.begin(), out.end(),
+                                 [](auto& s) { return s.empty() || has_control_character(s); })) {
+    error = std::string("\"") + field +
+            "\" must be a model name or a list of names (without control characters)";
     return false;
   }
   return true;
@@ -65,13 +67,12 @@ bool read_homography(const Json& value, Homography& h, std::string& error) {
   for (std::size_t i = 0; i < 9; ++i) {
     if (!read_number(value[i], h[i])) return false;
   }
-  const double det = h[0] * (h[4] * h[8] - h[5] * h[7]) - h[1] * (h[3] * h[8] - h[5] * h[6]) +
-                     h[2] * (h[3] * h[7] - h[4] * h[6]);
-  if (h[8] == 0 || !std::isfinite(det) || det == 0) {
-    error = "\"homography\" is singular or has h33 = 0";
+  if (!normalise_homography(h)) {
+    error =
+        "\"homography\" is singular, has h33 = 0, or does not normalise to h33 = 1 in finite "
+        "numbers";
     return false;
   }
-  for (double& v : h) v /= h[8];
   return true;
 }
 
@@ -112,11 +113,13 @@ bool parse_truth_line(std::string_view text, TruthScene& out, std::string& error
   out.scene.clear();
   out.instances.clear();
   out.search.clear();
-  const Json line = Json::parse(text.begin(), text.end(), nullptr, false);
-  if (line.is_discarded()) {
-    error = "not valid JSON";
+  if (text.size() > kMaxManifestLineBytes) {
+    error = "line of " + std::to_string(text.size()) + " bytes, over the " +
+            platform::byte_size_text(kMaxManifestLineBytes) + " a manifest line may have";
     return false;
   }
+  Json line;
+  if (!parse_json_strict(text, line, error)) return false;
   if (!line.is_object()) {
     error = "a line must be a JSON object with \"scene\" and \"instances\"";
     return false;
@@ -129,8 +132,9 @@ bool parse_truth_line(std::string_view text, TruthScene& out, std::string& error
     }
   }
   if (!line.contains("scene") || !line["scene"].is_string() ||
-      line["scene"].get<std::string>().empty()) {
-    error = "\"scene\" must be an image path";
+      line["scene"].get<std::string>().empty() ||
+      has_control_character(line["scene"].get<std::string>())) {
+    error = "\"scene\" must be an image path (without control characters)";
     return false;
   }
   out.scene = line["scene"].get<std::string>();
@@ -148,29 +152,39 @@ bool parse_truth_line(std::string_view text, TruthScene& out, std::string& error
   return true;
 }
 
-Status read_truth_manifest(const std::string& path, TruthManifest& out) {
+Status parse_truth_manifest(std::string_view text, const std::string& path, TruthManifest& out) {
   out.path = path;
   out.scenes.clear();
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return {StatusCode::kNotFound, path + ": cannot open the manifest"};
   const std::filesystem::path base = std::filesystem::path(path).parent_path();
-  std::string text;
-  for (int number = 1; std::getline(in, text); ++number) {
-    if (!text.empty() && text.back() == '\r') text.pop_back();
-    const std::size_t first = text.find_first_not_of(" \t");
-    if (first == std::string::npos || text[first] == '#') continue;
+  std::size_t begin = 0;
+  for (int number = 1; begin < text.size(); ++number) {
+    std::size_t end = text.find('\n', begin);
+    if (end == std::string_view::npos) end = text.size();
+    std::string_view line = text.substr(begin, end - begin);
+    begin = end + 1;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    const std::size_t first = line.find_first_not_of(" \t");
+    if (first == std::string_view::npos || line[first] == '#') continue;
     TruthScene scene;
     std::string error;
-    if (!parse_truth_line(text, scene, error))
+    if (!parse_truth_line(line, scene, error))
       return {StatusCode::kCorruptData, path + ":" + std::to_string(number) + ": " + error};
     scene.line = number;
     const std::filesystem::path p(scene.scene);
     scene.path = p.is_absolute() ? p.string() : (base / p).string();
     out.scenes.push_back(std::move(scene));
   }
-  if (in.bad()) return {StatusCode::kIoError, path + ": read error"};
   if (out.scenes.empty()) return {StatusCode::kCorruptData, path + ": no scenes in the manifest"};
   return Status::ok();
+}
+
+Status read_truth_manifest(const std::string& path, TruthManifest& out) {
+  out.path = path;
+  out.scenes.clear();
+  std::string text;
+  if (Status s = platform::read_text_file(path, text, kMaxManifestBytes, "a manifest"); !s)
+    return s;
+  return parse_truth_manifest(text, path, out);
 }
 
 bool check_truth_models(const TruthScene& scene, const std::vector<std::string>& known,

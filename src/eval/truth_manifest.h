@@ -9,6 +9,7 @@
 // OpenCV-free (the manifest fuzzer links it without the desktop build).
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -43,11 +44,22 @@ struct TruthManifest {
   std::vector<TruthScene> scenes;
 };
 
-// One line's JSON. On failure `error` says what is wrong (no location).
+// Bounds of a manifest (docs/EVAL.md): a regular file of at most
+// kMaxManifestBytes, lines of at most kMaxManifestLineBytes, JSON nested at
+// most kMaxJsonDepth levels (builder/strict_json.h).
+inline constexpr std::size_t kMaxManifestBytes = std::size_t{64} << 20;
+inline constexpr std::size_t kMaxManifestLineBytes = std::size_t{1} << 20;
+
+// One line's JSON (strict_json.h: no key twice). On failure `error` says
+// what is wrong (no location).
 bool parse_truth_line(std::string_view text, TruthScene& out, std::string& error);
 
-// Reads the whole manifest; blank lines and lines starting with '#' are
-// skipped. Errors are "MANIFEST:LINE: what". Scene files are not checked.
+// A whole manifest's text; blank lines and lines starting with '#' are
+// skipped; scene paths are resolved against `path`'s directory. Errors are
+// "MANIFEST:LINE: what". Scene files are not checked.
+Status parse_truth_manifest(std::string_view text, const std::string& path, TruthManifest& out);
+// Reads the manifest file (a regular file within the bounds above), then
+// parse_truth_manifest().
 Status read_truth_manifest(const std::string& path, TruthManifest& out);
 
 // Checks the scene's model names (instances and search) against the known

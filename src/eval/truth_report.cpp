@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <sstream>
 
+#include "builder/image_io.h"
 #include "eval/plot.h"
 #include "eval/report_io.h"
 
@@ -41,7 +43,7 @@ std::vector<TruthBin> bin_cases(const std::vector<const TruthCase*>& cases,
     std::vector<double> sizes;
     for (const TruthCase* c : cases) {
       const double v = by_size ? c->long_edge : c->scale;
-      if (v < b.lo || v >= b.hi) continue;
+      if (!(v >= b.lo && v < b.hi)) continue;  // NaN in no bin
       ++b.instances;
       b.found += c->found;
       b.found_iou += c->found_iou;
@@ -93,43 +95,57 @@ std::string bins_json(const std::vector<TruthBin>& bins) {
   return j.str();
 }
 
-cv::Mat size_plot(const std::vector<TruthRow>& rows) {
+}  // namespace
+
+cv::Mat truth_size_plot(const std::vector<TruthRow>& rows) {
   PlotSpec spec;
   spec.title = "Found (all corners within the tolerance; dashed: IoU >= 0.5)";
   spec.x_label = "object long edge in the scene, log2 px (5 = 32 px, 7 = 128 px)";
   spec.y_label = "fraction found";
-  spec.width = 720;
+  spec.width = 900;
   spec.height = 480;
   double lo = kInf, hi = -kInf;
+  // Series that find the same fraction would hide each other: each
+  // (corners and IoU of every method) is shifted a little along x, at most
+  // 0.1 either way (7 % in size), a method's line is drawn 4 pixels from
+  // the next one's (a fraction of about 0.01), and it marks its points with
+  // its own shape.
+  const double series = 2.0 * static_cast<double>(rows.size());
+  const double dodge = series > 1 ? 0.2 / (series - 1) : 0.0;
+  const auto shift = [&](std::size_t k) {
+    return (static_cast<double>(k) - (series - 1) / 2) * dodge;
+  };
   for (std::size_t r = 0; r < rows.size(); ++r) {
     PlotSeries corners, iou;
     corners.label = rows[r].method;
     iou.label = rows[r].method + " (IoU)";
     corners.colour = iou.colour = plot_colour(static_cast<int>(r));
+    corners.point_shape = iou.point_shape = static_cast<int>(r);
+    corners.offset_y = iou.offset_y =
+        4 * static_cast<int>(r) - 2 * (static_cast<int>(rows.size()) - 1);
     iou.dashed = true;
     for (const TruthBin& b : rows[r].by_size) {
       if (b.instances == 0) continue;
       const double x = std::log2(std::max(b.median_size, 1.0));
       lo = std::min(lo, x);
       hi = std::max(hi, x);
-      corners.x.push_back(x);
+      corners.x.push_back(x + shift(2 * r));
       corners.y.push_back(static_cast<double>(b.found) / b.instances);
-      iou.x.push_back(x);
+      iou.x.push_back(x + shift(2 * r + 1));
       iou.y.push_back(static_cast<double>(b.found_iou) / b.instances);
     }
     spec.series.push_back(corners);
     spec.series.push_back(iou);
   }
   if (!(lo <= hi)) lo = 4, hi = 8;
-  spec.x_min = std::floor(lo);
-  spec.x_max = std::max(std::ceil(hi), spec.x_min + 1);
-  spec.y_min = 0;
+  spec.x_min = std::floor(lo - 0.1);
+  spec.x_max = std::max(std::ceil(hi + 0.1), spec.x_min + 1);
+  // Room below 0 and above 1: lines there are not drawn on the axes' box.
+  spec.y_min = -0.05;
   spec.y_max = 1.05;
-  spec.legend = LegendCorner::kTopLeft;
+  spec.legend = LegendCorner::kOutsideRight;
   return render_plot(spec);
 }
-
-}  // namespace
 
 std::vector<TruthRow> truth_tallies(const TruthResults& results) {
   std::vector<TruthRow> rows;
@@ -281,10 +297,77 @@ std::string truth_text(const std::vector<TruthRow>& rows, const TruthEvalOptions
   return out;
 }
 
+std::string truth_gallery_path(const std::string& dir, const std::string& method, int scene,
+                               const TruthResults& results) {
+  char prefix[16];
+  std::snprintf(prefix, sizeof(prefix), "%04d_", scene);
+  return (std::filesystem::path(dir) / "gallery" / method /
+          (prefix +
+           std::filesystem::path(results.manifest.scenes[static_cast<std::size_t>(scene)].scene)
+               .stem()
+               .string() +
+           ".png"))
+      .string();
+}
+
+namespace {
+
+const char* const kTruthFiles[] = {"truth-cases.csv", "truth-detections.csv", "truth-summary.json",
+                                   "truth-by-size.png"};
+
+// Earlier runs' gallery pictures in `dir`/gallery that this run does not
+// write, and the directories they leave empty: METHOD/NNNN_*.png files
+// (links included, never followed), directories last. `written` sorted.
+std::vector<std::string> stale_gallery(const std::string& dir,
+                                       const std::vector<std::string>& written) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> files, dirs;
+  std::error_code ec;
+  const fs::path gallery = fs::path(dir) / "gallery";
+  if (!fs::is_directory(fs::symlink_status(gallery, ec))) return {};
+  for (const fs::directory_entry& m : fs::directory_iterator(gallery, ec)) {
+    if (!fs::is_directory(m.symlink_status(ec))) continue;
+    for (const fs::directory_entry& f : fs::directory_iterator(m.path(), ec)) {
+      const std::string name = f.path().filename().string();
+      // NNNN_STEM.png: four or more digits, an underscore.
+      const std::size_t digits = name.find_first_not_of("0123456789");
+      const bool ours = digits != std::string::npos && digits >= 4 && name[digits] == '_' &&
+                        name.size() > 4 && name.compare(name.size() - 4, 4, ".png") == 0;
+      if (ours && !std::binary_search(written.begin(), written.end(), f.path().string()))
+        files.push_back(f.path().string());
+    }
+    dirs.push_back(m.path().string());
+  }
+  dirs.push_back(gallery.string());
+  files.insert(files.end(), dirs.begin(), dirs.end());
+  return files;
+}
+
+}  // namespace
+
+Status check_truth_report(const std::string& dir, const TruthEvalOptions& options,
+                          const TruthResults& results) {
+  if (Status s = platform::check_output_directory(dir); !s) return s;
+  platform::OutputSet out(dir, results.inputs);
+  for (const char* name : kTruthFiles) {
+    if (Status s = out.check(dir + "/" + name); !s) return s;
+  }
+  if (options.gallery) {
+    // Any scene may be drawn for any method.
+    for (const std::string& method : results.methods) {
+      for (std::size_t si = 0; si < results.manifest.scenes.size(); ++si) {
+        if (Status s = out.check(truth_gallery_path(dir, method, static_cast<int>(si), results));
+            !s)
+          return s;
+      }
+    }
+  }
+  return Status::ok();
+}
+
 Status write_truth_report(const std::string& dir, const TruthEvalOptions& options,
                           const TruthResults& results) {
-  Status s = ensure_directory(dir);
-  if (!s) return s;
+  platform::OutputSet out(dir, results.inputs);
   const std::vector<TruthScene>& scenes = results.manifest.scenes;
   std::ostringstream cases;
   cases << "method,scene,line,scene_file,instance,models,found,found_iou,corner_error,iou,"
@@ -301,7 +384,8 @@ Status write_truth_report(const std::string& dir, const TruthEvalOptions& option
           << c.truth_refound << ',' << c.truth_z << ',' << c.truth_verifiable << ','
           << c.truth_matches << '\n';
   }
-  if (s = write_text_file(dir + "/truth-cases.csv", cases.str()); !s) return s;
+  Status s = out.add(dir + "/truth-cases.csv", cases.str());
+  if (!s) return s;
   std::ostringstream detections;
   detections << "method,scene,line,scene_file,model,kind,instance,x1,y1,x2,y2,x3,y3,x4,y4\n";
   for (const TruthDetection& d : results.detections) {
@@ -313,7 +397,7 @@ Status write_truth_report(const std::string& dir, const TruthEvalOptions& option
     for (const Point2f& p : d.corners) detections << ',' << p.x << ',' << p.y;
     detections << '\n';
   }
-  if (s = write_text_file(dir + "/truth-detections.csv", detections.str()); !s) return s;
+  if (s = out.add(dir + "/truth-detections.csv", detections.str()); !s) return s;
 
   const std::vector<TruthRow> rows = truth_tallies(results);
   std::ostringstream j;
@@ -351,14 +435,33 @@ Status write_truth_report(const std::string& dir, const TruthEvalOptions& option
       << (i + 1 < rows.size() ? ",\n" : "\n");
   }
   j << "  ]\n}\n";
-  if (s = write_text_file(dir + "/truth-summary.json", j.str()); !s) return s;
-  if (s = write_png_file(dir + "/truth-by-size.png", size_plot(rows)); !s) return s;
-  for (const auto& [name, png] : results.gallery) {
-    const std::filesystem::path p = std::filesystem::path(dir) / "gallery" / name;
-    if (s = ensure_directory(p.parent_path().string()); !s) return s;
-    if (s = write_text_file(p.string(), std::string(png.begin(), png.end())); !s) return s;
+  if (s = out.add(dir + "/truth-summary.json", j.str()); !s) return s;
+  if (s = add_png(out, dir + "/truth-by-size.png", truth_size_plot(rows)); !s) return s;
+  // The gallery, one picture in memory at a time, drawn from the scene file.
+  std::vector<std::string> gallery;
+  for (const TruthGalleryEntry& g : results.gallery) {
+    const std::string path = truth_gallery_path(dir, g.method, g.scene, results);
+    cv::Mat gray;
+    if (s = load_gray(scenes[static_cast<std::size_t>(g.scene)].path, gray); !s) return s;
+    std::vector<FoundQuad> found;
+    std::vector<DetectionKind> kinds;
+    for (const TruthDetection& d : results.detections) {
+      if (d.method != g.method || d.scene != g.scene) continue;
+      FoundQuad f;
+      f.model = d.model;
+      std::copy(d.corners, d.corners + 4, f.corners);
+      found.push_back(f);
+      kinds.push_back(d.kind);
+    }
+    const cv::Mat picture =
+        draw_truth_scene(gray, truth_quads(results, g.scene), found, kinds, results.models);
+    if (s = add_png(out, path, picture); !s) return s;
+    gallery.push_back(path);
   }
-  return Status::ok();
+  // What an earlier run drew and this one does not is no longer this report's.
+  std::sort(gallery.begin(), gallery.end());
+  for (const std::string& stale : stale_gallery(dir, gallery)) out.remove_at_commit(stale);
+  return out.commit();
 }
 
 }  // namespace kg

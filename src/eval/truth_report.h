@@ -2,11 +2,14 @@
 // table on stdout, truth-summary.json, truth-cases.csv (one row per method
 // and truth instance, or per scene without any), truth-detections.csv (one
 // row per detection, with its kind), truth-by-size.png (detection rate by
-// the object's size, every method) and, with --gallery, gallery/METHOD/*.png.
+// the object's size, every method; the legend beside the axes) and, with
+// --gallery, gallery/METHOD/*.png.
 #pragma once
 
 #include <string>
 #include <vector>
+
+#include <opencv2/core.hpp>
 
 #include "eval/truth_eval.h"
 #include "keygraph/status.h"
@@ -42,11 +45,30 @@ struct TruthRow {
 
 std::vector<TruthRow> truth_tallies(const TruthResults& results);
 
+// truth-by-size.png: the fraction found by the object's long edge, a solid
+// (corners) and a dashed (IoU) line per method, each method shifted a
+// little along x with its own point markers (methods that find the same
+// fraction stay visible), the legend beside the axes (never over the data).
+cv::Mat truth_size_plot(const std::vector<TruthRow>& rows);
+
 std::string truth_text(const std::vector<TruthRow>& rows, const TruthEvalOptions& options,
                        const TruthResults& results);
 
-// Every file into `dir` (created if needed).
+// Checks, before any work, every file write_truth_report() may write into
+// `dir` (platform/files/output_set.h: not an input, nothing in the way;
+// with options.gallery, the gallery path of every scene for every method).
+Status check_truth_report(const std::string& dir, const TruthEvalOptions& options,
+                          const TruthResults& results);
+
+// Every file into `dir` (created if needed), all or nothing; the gallery
+// pictures are drawn here, one at a time, from the scene files. Gallery
+// pictures of an earlier run that this one does not draw are removed
+// (gallery/METHOD/NNNN_*.png; other files are left alone).
 Status write_truth_report(const std::string& dir, const TruthEvalOptions& options,
                           const TruthResults& results);
+
+// dir/gallery/METHOD/NNNN_STEM.png: scene NNNN (0-based, in manifest order).
+std::string truth_gallery_path(const std::string& dir, const std::string& method, int scene,
+                               const TruthResults& results);
 
 }  // namespace kg

@@ -69,7 +69,7 @@ good_line >"$M"
 expect_failure "no models" "give one of --models" "$KG" eval --truth "$M" --out out
 expect_failure "missing models" "nomodels: no such" \
   "$KG" eval --truth "$M" --models "$WORK/nomodels" --out out
-expect_failure "missing manifest" "cannot open the manifest" \
+expect_failure "missing manifest" "none.jsonl: no such file" \
   "$KG" eval --truth "$WORK/none.jsonl" --models "$WORK/models" --out out
 expect_failure "unknown method" "unknown method 'nonesuch'" \
   "$KG" eval --truth "$M" --models "$WORK/models" --methods keygraph,nonesuch --out out

@@ -1692,6 +1692,41 @@ TEST_F(ModelIndexTest, RejectsBadModelRecords) {
   EXPECT_TRUE(rejected(b, "keypoint 3: not finite"));
 }
 
+// What the format promises beyond bounds (docs/FORMAT.md, issue 40):
+// reserved bytes are zero, the sections read do not overlap, and every
+// outline corner lies on the model image. Each is refused with the CRCs
+// repaired, so only the promise can reject it.
+TEST_F(ModelIndexTest, RejectsReservedBytesOverlapsAndOutlinesOffTheImage) {
+  const std::size_t rec1 =
+      section_offset(bytes(), format::kSectionModels) + format::kModelRecordSize;
+  for (std::size_t at = format::kOffHeaderCrc + 4; at < format::kHeaderSize; at += 7) {
+    Bytes b = bytes();
+    b[at] = 1;
+    fix_header_crc(b);
+    EXPECT_TRUE(rejected(b, "header: reserved byte " + std::to_string(at) + " is not zero"));
+  }
+  for (const std::size_t at : {format::kModReserved, format::kModOutline + 32 + 7}) {
+    Bytes b = bytes();
+    b[rec1 + at] = 1;
+    reseal(b);
+    EXPECT_TRUE(rejected(b, "model 1: reserved bytes are not zero")) << "byte " << at;
+  }
+  for (const float v : {1e30f, -1.f, 1e6f}) {
+    Bytes b = bytes();
+    store<float>(b.data() + rec1 + format::kModOutline + 12, v);
+    reseal(b);
+    EXPECT_TRUE(rejected(b, "model 1: bad outline")) << v;
+  }
+  // The keypoints section pointed at the models' bytes (sizes kept): the
+  // CRC matches, the sections overlap.
+  Bytes b = bytes();
+  const std::size_t e = entry(b, format::kSectionKeypointScales);
+  store<std::uint64_t>(b.data() + e + format::kEntOffset,
+                       section_offset(b, format::kSectionKeypoints));
+  reseal(b);
+  EXPECT_TRUE(rejected(b, " section overlaps the "));
+}
+
 TEST_F(ModelIndexTest, RejectsBadParameterValues) {
   Params p;
   p.graph.structure = static_cast<Structure>(7);

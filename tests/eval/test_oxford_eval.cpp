@@ -153,7 +153,9 @@ TEST(OxfordEval, CurvesOfKeygraphsAndKeypointsOnGraf) {
   // The report: JSON summary, one CSV per curve, PNG plots.
   const std::string dir = std::string(KG_TEST_OUTPUT_DIR) + "/oxford_report";
   std::filesystem::remove_all(dir);
-  ASSERT_TRUE(write_oxford_report(dir, options, cases).is_ok());
+  platform::OutputSet report(dir, {});
+  ASSERT_TRUE(write_oxford_report(report, dir, options, cases).is_ok());
+  ASSERT_TRUE(report.commit().is_ok());
   for (const char* f : {"summary.json", "cases.csv", "pr-keygraph.png", "iterations-keygraph.png",
                         "pr-keygraph-degrees.png", "curves/keygraph-all-keygraph.csv",
                         "curves/keygraph-img2-sift-ratio.csv"}) {

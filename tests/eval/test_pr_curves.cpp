@@ -11,6 +11,7 @@
 #include "eval/correspondence_pr.h"
 #include "eval/plot.h"
 #include "eval/pr_curves.h"
+#include "eval/truth_report.h"
 
 namespace kg {
 namespace {
@@ -152,6 +153,52 @@ TEST(Plot, SeriesAreDrawnWhereTheirDataLies) {
   const PlotFrame lf(log_spec);
   EXPECT_NEAR(lf.to_pixel(0, 1).y - lf.to_pixel(0, 10).y,
               lf.to_pixel(0, 1000).y - lf.to_pixel(0, 10000).y, 1e-9);
+}
+
+// eval --truth's by-size plot (issue 39, item 14): two methods that find
+// exactly the same fractions are both visible, and the legend is beside
+// the axes, not over the data.
+TEST(Plot, SizePlotShowsCoincidentMethodsAndKeepsItsLegendOffTheData) {
+  std::vector<TruthRow> rows(2);
+  rows[0].method = "keygraph";
+  rows[1].method = "sift-magsac";
+  for (TruthRow& r : rows) {
+    for (const double edge : {40.0, 100.0, 300.0}) {
+      TruthBin b;
+      b.instances = 4;
+      b.found = b.found_iou = 2;
+      b.median_size = edge;
+      r.by_size.push_back(b);
+    }
+  }
+  const cv::Mat img = truth_size_plot(rows);
+  // The axes' box: its vertical edges are the columns that are black for
+  // most of the height (the legend's box is short).
+  int right_edge = -1;
+  for (int x = 0; x < img.cols; ++x) {
+    int black = 0;
+    for (int y = 0; y < img.rows; ++y)
+      black += img.at<cv::Vec3b>(y, x)[0] < 60 && img.at<cv::Vec3b>(y, x)[1] < 60 &&
+               img.at<cv::Vec3b>(y, x)[2] < 60;
+    if (black > img.rows / 2) right_edge = x;
+  }
+  ASSERT_GT(right_edge, img.cols / 2);
+  int inside[2] = {0, 0}, beside[2] = {0, 0};
+  for (int c = 0; c < 2; ++c) {
+    const cv::Scalar colour = plot_colour(c);
+    for (int y = 0; y < img.rows; ++y) {
+      for (int x = 0; x < img.cols; ++x) {
+        const cv::Vec3b p = img.at<cv::Vec3b>(y, x);
+        const double d =
+            std::abs(p[0] - colour[0]) + std::abs(p[1] - colour[1]) + std::abs(p[2] - colour[2]);
+        if (d < 30) ++(x < right_edge ? inside[c] : beside[c]);
+      }
+    }
+  }
+  EXPECT_GT(inside[0], 300) << "keygraph's lines are hidden";
+  EXPECT_GT(inside[1], 300) << "sift-magsac's lines are hidden";
+  EXPECT_GT(beside[0], 20) << "keygraph's legend entry is not beside the axes";
+  EXPECT_GT(beside[1], 20) << "sift-magsac's legend entry is not beside the axes";
 }
 
 }  // namespace

@@ -1,10 +1,10 @@
 // libFuzzer target for the ground-truth manifest of eval --truth
 // (eval/truth_manifest.h, docs/EVAL.md): each input is a manifest's text,
-// parsed line by line as read_truth_manifest() does. What a line accepts is
-// checked against the parser's promises -- four corners forming a simple
-// quadrilateral, a homography with h33 = 1, at least one non-empty model
-// name per instance -- and fed to the scoring geometry (order-free corner
-// error, IoU in [0, 1], also against its own corners reversed).
+// parsed line by line, and whole as read_truth_manifest() does (line
+// length, nesting depth and duplicate keys bounded by builder/strict_json.h). What a line accepts
+// is checked against the parser's promises -- four corners forming a simple quadrilateral, a
+// homography with h33 = 1, at least one non-empty model name per instance -- and fed to the scoring
+// geometry (order-free corner error, IoU in [0, 1], also against its own corners reversed).
 //
 // Seeds: tests/fuzz/seeds/truth_manifest/ (one line of each kind, and a
 // converted real-set line).
@@ -74,6 +74,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       check(!error.empty());
     }
     begin = end + 1;
+  }
+  kg::TruthManifest manifest;
+  const kg::Status s = kg::parse_truth_manifest(text, "dir/m.jsonl", manifest);
+  if (!s) {
+    check(s.message().rfind("dir/m.jsonl", 0) == 0);
+  } else {
+    check(!manifest.scenes.empty());
+    for (const kg::TruthScene& scene : manifest.scenes) {
+      check(scene.line >= 1 && scene.path.find(scene.scene) != std::string::npos);
+      exercise(scene);
+    }
   }
   return 0;
 }

@@ -1,8 +1,9 @@
-// The file helpers behind the CLI's guarantees (issue 15): inputs opened
-// only as regular files, never blocking; PGM sizes checked before pixels are
-// allocated; truncated JPEGs told from whole ones (real opencv-doc JPEGs cut
-// at every 5 %); outputs written whole or not at all, never over a device
-// node or an input.
+// The file helpers behind the CLI's guarantees (issues 15 and 40): inputs
+// opened only as regular files, never blocking, text inputs within a size
+// limit; PGM sizes checked before pixels are allocated; truncated JPEGs told
+// from whole ones (real opencv-doc JPEGs cut at every 5 %); outputs written
+// whole or not at all, never over a device node or an input, several of
+// them together; detector limits grown by the frame.
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
 #include <unistd.h>
@@ -17,9 +18,11 @@
 
 #include <gtest/gtest.h>
 
+#include "platform/files/frame_limits.h"
 #include "platform/files/image_limits.h"
 #include "platform/files/jpeg_structure.h"
 #include "platform/files/output_file.h"
+#include "platform/files/output_set.h"
 #include "platform/files/pgm.h"
 #include "platform/files/regular_file.h"
 #include "support/temp_dir.h"
@@ -160,6 +163,123 @@ TEST(OutputFile, NeverReplacesANonRegularFileOrAnInput) {
   struct stat st {};
   ASSERT_EQ(::stat(device.c_str(), &st), 0);
   EXPECT_TRUE(S_ISCHR(st.st_mode));
+}
+
+TEST(TextFile, ReadWithinItsLimitOnly) {
+  TempDir dir;
+  ASSERT_EQ(::mkfifo(dir.file("fifo").c_str(), 0600), 0);
+  std::string text;
+  // A FIFO would block a stream for ever; /dev/zero would never end.
+  Status s = read_text_file(dir.file("fifo"), text, 4096, "a test file");
+  EXPECT_EQ(s.message(), dir.file("fifo") + ": is a FIFO");
+  s = read_text_file("/dev/zero", text, 4096, "a test file");
+  EXPECT_EQ(s.message(), "/dev/zero: is a character device");
+  // A sparse file of 5 GB is refused by its size, before a byte is read.
+  { std::ofstream(dir.file("sparse")); }
+  fs::resize_file(dir.file("sparse"), std::uintmax_t{5} << 30);
+  s = read_text_file(dir.file("sparse"), text, 4096, "a test file");
+  EXPECT_EQ(s.code(), StatusCode::kResourceExhausted);
+  EXPECT_EQ(s.message(),
+            dir.file("sparse") + ": 5368709120 bytes, over the 4 KiB a test file may have");
+  std::ofstream(dir.file("small"), std::ios::binary) << "line 1\nline 2\n";
+  ASSERT_TRUE(read_text_file(dir.file("small"), text, 4096, "a test file"));
+  EXPECT_EQ(text, "line 1\nline 2\n");
+  EXPECT_EQ(byte_size_text(std::size_t{64} << 20), "64 MiB");
+  EXPECT_EQ(byte_size_text(1000), "1000 bytes");
+}
+
+TEST(OutputSet, WritesEveryFileOrNone) {
+  TempDir dir;
+  const std::string root = dir.file("report");
+  {
+    OutputSet out(root, {});
+    ASSERT_TRUE(out.add(root + "/a.csv", std::string("a")));
+    ASSERT_TRUE(out.add(root + "/sub/b.png", std::string("b")));
+    // Staged, not visible: only the staging directory, in the new root.
+    ASSERT_TRUE(fs::is_directory(root));
+    EXPECT_FALSE(fs::exists(root + "/a.csv"));
+  }  // not committed: the staging directory and the root it made are gone
+  EXPECT_TRUE(dir.names().empty());
+
+  OutputSet out(root, {});
+  ASSERT_TRUE(out.add(root + "/a.csv", std::string("a")));
+  ASSERT_TRUE(out.add(root + "/sub/b.png", std::string("b")));
+  EXPECT_EQ(out.add(root + "/./a.csv", std::string("again")).message(),
+            root + "/./a.csv: written twice by one command");
+  ASSERT_TRUE(out.commit());
+  EXPECT_EQ(read_text(root + "/a.csv"), "a");
+  EXPECT_EQ(read_text(root + "/sub/b.png"), "b");
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(root)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"a.csv", "sub"}));
+}
+
+TEST(OutputSet, ChecksEveryTargetBeforeTheFirstWrite) {
+  TempDir dir;
+  const std::string root = dir.file("o");
+  fs::create_directories(root + "/summary.json");  // a directory where a file goes
+  std::ofstream(dir.file("input.txt")) << "input";
+  fs::create_symlink("../input.txt", root + "/link.csv");
+  std::ofstream(dir.file("precious")) << "precious";
+  fs::create_symlink("../precious", root + "/cases.csv.tmp");  // a fixed temporary name
+  OutputSet out(root, {dir.file("input.txt")});
+  EXPECT_EQ(out.check(root + "/summary.json").message(),
+            root + "/summary.json: is a directory; outputs replace regular files only");
+  EXPECT_EQ(
+      out.check(root + "/link.csv").message(),
+      root + "/link.csv: is also an input (" + dir.file("input.txt") + "); choose another output");
+  EXPECT_EQ(out.check(dir.file("input.txt") + "/x").message(),
+            dir.file("input.txt") + "/x: a path component is not a directory");
+  EXPECT_FALSE(out.check(root + "/"));
+  ASSERT_TRUE(out.add(root + "/cases.csv", std::string("cases")));
+  ASSERT_TRUE(out.commit());
+  EXPECT_EQ(read_text(root + "/cases.csv"), "cases");
+  EXPECT_EQ(read_text(dir.file("precious")), "precious");
+  EXPECT_EQ(read_text(dir.file("input.txt")), "input");
+  EXPECT_TRUE(check_output_directory(root));
+  EXPECT_TRUE(check_output_directory(dir.file("new/deeper")));
+  EXPECT_EQ(check_output_directory(dir.file("input.txt") + "/sub").message(),
+            dir.file("input.txt") + ": is a file, not a directory");
+}
+
+TEST(OutputSet, RemovesAnEarlierRunsFilesButNeverAnInput) {
+  TempDir dir;
+  const std::string root = dir.file("o");
+  fs::create_directories(root + "/gallery/old");
+  std::ofstream(root + "/gallery/old/0001_x.png") << "stale";
+  std::ofstream(root + "/gallery/old/0002_in.png") << "an input";
+  OutputSet out(root, {root + "/gallery/old/0002_in.png"});
+  ASSERT_TRUE(out.add(root + "/gallery/new/0001_x.png", std::string("new")));
+  out.remove_at_commit(root + "/gallery/old/0001_x.png");
+  out.remove_at_commit(root + "/gallery/old/0002_in.png");
+  out.remove_at_commit(root + "/gallery/old");  // not empty: stays
+  ASSERT_TRUE(out.commit());
+  EXPECT_FALSE(fs::exists(root + "/gallery/old/0001_x.png"));
+  EXPECT_EQ(read_text(root + "/gallery/old/0002_in.png"), "an input");
+  EXPECT_EQ(read_text(root + "/gallery/new/0001_x.png"), "new");
+}
+
+TEST(FrameLimits, GrownByTheFrameNeverToTheProductOfThinFrames) {
+  const Limits defaults;
+  // A frame that fits keeps the limits (no new workspace).
+  EXPECT_EQ(limits_for_frame(defaults, 320, 240).max_width, defaults.max_width);
+  const Limits tall = limits_for_frame(defaults, 16, 16384);
+  EXPECT_EQ(tall.max_width, defaults.max_width);
+  EXPECT_EQ(tall.max_height, 16384);
+  // Then a wide one: its own shape (with the default height), not 16384 x 16384.
+  const Limits wide = limits_for_frame(tall, 16384, 16);
+  EXPECT_EQ(wide.max_width, 16384);
+  EXPECT_EQ(wide.max_height, defaults.max_height);
+  EXPECT_LE(static_cast<long long>(wide.max_width) * wide.max_height, kMaxImagePixels);
+  // Frames of one shape growing: both sides kept while the area allows.
+  const Limits both = limits_for_frame(limits_for_frame(defaults, 2000, 480), 640, 2000);
+  EXPECT_EQ(both.max_width, 2000);
+  EXPECT_EQ(both.max_height, 2000);
+  EXPECT_EQ(frame_size_problem(1, 1), "frame 1x1 is too small (under 16 pixels a side)");
+  EXPECT_EQ(frame_size_problem(20000, 8),
+            "frame 20000x8 is beyond the detector's limits (16384 pixels a side)");
+  EXPECT_EQ(frame_size_problem(16, 16), "");
 }
 
 }  // namespace

@@ -1,11 +1,12 @@
 // keygraph bench: its options are the Options table below (keygraph bench --help).
-// Loads the index and every frame once, then runs Detector::detect() N
-// times on each frame and prints the time per stage (DetectStats) and in
-// total (steady clock around detect()) as min / median / p90 / max, and the
-// detector's workspace bytes. The timed loop is the device's per-frame path
-// and nothing else: frames are in memory, the result list and the timing
-// table are allocated before it, and no output happens inside it, so any
-// heap use a profiler sees there is detect()'s own.
+// Loads the index, then reads the frames one at a time (memory does not
+// grow with their count): runs Detector::detect() N times on each and
+// prints the time per stage (DetectStats) and in total (steady clock around
+// detect()) as min / median / p90 / max, and the detector's workspace
+// bytes. The timed loop is the device's per-frame path and nothing else:
+// the frame is in memory, the workspace sized for it, the result list and
+// the timing table are allocated before it, and no output happens inside
+// it, so any heap use a profiler sees there is detect()'s own.
 #include <algorithm>
 #include <chrono>
 #include <cinttypes>
@@ -14,13 +15,13 @@
 #include <string>
 #include <vector>
 
+#include "cli/device/detector_fit.h"
 #include "cli/device/device_commands.h"
 #include "cli/device/frame_output.h"
 #include "cli/device/json.h"
 #include "cli/device/options.h"
 #include "core/description/descriptor_encoding.h"
 #include "keygraph/detector.h"
-#include "platform/convert.h"
 #include "platform/files/file_source.h"
 
 namespace kg::cli {
@@ -28,11 +29,6 @@ namespace kg::cli {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-struct LoadedFrame {
-  std::string name;
-  platform::GrayImage image;
-};
 
 // The rows of the table: the core's stages, then the total and the part of
 // the total outside the stages.
@@ -55,29 +51,9 @@ Summary summarize(std::vector<double>& values) {
   return {values.front(), rank(0.5), rank(0.9), values.back()};
 }
 
-// Every frame of `paths` (files or directories, in the file source's order)
-// copied into memory. Returns an error message, or empty.
-std::string load_frames(const std::vector<std::string>& paths, std::vector<LoadedFrame>& out) {
-  platform::FileSource source(paths);
-  if (Status s = source.start(); !s) return s.message();
-  platform::Frame frame;
-  for (Status s = source.next(frame, 0); !platform::is_end_of_stream(s);
-       s = source.next(frame, 0)) {
-    if (!s) return s.message();
-    LoadedFrame& f = out.emplace_back();
-    f.name = source.last_path();
-    f.image.width = frame.image.width;
-    f.image.height = frame.image.height;
-    f.image.pixels.resize(static_cast<std::size_t>(frame.image.width) *
-                          static_cast<std::size_t>(frame.image.height));
-    platform::copy_gray(frame.image, f.image.pixels.data(), frame.image.width);
-  }
-  return {};
-}
-
-void print_text(const LoadedFrame& f, int repeat, int min_found, int max_found,
+void print_text(const std::string& name, ImageView frame, int repeat, int min_found, int max_found,
                 const DetectStats& stats, const Summary (&rows)[kSeries]) {
-  std::printf("\n%s (%dx%d), %d runs: ", f.name.c_str(), f.image.width, f.image.height, repeat);
+  std::printf("\n%s (%dx%d), %d runs: ", name.c_str(), frame.width, frame.height, repeat);
   if (min_found == max_found) {
     std::printf("%d detection(s) in every run", min_found);
   } else {
@@ -99,12 +75,11 @@ void print_text(const LoadedFrame& f, int repeat, int min_found, int max_found,
   }
 }
 
-void print_json(const LoadedFrame& f, int repeat, int min_found, int max_found,
+void print_json(const std::string& name, ImageView frame, int repeat, int min_found, int max_found,
                 std::optional<std::size_t> workspace, const Summary (&rows)[kSeries]) {
   std::string s =
-      "{\"frame\": " + json_string(f.name) + ", \"width\": " + std::to_string(f.image.width) +
-      ", \"height\": " + std::to_string(f.image.height) +
-      ", \"repeat\": " + std::to_string(repeat) +
+      "{\"frame\": " + json_string(name) + ", \"width\": " + std::to_string(frame.width) +
+      ", \"height\": " + std::to_string(frame.height) + ", \"repeat\": " + std::to_string(repeat) +
       ", \"workspace_bytes\": " + (workspace ? std::to_string(*workspace) : std::string("null")) +
       ", \"detections\": {\"min\": " + std::to_string(min_found) +
       ", \"max\": " + std::to_string(max_found) + "}, \"ms\": {";
@@ -125,7 +100,7 @@ int cmd_bench(const Args& args) {
   bool json = false;
   std::vector<std::string> paths;
   Options options("bench", "--index I.kgi [--repeat N] [--json] FRAME...",
-                  "Times Detector::detect() per stage on frames held in memory: min, median, p90\n"
+                  "Times Detector::detect() per stage on each frame in memory: min, median, p90\n"
                   "and max milliseconds of each stage and in total, and the workspace bytes.");
   options
       .positional("FRAME...", "image files or directories of them (in name order)",
@@ -145,33 +120,12 @@ int cmd_bench(const Args& args) {
   if (Status s = ModelIndex::read(index_path, index); !s) return fail(s.message());
   if (const std::string problem = core_detector_problem(index); !problem.empty())
     return fail("bench: " + index_path + ": " + problem);
-  std::vector<LoadedFrame> frames;
-  if (std::string error = load_frames(paths, frames); !error.empty())
-    return fail("bench: " + error);
-
-  // A frame beyond the detector's limits is skipped with a warning.
-  const auto beyond = [](const LoadedFrame& f) {
-    return f.image.width > Limits::kMaxSide || f.image.height > Limits::kMaxSide;
-  };
-  for (const LoadedFrame& f : frames) {
-    if (beyond(f)) {
-      std::fprintf(stderr,
-                   "keygraph: bench: %s: frame %dx%d is beyond the detector's limits (%d pixels "
-                   "a side), skipped\n",
-                   f.name.c_str(), f.image.width, f.image.height, Limits::kMaxSide);
-    }
-  }
-  frames.erase(std::remove_if(frames.begin(), frames.end(), beyond), frames.end());
-  if (frames.empty()) return fail("bench: no frame within the detector's limits");
-  // One workspace for the largest frame, allocated before any timing.
-  int width = 1, height = 1;
-  for (const LoadedFrame& f : frames) {
-    width = std::max(width, f.image.view().width);
-    height = std::max(height, f.image.view().height);
-  }
-  Detector detector(index, Limits{}.for_frame(width, height));
+  platform::FileSource source(paths);
+  if (Status s = source.start(); !s) return fail("bench: " + s.message());
+  // The workspace for 640x480, grown when a frame does not fit
+  // (fit_detector()), before that frame's timed loop.
+  Detector detector(index);
   if (!detector.status()) return fail("bench: " + detector.status().message());
-  const std::optional<std::size_t> workspace = detector.workspace_bytes();
   DetectionList found;
   // One row per run: the five stages and the total, filled by the timed loop.
   std::vector<double> table(static_cast<std::size_t>(repeat) * 6);
@@ -181,20 +135,53 @@ int cmd_bench(const Args& args) {
     std::printf("index %s: %s, %u arcs, %s descriptors; %s, %s each\n", index_path.c_str(),
                 counted(index.model_count(), "model").c_str(), index.arc_count(),
                 encoding_name(index.descriptor_encoding()),
-                counted(static_cast<long long>(frames.size()), "frame").c_str(),
+                counted(static_cast<long long>(source.files().size()), "frame file").c_str(),
                 counted(repeat, "run").c_str());
-    std::printf("detector workspace: %zu bytes (frames up to %dx%d)\n", *workspace, width, height);
   }
   std::fflush(stdout);
-  for (const LoadedFrame& f : frames) {
-    const ImageView view = f.image.view();
+  std::optional<std::size_t> printed_workspace;
+  int measured = 0;
+  // Skipped frames not yet shown: the first few reasons, and how many.
+  constexpr std::size_t kHeldReasons = 8;
+  std::vector<std::string> skipped;
+  std::size_t skipped_count = 0;
+  const auto warn_skipped = [&] {
+    for (const std::string& why : skipped)
+      std::fprintf(stderr, "keygraph: bench: %s\n", one_line(why + ", skipped").c_str());
+    if (skipped_count > skipped.size())
+      std::fprintf(stderr, "keygraph: bench: %zu more frames skipped\n",
+                   skipped_count - skipped.size());
+    skipped.clear();
+    skipped_count = 0;
+  };
+  platform::Frame frame;
+  for (Status s = source.next(frame, 0); !platform::is_end_of_stream(s);
+       s = source.next(frame, 0)) {
+    if (!s) return fail("bench: " + s.message());
+    const std::string name = source.last_path();
+    const ImageView view = frame.image;
+    // A frame the detector cannot take is skipped with a warning (held
+    // until a frame is measured: without one, the error line says why).
+    if (const Status fit = fit_detector(detector, view); !fit) {
+      if (skipped.size() < kHeldReasons) skipped.push_back(name + ": " + fit.message());
+      ++skipped_count;
+      if (measured > 0) warn_skipped();
+      continue;
+    }
+    if (measured == 0) warn_skipped();
+    const std::optional<std::size_t> workspace = detector.workspace_bytes();
+    if (!json && workspace != printed_workspace) {
+      std::printf("detector workspace: %zu bytes (frames up to %dx%d)\n", workspace.value_or(0),
+                  detector.limits().max_width, detector.limits().max_height);
+      printed_workspace = workspace;
+    }
     int min_found = 1 << 30, max_found = 0;
     // The timed loop: detect() and clock reads only.
     for (int r = 0; r < repeat; ++r) {
       const Clock::time_point t0 = Clock::now();
-      const Status s = detector.detect(view, found);
+      const Status d = detector.detect(view, found);
       const Clock::time_point t1 = Clock::now();
-      if (!s) return fail("bench: " + f.name + ": " + s.message());
+      if (!d) return fail("bench: " + name + ": " + d.message());
       const DetectStats& st = detector.stats();
       double* row = &table[static_cast<std::size_t>(r) * 6];
       row[0] = st.ms_keypoints;
@@ -217,11 +204,19 @@ int cmd_bench(const Args& args) {
       rows[i] = summarize(series);
     }
     if (json) {
-      print_json(f, repeat, min_found, max_found, workspace, rows);
+      print_json(name, view, repeat, min_found, max_found, workspace, rows);
     } else {
-      print_text(f, repeat, min_found, max_found, detector.stats(), rows);
+      print_text(name, view, repeat, min_found, max_found, detector.stats(), rows);
     }
     std::fflush(stdout);
+    ++measured;
+  }
+  if (measured == 0) {
+    std::string why;
+    if (skipped_count == 1) why = " (" + skipped.front() + ")";
+    if (skipped_count > 1)
+      why = " (" + std::to_string(skipped_count) + " frames; the first: " + skipped.front() + ")";
+    return fail("bench: no frame within the detector's limits" + why);
   }
   return 0;
 }

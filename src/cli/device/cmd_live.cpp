@@ -242,7 +242,7 @@ class LiveIndex {
       failure_reported_ = true;
       std::fprintf(stderr,
                    "keygraph: live: index changed but not reloaded (keeping the loaded one): %s\n",
-                   s.message().c_str());
+                   one_line(s.message()).c_str());
       return false;
     }
     // The file may have changed again while it was read: compare with what
@@ -250,8 +250,8 @@ class LiveIndex {
     loaded_ = now;
     failure_reported_ = false;
     index_ = std::move(fresh);
-    std::fprintf(stderr, "live: index %s changed: reloaded (%d model%s)\n", path_.c_str(),
-                 index_.model_count(), index_.model_count() == 1 ? "" : "s");
+    std::fprintf(stderr, "live: index %s changed: reloaded (%s)\n", one_line(path_).c_str(),
+                 counted(index_.model_count(), "model").c_str());
     return true;
   }
 
@@ -324,7 +324,7 @@ int cmd_live(const Args& args) {
                     "; give the images distinct names");
     }
   }
-  if (!o.quiet) std::fprintf(stderr, "live: %s\n", source->description().c_str());
+  if (!o.quiet) std::fprintf(stderr, "live: %s\n", one_line(source->description()).c_str());
 
   const Clock::time_point start = Clock::now();
   RateMeter meter(start);
@@ -339,7 +339,7 @@ int cmd_live(const Args& args) {
   // of the image files had no usable frame (the loop would never end).
   auto skip_frame = [&](const std::string& why) {
     if (++bad_frames <= kShownBadFrames) {
-      std::fprintf(stderr, "keygraph: live: %s (frame skipped%s)\n", why.c_str(),
+      std::fprintf(stderr, "keygraph: live: %s (frame skipped%s)\n", one_line(why).c_str(),
                    bad_frames == kShownBadFrames ? "; further bad frames are only counted" : "");
     }
     return files != nullptr && o.loop && ++bad_in_a_row >= files->files().size();

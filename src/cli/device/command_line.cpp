@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <map>
 
+#include "platform/files/output_file.h"
+
 namespace kg::cli {
 
 namespace {
@@ -20,12 +22,34 @@ void set_command_name(const std::string& name) {
 int fail(const std::string& message) {
   const std::string prefix = g_command.empty() ? std::string() : g_command + ": ";
   const bool named = prefix.empty() || message.compare(0, prefix.size(), prefix) == 0;
-  std::fprintf(stderr, "keygraph: %s%s\n", named ? "" : prefix.c_str(), message.c_str());
+  std::fprintf(stderr, "keygraph: %s%s\n", named ? "" : prefix.c_str(), one_line(message).c_str());
   return 1;
 }
 
 std::string counted(long long n, const std::string& noun) {
   return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
+}
+
+std::string one_line(const std::string& message) {
+  std::string out;
+  out.reserve(message.size());
+  for (const char ch : message) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c == '\n') {
+      out += "\\n";
+    } else if (c == '\r') {
+      out += "\\r";
+    } else if (c == '\t') {
+      out += "\\t";
+    } else if (c < 0x20 || c == 0x7f) {
+      char code[8];
+      std::snprintf(code, sizeof(code), "\\u%04x", c);
+      out += code;
+    } else {
+      out += ch;
+    }
+  }
+  return out;
 }
 
 bool parse_int(const std::string& text, int min, int max, int& out) {
@@ -63,6 +87,16 @@ std::string draw_paths(const std::string& draw, const std::vector<std::string>& 
              "; give the scenes distinct names";
     }
     out.push_back(std::move(path));
+  }
+  // Every picture's path before the first scene: none may be a scene or be
+  // in the way (a picture written before another is refused is partial
+  // output).
+  for (const std::string& path : out) {
+    if (Status s = platform::check_output_target(path); !s) return "--draw " + s.message();
+    for (const std::string& scene : scenes) {
+      if (platform::same_file(path, scene))
+        return "--draw " + path + ": is also an input (" + scene + "); choose another output";
+    }
   }
   return {};
 }

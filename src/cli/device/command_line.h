@@ -13,9 +13,14 @@ using Args = std::vector<std::string>;
 // names it, as "keygraph: build: ...".
 void set_command_name(const std::string& name);
 
-// "keygraph: <command>: <message>" on stderr (the command left out when the
-// message already starts with it, or none is set); returns 1.
+// "keygraph: <command>: <message>" on stderr, on one line (one_line(); the
+// command left out when the message already starts with it, or none is
+// set); returns 1.
 int fail(const std::string& message);
+// `message` with control characters escaped as in JSON (\n, \u001b): a
+// name from an input file or the command line that holds a newline keeps
+// an error on one line.
+std::string one_line(const std::string& message);
 
 // "1 model", "2 models": a count and its noun, plural unless it is one.
 std::string counted(long long n, const std::string& noun);
@@ -28,8 +33,9 @@ bool parse_size(const std::string& text, int& width, int& height);
 
 // The --draw file of each scene: `draw` itself for one scene; with several,
 // OUT_<scene stem><ext> for --draw OUT<ext>. Returns an error message when
-// two scenes would be drawn to one file (same stem in two directories),
-// else empty.
+// two scenes would be drawn to one file (same stem in two directories), or
+// a picture's path is a scene or not a regular file (checked before the
+// first scene), else empty.
 std::string draw_paths(const std::string& draw, const std::vector<std::string>& scenes,
                        std::vector<std::string>& out);
 

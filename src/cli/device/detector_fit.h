@@ -5,22 +5,25 @@
 #include <utility>
 
 #include "keygraph/detector.h"
+#include "platform/files/frame_limits.h"
 
 namespace kg::cli {
 
-// Rebuilds `detector` with room for `frame` when the frame is larger than
-// its limits (the workspace is allocated again: once per new largest size,
-// never for frames that fit). When the frame is beyond what a detector can
-// take (over 16384 pixels a side, or no memory for the workspace), returns
-// why and leaves `detector` as it was, so the caller can skip the frame.
+// Rebuilds `detector` with room for `frame` when the frame does not fit
+// its limits (platform::limits_for_frame(): the workspace is allocated
+// again, once per frame that does not fit, never for frames that do, and
+// never for the product of two thin frames' sides). When the frame cannot
+// be detected on (platform::frame_size_problem(), or no memory for the
+// workspace), returns why and leaves `detector` as it was, so the caller
+// can skip the frame.
 inline Status fit_detector(Detector& detector, ImageView frame) {
+  if (const std::string problem = platform::frame_size_problem(frame.width, frame.height);
+      !problem.empty())
+    return {StatusCode::kInvalidArgument, problem};
   const Limits& limits = detector.limits();
   if (frame.width <= limits.max_width && frame.height <= limits.max_height)
     return detector.status();
-  Detector larger(
-      detector.index(),
-      limits.for_frame(frame.width > limits.max_width ? frame.width : limits.max_width,
-                       frame.height > limits.max_height ? frame.height : limits.max_height));
+  Detector larger(detector.index(), platform::limits_for_frame(limits, frame.width, frame.height));
   if (!larger.status()) {
     return {larger.status().code(),
             "frame " + std::to_string(frame.width) + "x" + std::to_string(frame.height) +

@@ -252,7 +252,7 @@ int Options::parse(const Args& args) const {
       error = o->apply(args[++i]);
     }
     if (!error.empty()) {
-      std::fprintf(stderr, "keygraph: %s: %s\n", command_.c_str(), error.c_str());
+      std::fprintf(stderr, "keygraph: %s: %s\n", command_.c_str(), one_line(error).c_str());
       return kUsageError;
     }
   }
@@ -261,7 +261,7 @@ int Options::parse(const Args& args) const {
 
 int Options::usage_error(const std::string& message) const {
   std::fprintf(stderr, "keygraph: %s: %s (see keygraph %s --help)\n", command_.c_str(),
-               message.c_str(), command_.c_str());
+               one_line(message).c_str(), command_.c_str());
   return kUsageError;
 }
 

@@ -268,6 +268,12 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   if (table_offset < static_cast<std::uint64_t>(params_offset) + params_size || table_end > size)
     return corrupt("header: section table out of bounds");
   if (!header_crc_matches(d, size)) return corrupt("header: checksum mismatch");
+  // Reserved bytes are zero: a later version that gives them a meaning is a
+  // new major version (additions within one go into new sections and the
+  // parameter block's tail), so a reader never misreads them.
+  for (std::size_t i = kOffHeaderCrc + 4; i < kHeaderSize; ++i) {
+    if (d[i] != 0) return corrupt("header: reserved byte " + std::to_string(i) + " is not zero");
+  }
 
   Status s = parse_params(d + params_offset, params_size, params_);
   if (!s) return s;
@@ -294,6 +300,25 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
                      " size " + std::to_string(sec.size) + " out of bounds");
     if (crc32(d + sec.offset, static_cast<std::size_t>(sec.size)) != sec.crc)
       return corrupt(std::string(name) + " section: checksum mismatch");
+  }
+  // The sections this reader reads do not overlap one another (each byte
+  // has one meaning; empty sections take no bytes). Sorted by offset, in a
+  // fixed array: no allocation.
+  {
+    std::uint32_t order[kLastSectionId + 1];
+    std::uint32_t n = 0;
+    for (std::uint32_t id = 1; id <= kLastSectionId; ++id) {
+      if (sections[id].present && sections[id].size > 0) order[n++] = id;
+    }
+    std::sort(order, order + n, [&](std::uint32_t a, std::uint32_t b) {
+      return sections[a].offset < sections[b].offset;
+    });
+    for (std::uint32_t i = 1; i < n; ++i) {
+      const Section& before = sections[order[i - 1]];
+      if (before.offset + before.size > sections[order[i]].offset)
+        return corrupt(std::string(section_name(order[i])) + " section overlaps the " +
+                       section_name(order[i - 1]) + " section");
+    }
   }
   // Minor version 1 added the quality sections, 2 the appearance sections:
   // required from then on.
@@ -383,9 +408,17 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
       return model_error("name out of bounds");
     const float w = load<float>(rec + kModWidth), h = load<float>(rec + kModHeight);
     if (!(w >= 1.f && h >= 1.f && w < 1e6f && h < 1e6f)) return model_error("bad image size");
+    // The outline lies on the model image: every corner within its extent
+    // (pixel centres, -0.5 .. size - 0.5), so that a pose maps it to a
+    // quadrilateral of the frame's scale (an outline of 1e30 would not).
     for (int c = 0; c < 8; ++c) {
-      if (!std::isfinite(load<float>(rec + kModOutline + 4 * c))) return model_error("bad outline");
+      const float v = load<float>(rec + kModOutline + 4 * c);
+      const float extent = c % 2 == 0 ? w : h;
+      if (!(v >= -0.5f && v <= extent - 0.5f)) return model_error("bad outline");
     }
+    if (load<std::uint32_t>(rec + kModReserved) != 0 ||
+        load<std::uint64_t>(rec + kModOutline + 32) != 0)
+      return model_error("reserved bytes are not zero");
     // Models own consecutive, non-overlapping keypoint ranges.
     if (load<std::uint32_t>(rec + kModKeypointBegin) != next_keypoint)
       return model_error("keypoint range not contiguous");

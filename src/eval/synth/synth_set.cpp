@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 #include <system_error>
 
@@ -12,6 +11,8 @@
 
 #include "eval/report_io.h"
 #include "eval/synth/sign_catalogue.h"
+#include "platform/files/output_set.h"
+#include "platform/files/regular_file.h"
 
 namespace kg {
 
@@ -52,7 +53,7 @@ Rng frame_rng(std::uint64_t seed, int i) {
 }  // namespace
 
 Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
-                        SynthSetImages& images, const ProgressFn& progress) {
+                        const SynthImageSink& sink, const ProgressFn& progress) {
   if (options.signs < 1 || options.signs > sign_catalogue_size())
     return {StatusCode::kInvalidArgument, "the catalogue has " +
                                               std::to_string(sign_catalogue_size()) +
@@ -82,7 +83,7 @@ Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
   manifest.seed = options.seed;
   manifest.width = options.frame.width;
   manifest.height = options.frame.height;
-  images = SynthSetImages{};
+  std::vector<cv::Mat> signs;  // kept: every frame may show any of them
   for (int i = 0; i < options.signs; ++i) {
     SignImage s = render_sign(i, options.seed);
     SynthSign entry;
@@ -92,7 +93,8 @@ Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
     entry.width = s.image.cols;
     entry.height = s.image.rows;
     manifest.signs.push_back(entry);
-    images.signs.push_back(s.image);
+    if (Status st = sink(entry.file, s.image); !st) return st;
+    signs.push_back(s.image);
   }
   // Which frames show which sign: every sign equally often, in shuffled order.
   const int sign_free = static_cast<int>(std::lround(options.frames * options.sign_free_fraction));
@@ -115,47 +117,53 @@ Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
     entry.file = "frames/" + four_digits(i) + ".png";
     entry.background = photo_names[b];
     const cv::Mat none;
-    images.frames.push_back(
-        render_frame(background, sign >= 0 ? images.signs[static_cast<std::size_t>(sign)] : none,
-                     sign, photos[o], options.frame, rng, entry.info));
+    const cv::Mat frame =
+        render_frame(background, sign >= 0 ? signs[static_cast<std::size_t>(sign)] : none, sign,
+                     photos[o], options.frame, rng, entry.info);
+    if (Status st = sink(entry.file, frame); !st) return st;
     manifest.frames.push_back(entry);
     if (progress) progress(i + 1, options.frames, {});
   }
   return Status::ok();
 }
 
+Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
+                        SynthSetImages& images, const ProgressFn& progress) {
+  images = SynthSetImages{};
+  return render_synth_set(
+      options, manifest,
+      [&images](const std::string& file, const cv::Mat& image) {
+        (file.rfind("signs/", 0) == 0 ? images.signs : images.frames).push_back(image);
+        return Status::ok();
+      },
+      progress);
+}
+
 Status write_synth_set(const SynthSetOptions& options, const ProgressFn& progress) {
-  std::error_code ec;
   if (options.directory.empty()) return {StatusCode::kInvalidArgument, "no output directory"};
-  const fs::path target(options.directory);
-  if (fs::exists(target, ec) && !(fs::is_directory(target, ec) && fs::is_empty(target, ec)))
-    return {StatusCode::kInvalidArgument, options.directory + " exists and is not empty"};
-  SynthManifest manifest;
-  SynthSetImages images;
-  Status s = render_synth_set(options, manifest, images, progress);
-  if (!s) return s;
-  const fs::path tmp = target.parent_path() / (".tmp-" + target.filename().string());
-  fs::remove_all(tmp, ec);
-  const auto fail = [&](const std::string& what) {
-    fs::remove_all(tmp, ec);
-    return Status{StatusCode::kIoError, what};
+  // A new directory, or an empty one (never a link, a file or a FIFO).
+  std::error_code ec;
+  const fs::file_status status = fs::symlink_status(options.directory, ec);
+  if (fs::exists(status)) {
+    if (!fs::is_directory(status))
+      return {StatusCode::kInvalidArgument,
+              options.directory + ": exists and is not a directory (synth makes a new one)"};
+    if (!fs::is_empty(options.directory, ec))
+      return {StatusCode::kInvalidArgument, options.directory + " exists and is not empty"};
+  }
+  if (Status s = platform::check_output_directory(options.directory); !s) return s;
+  // Each image is staged as soon as it is rendered (memory does not grow
+  // with the frames), and the whole set appears at the end, or nothing.
+  platform::OutputSet out(options.directory, {});
+  const auto stage = [&](const std::string& file, const cv::Mat& image) {
+    return add_png(out, (fs::path(options.directory) / file).string(), image);
   };
-  if (!fs::create_directories(tmp / "signs", ec) || !fs::create_directories(tmp / "frames", ec))
-    return fail("cannot create " + tmp.string());
-  for (std::size_t i = 0; i < images.signs.size(); ++i) {
-    if (!cv::imwrite((tmp / manifest.signs[i].file).string(), images.signs[i]))
-      return fail("cannot write " + manifest.signs[i].file);
-  }
-  for (std::size_t i = 0; i < images.frames.size(); ++i) {
-    if (!cv::imwrite((tmp / manifest.frames[i].file).string(), images.frames[i]))
-      return fail("cannot write " + manifest.frames[i].file);
-  }
-  if (s = write_text_file((tmp / "manifest.txt").string(), manifest_text(manifest)); !s)
-    return fail(s.message());
-  if (fs::exists(target, ec)) fs::remove(target, ec);  // empty directory
-  fs::rename(tmp, target, ec);
-  if (ec) return fail("cannot rename " + tmp.string() + " to " + options.directory);
-  return Status::ok();
+  SynthManifest manifest;
+  Status s = render_synth_set(options, manifest, stage, progress);
+  if (s)
+    s = out.add((fs::path(options.directory) / "manifest.txt").string(), manifest_text(manifest));
+  if (s) s = out.commit();
+  return s;
 }
 
 std::string manifest_text(const SynthManifest& m) {
@@ -263,11 +271,12 @@ Status parse_manifest(const std::string& text, SynthManifest& out) {
 
 Status read_manifest(const std::string& directory, SynthManifest& out) {
   const std::string path = directory + "/manifest.txt";
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return {StatusCode::kNotFound, path + ": no such file (not a keygraph synth directory)"};
-  std::ostringstream text;
-  text << in.rdbuf();
-  Status s = parse_manifest(text.str(), out);
+  std::string text;
+  Status s = platform::read_text_file(path, text, kMaxSynthManifestBytes, "a synth manifest");
+  if (s.code() == StatusCode::kNotFound)
+    return {StatusCode::kNotFound, path + ": no such file (not a keygraph synth directory)"};
+  if (!s) return s;
+  s = parse_manifest(text, out);
   if (!s) return {s.code(), path + ": " + s.message()};
   return Status::ok();
 }

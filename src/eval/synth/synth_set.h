@@ -18,7 +18,9 @@
 // the homography maps sign pixels to frame pixels (row-major).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -59,16 +61,27 @@ struct SynthManifest {
   std::vector<SynthFrameEntry> frames;
 };
 
-// Renders the set in memory (no files): the signs and the frames.
+// Renders the set, handing each image to `sink` as it is rendered (the
+// signs first, then the frames; `file` relative to the set's directory), so
+// that memory does not grow with the frames. A sink's error stops it.
+using SynthImageSink = std::function<Status(const std::string& file, const cv::Mat& image)>;
+Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
+                        const SynthImageSink& sink, const ProgressFn& progress = {});
+// The same, every image in memory (for tests of small sets).
 struct SynthSetImages {
   std::vector<cv::Mat> signs, frames;
 };
 Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
                         SynthSetImages& images, const ProgressFn& progress = {});
 
-// Renders and writes the set into options.directory, through a temporary
-// directory renamed into place (never half-written).
+// Renders and writes the set into options.directory (new, or an empty
+// directory), all or nothing (platform/files/output_set.h: the images are
+// staged as they are rendered and appear together at the end).
 Status write_synth_set(const SynthSetOptions& options, const ProgressFn& progress = {});
+
+// The most a manifest.txt may hold when read (the largest set, 100000
+// frames, writes about 40 MB).
+inline constexpr std::size_t kMaxSynthManifestBytes = std::size_t{64} << 20;
 
 std::string manifest_text(const SynthManifest& manifest);
 // Parses manifest text; errors name the line.
