@@ -1,0 +1,48 @@
+// What the C API's opaque handles hold (include/keygraph/keygraph.h), and
+// the helpers its entry points share. The C API wraps the public C++
+// contract (keygraph/) and nothing else.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "keygraph/detector.h"
+#include "keygraph/keygraph.h"
+#include "keygraph/model_index.h"
+#include "keygraph/status.h"
+
+// An index and the NUL-terminated copies of its model names (the C++
+// ModelInfo::name is a string_view into the file, not terminated), made
+// once when the index is opened.
+struct kg_index {
+  kg::ModelIndex index;
+  std::unique_ptr<char[]> name_bytes;
+  std::unique_ptr<const char*[]> names;  // model_count() pointers into name_bytes
+};
+
+// A detector, the list its frames fill (kept here rather than on the
+// caller's stack: 64 detections are about 13 KB), and the model selection,
+// which Detector::options() does not return and set_option() re-applies.
+struct kg_detector {
+  kg_detector(const kg_index& owner, const kg::Limits& limits)
+      : index(&owner), detector(owner.index, limits) {}
+  kg_detector(const kg_index& owner, const kg::Limits& limits, void* buffer, std::size_t size)
+      : index(&owner), detector(owner.index, limits, buffer, size) {}
+  const kg_index* index;
+  kg::Detector detector;
+  kg::DetectionList found;
+  std::vector<std::int32_t> models;  // empty: every model
+  bool caller_truncated = false;     // the last frame found more than the caller's capacity
+};
+
+namespace kg::capi {
+
+// Records `status`'s message as this thread's last error (kg_last_error())
+// and returns its code.
+kg_status fail(const Status& status);
+// The same for a message of the C API's own (static text).
+kg_status fail(kg_status code, const char* message);
+
+}  // namespace kg::capi
