@@ -90,10 +90,12 @@ kg_install_component(core keygraph_core keygraph "Planar object detection with k
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/keygraph DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
         COMPONENT dev)
 # The C API: C programs link with a C driver, which adds no C++ runtime,
-# so its .pc names it (the core's leaves it to the C++ driver).
+# so its .pc names it, after the core (the core's leaves it to the C++
+# driver). The core's library is named here rather than required through
+# keygraph.pc, which would put it after the runtime.
 list(APPEND KG_INSTALLED_COMPONENTS capi)
 kg_install_component(capi keygraph_capi keygraph-c "keygraph's C API (keygraph/keygraph.h)"
-                     REQUIRES keygraph LIBS -lstdc++ -lm)
+                     LIBS -lkeygraph_core -lstdc++ -lm)
 if(TARGET keygraph_platform)
   list(APPEND KG_INSTALLED_COMPONENTS platform)
   kg_install_component(platform keygraph_platform keygraph-platform
