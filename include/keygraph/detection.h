@@ -47,6 +47,12 @@ struct Detection {
   // trade detections for fewer false ones (docs/RESULTS.md, "Detection confidence").
   double confidence = 0.0;
   int ransac_iterations = 0;
+  // Tracker (keygraph/tracker.h) only: the object's id while it is
+  // followed (-1: not tracked), and whether this frame confirmed it around
+  // its predicted pose (true) or detection found it (false). A Detector
+  // alone reports -1 and false.
+  int track_id = -1;
+  bool tracked = false;
 };
 
 struct DetectStats {

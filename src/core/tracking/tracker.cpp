@@ -1,0 +1,267 @@
+// The Tracker (keygraph/tracker.h): constant-velocity prediction of each
+// object's corners, confirmation by aligning the model's appearance from the
+// prediction (core/pose/appearance_align.h), detection when needed.
+#include "keygraph/tracker.h"
+
+#include <algorithm>
+#include <chrono>
+#include <string>
+
+#include "core/image/blur.h"
+#include "core/image/plane.h"
+#include "core/pose/appearance_align.h"
+#include "core/pose/homography.h"
+#include "core/pose/overlap.h"
+#include "core/support/workspace.h"
+
+namespace kg {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
+
+Status check_options(const TrackerOptions& o) {
+  if (o.detect_interval < 1)
+    return {StatusCode::kInvalidArgument, "tracker: detect_interval must be >= 1"};
+  if (!(o.min_correlation > 0.0 && o.min_correlation < 1.0))
+    return {StatusCode::kInvalidArgument, "tracker: min_correlation must be in (0, 1)"};
+  if (o.max_tracks < 1 || o.max_tracks > kMaxDetections)
+    return {StatusCode::kInvalidArgument,
+            "tracker: max_tracks must be in 1.." + std::to_string(kMaxDetections)};
+  if (!(o.smoothing >= 0.0 && o.smoothing < 1.0))
+    return {StatusCode::kInvalidArgument, "tracker: smoothing must be in [0, 1)"};
+  return Status::ok();
+}
+
+}  // namespace
+
+struct Tracker::State {
+  State(Detector& d, const TrackerOptions& o)
+      : detector(&d),
+        options(o),
+        blurred(std::pmr::new_delete_resource()),
+        blur_scratch(std::pmr::new_delete_resource()),
+        aligner(std::pmr::new_delete_resource()) {}
+
+  struct Track {
+    int id = -1;
+    Detection detection;  // as last reported
+    Point2f corners[4];   // measured this frame (or at the last detection)
+    Point2f previous[4];  // measured the frame before
+    bool has_previous = false;
+    bool seen = false;  // confirmed or detected this frame
+  };
+
+  // Predicts track t's pose in this frame and aligns its model's appearance
+  // from there; false when the object is lost.
+  bool confirm(Track& t, ImageView blurred_frame);
+  // The reported corners of `t` after `measured` was measured.
+  void report(Track& t, const Point2f* measured, bool smooth);
+
+  Detector* detector;
+  TrackerOptions options;
+  Status status;
+  TrackerStats stats;
+  bool can_track = false;
+  int max_width = 0, max_height = 0;
+  Plane<std::uint8_t> blurred;
+  Plane<float> blur_scratch;
+  AppearanceAligner aligner;
+  DetectionList found;
+  Track tracks[kMaxDetections];
+  int track_count = 0;
+  int next_id = 0;
+};
+
+bool Tracker::State::confirm(Track& t, ImageView blurred_frame) {
+  const ModelIndex& index = detector->index();
+  const ModelInfo info = index.model(t.detection.model_id);
+  const ModelAppearance stored = index.appearance(t.detection.model_id);
+  if (stored.empty()) return false;
+  // Constant velocity of the corners, then the homography through them.
+  Point2f predicted[4];
+  for (int c = 0; c < 4; ++c) {
+    const Point2f now = t.corners[c];
+    const Point2f step = t.has_previous ? Point2f{now.x - t.previous[c].x, now.y - t.previous[c].y}
+                                        : Point2f{0.f, 0.f};
+    predicted[c] = {now.x + step.x, now.y + step.y};
+  }
+  Homography h;
+  if (!fit_homography(info.outline, predicted, 4, h)) return false;
+  const AppearanceFit fit = aligner.align(
+      {stored.pixels, stored.width, stored.height, stored.scale, stored.scale}, blurred_frame, h);
+  if (!fit.measured) return false;
+  const double ncc = fit.aligned ? fit.ncc : fit.ncc_before;
+  const RansacParams& rp = detector->options().ransac;
+  if (!(ncc >= options.min_correlation) ||
+      !is_plausible_pose(h, info.width, info.height, rp,
+                         smallest_area_scale(index.params(), info.width, info.height)))
+    return false;
+  Point2f measured[4];
+  for (int c = 0; c < 4; ++c) measured[c] = kg::apply(h, info.outline[c]);
+  std::copy_n(t.corners, 4, t.previous);
+  t.has_previous = true;
+  std::copy_n(measured, 4, t.corners);
+  t.detection.homography = h;
+  t.detection.appearance = ncc;
+  t.detection.tracked = true;
+  report(t, measured, true);
+  return true;
+}
+
+void Tracker::State::report(Track& t, const Point2f* measured, bool smooth) {
+  const auto a = static_cast<float>(smooth ? options.smoothing : 0.0);
+  for (int c = 0; c < 4; ++c) {
+    const Point2f before = t.detection.corners[c];
+    t.detection.corners[c] = {a * before.x + (1.f - a) * measured[c].x,
+                              a * before.y + (1.f - a) * measured[c].y};
+  }
+}
+
+Tracker::Tracker(Detector& detector, const TrackerOptions& options)
+    : state_(new State(detector, options)) {
+  State& s = *state_;
+  s.status = check_options(options);
+  if (s.status) s.status = detector.status();
+  if (!s.status) return;
+  const ModelIndex& index = detector.index();
+  s.can_track = index.has_appearance();
+  if (!s.can_track)
+    s.status = {StatusCode::kInvalidArgument,
+                "tracker: the index stores no model appearances (format 6.2 and later, "
+                "views.appearance_size > 0): every frame is detected"};
+  s.max_width = detector.limits().max_width;
+  s.max_height = detector.limits().max_height;
+  if (!s.can_track) return;
+  const float sigma = index.params().descriptor.blur_sigma;
+  s.blurred.reserve(s.max_width, s.max_height);
+  s.blur_scratch.reserve(s.max_width + 2 * blur_radius(sigma), 2);
+  s.aligner.reserve(index.max_appearance_pixels());
+}
+
+Tracker::~Tracker() {
+  delete state_;
+}
+
+const Status& Tracker::status() const {
+  return state_->status;
+}
+const TrackerStats& Tracker::stats() const {
+  return state_->stats;
+}
+const TrackerOptions& Tracker::options() const {
+  return state_->options;
+}
+
+void Tracker::reset() {
+  state_->track_count = 0;
+  state_->stats = TrackerStats{};
+}
+
+Status Tracker::process(ImageView frame, DetectionList& out) {
+  State& s = *state_;
+  out.clear();
+  TrackerStats& st = s.stats;
+  st.confirmed = st.lost = 0;
+  st.detected = false;
+  st.ms_track = st.ms_detect = 0.0;
+  if (!s.detector->status()) return s.detector->status();
+  if (!check_options(s.options)) return check_options(s.options);
+  if (frame.width > s.max_width || frame.height > s.max_height)
+    return {StatusCode::kInvalidArgument,
+            "tracker: frame " + std::to_string(frame.width) + "x" + std::to_string(frame.height) +
+                " is larger than the detector's limits when the tracker was made (" +
+                std::to_string(s.max_width) + "x" + std::to_string(s.max_height) + ")"};
+  ++st.frames;
+  for (int i = 0; i < s.track_count; ++i) s.tracks[i].seen = false;
+
+  // Confirm each track around its prediction; drop the lost ones in place.
+  if (s.can_track && s.track_count > 0 && !frame.empty()) {
+    const auto start = Clock::now();
+    gaussian_blur(frame, s.detector->index().params().descriptor.blur_sigma, s.blurred,
+                  s.blur_scratch);
+    int kept = 0;
+    for (int i = 0; i < s.track_count; ++i) {
+      State::Track& t = s.tracks[i];
+      if (s.confirm(t, view_of(s.blurred))) {
+        t.seen = true;
+        ++st.confirmed;
+        s.tracks[kept++] = t;
+      } else {
+        ++st.lost;
+      }
+    }
+    s.track_count = kept;
+    st.ms_track = ms_since(start);
+  }
+
+  // Detect when nothing is followed, when an object was lost, and every
+  // detect_interval frames.
+  const bool detect = !s.can_track || s.track_count == 0 || st.lost > 0 ||
+                      st.frames % s.options.detect_interval == 0;
+  DetectionList& extra = s.found;  // detections beyond max_tracks, reported untracked
+  int extras = 0;
+  if (detect) {
+    const auto start = Clock::now();
+    DetectionList found;  // fixed capacity: no heap
+    if (Status d = s.detector->detect(frame, found); !d) return d;
+    st.detected = true;
+    ++st.detected_frames;
+    extra.clear();
+    for (Detection d : found) {
+      d.tracked = false;
+      // The track this detection continues: the same model, overlapping.
+      int match = -1;
+      for (int i = 0; i < s.track_count && match < 0; ++i) {
+        const State::Track& t = s.tracks[i];
+        if (t.detection.model_id == d.model_id && outlines_overlap(t.corners, d.corners) &&
+            !(t.seen && !t.detection.tracked))
+          match = i;
+      }
+      if (match < 0 && s.can_track && s.track_count < s.options.max_tracks) {
+        State::Track& t = s.tracks[s.track_count++];
+        t = State::Track{};
+        t.id = s.next_id++;
+        if (s.next_id < 0) s.next_id = 0;
+        match = s.track_count - 1;
+        t.detection = d;
+        std::copy_n(d.corners, 4, t.corners);
+      } else if (match < 0) {
+        d.track_id = -1;
+        extra.push_back(d);
+        ++extras;
+        continue;
+      } else {
+        State::Track& t = s.tracks[match];
+        // A track confirmed this frame keeps the corners of the frame
+        // before as its previous ones; otherwise this frame's become them.
+        if (!t.seen) {
+          std::copy_n(t.corners, 4, t.previous);
+          t.has_previous = true;
+        }
+        std::copy_n(d.corners, 4, t.corners);
+        const Detection before = t.detection;
+        t.detection = d;
+        std::copy_n(before.corners, 4, t.detection.corners);
+        s.report(t, d.corners, t.seen);
+      }
+      State::Track& t = s.tracks[match];
+      t.seen = true;
+      t.detection.track_id = t.id;
+      t.detection.tracked = false;
+    }
+    st.ms_detect = ms_since(start);
+  }
+  for (int i = 0; i < s.track_count; ++i) {
+    s.tracks[i].detection.track_id = s.tracks[i].id;
+    out.push_back(s.tracks[i].detection);
+  }
+  for (int i = 0; i < extras; ++i) out.push_back(extra[static_cast<std::size_t>(i)]);
+  st.tracks = s.track_count;
+  return Status::ok();
+}
+
+}  // namespace kg
