@@ -220,6 +220,8 @@ typedef struct kg_detection {
   double appearance;      /* appearance correlation in [0, 1]; -1 when not measured */
   double confidence;      /* estimated probability, in [0, 1], that it is right */
   int ransac_iterations;
+  int track_id; /* kg_tracker_process() only: the object's id while followed; -1 otherwise */
+  int tracked;  /* kg_tracker_process() only: 1 when confirmed around its prediction */
 } kg_detection;
 
 /* Detects the index's models in `image` (the index's keypoint detector
@@ -253,6 +255,57 @@ typedef struct kg_stats {
   const char* stopped_early; /* the stage a time budget ran out in, static text; NULL if none */
 } kg_stats;
 kg_status kg_detector_stats(const kg_detector* detector, kg_stats* out);
+
+/* ------------------------------------------------------------ tracker */
+
+/* Follows what a detector finds from frame to frame (kg::Tracker,
+ * keygraph/tracker.h): each object's corners are predicted and confirmed by
+ * aligning the model's stored appearance, full detection runs when nothing
+ * is followed, when an object is lost and every detect_interval frames, and
+ * an object keeps its track_id while it is followed. The detector must
+ * outlive the tracker, keep its limits and serve no other caller while the
+ * tracker uses it. Not thread-safe; frames in order. */
+typedef struct kg_tracker kg_tracker;
+
+typedef struct kg_tracker_options {
+  int detect_interval;    /* full detection every this many frames (>= 1; default 10) */
+  double min_correlation; /* a track is kept while its appearance correlates this
+                             much, in (0, 1) (default 0.75) */
+  int max_tracks;         /* objects followed at once, 1..KG_MAX_DETECTIONS (default 16) */
+  double smoothing;       /* corner smoothing in [0, 1) (default 0: none) */
+} kg_tracker_options;
+
+/* Fills `out` with kg::TrackerOptions{}'s defaults. */
+void kg_tracker_options_default(kg_tracker_options* out);
+/* Creates a tracker over `detector` with `options` (NULL: the defaults),
+ * reserving what it uses per frame (one allocation besides the handle).
+ * KG_INVALID_ARGUMENT for options out of range or a failed detector. An
+ * index without model appearances (format < 6.2) cannot be tracked: the
+ * tracker is made, detects every frame, and kg_tracker_can_track() is 0. */
+kg_status kg_tracker_create(kg_detector* detector, const kg_tracker_options* options,
+                            kg_tracker** out);
+void kg_tracker_destroy(kg_tracker* tracker);
+/* 1 when the index lets the tracker follow objects, 0 otherwise (and for NULL). */
+int kg_tracker_can_track(const kg_tracker* tracker);
+/* The objects in `image`, as kg_detect() returns them plus track_id and
+ * tracked; a frame larger than the detector's limits is KG_INVALID_ARGUMENT.
+ * Allocates nothing. */
+kg_status kg_tracker_process(kg_tracker* tracker, const kg_image* image, kg_detection* out,
+                             size_t capacity, size_t* count);
+/* Forgets every track (a new scene, a camera switch). */
+void kg_tracker_reset(kg_tracker* tracker);
+
+typedef struct kg_tracking_stats {
+  int tracks;       /* objects followed after the last frame */
+  int confirmed;    /* tracks confirmed around their prediction */
+  int lost;         /* tracks dropped on the last frame */
+  int detected;     /* 1: full detection ran on the last frame */
+  double ms_track;  /* the alignments, milliseconds */
+  double ms_detect; /* the detection, when it ran */
+  long long frames; /* frames since creation or kg_tracker_reset() */
+  long long detected_frames;
+} kg_tracking_stats;
+kg_status kg_tracker_stats(const kg_tracker* tracker, kg_tracking_stats* out);
 
 #ifdef __cplusplus
 } /* extern "C" */

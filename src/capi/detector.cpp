@@ -47,26 +47,49 @@ kg::DetectOptions current_options(const kg_detector& d) {
   return options;
 }
 
-void copy_detection(const kg_index& index, const kg::Detection& from, kg_detection& to) {
-  to.model_id = from.model_id;
-  to.model_name = kg_index_model_name(&index, from.model_id);
-  for (int i = 0; i < 9; ++i) to.homography[i] = from.homography[static_cast<std::size_t>(i)];
-  for (int c = 0; c < 4; ++c) {
-    to.corners[c][0] = from.corners[c].x;
-    to.corners[c][1] = from.corners[c].y;
+}  // namespace
+
+namespace kg::capi {
+
+std::size_t copy_detections(const kg_index& index, const DetectionList& found, kg_detection* out,
+                            std::size_t capacity, bool& truncated) {
+  const std::size_t n = found.size() < capacity ? found.size() : capacity;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Detection& from = found[i];
+    kg_detection& to = out[i];
+    to.model_id = from.model_id;
+    to.model_name = kg_index_model_name(&index, from.model_id);
+    for (int k = 0; k < 9; ++k) to.homography[k] = from.homography[static_cast<std::size_t>(k)];
+    for (int c = 0; c < 4; ++c) {
+      to.corners[c][0] = from.corners[c].x;
+      to.corners[c][1] = from.corners[c].y;
+    }
+    to.inliers = from.inliers;
+    to.inlier_keygraphs = from.inlier_keygraphs;
+    to.score = from.score;
+    to.chance = from.chance;
+    to.rms_error = from.rms_error;
+    to.verification_z = from.verification_z;
+    to.appearance = from.appearance;
+    to.confidence = from.confidence;
+    to.ransac_iterations = from.ransac_iterations;
+    to.track_id = from.track_id;
+    to.tracked = from.tracked ? 1 : 0;
   }
-  to.inliers = from.inliers;
-  to.inlier_keygraphs = from.inlier_keygraphs;
-  to.score = from.score;
-  to.chance = from.chance;
-  to.rms_error = from.rms_error;
-  to.verification_z = from.verification_z;
-  to.appearance = from.appearance;
-  to.confidence = from.confidence;
-  to.ransac_iterations = from.ransac_iterations;
+  truncated = n < found.size();
+  return n;
 }
 
-}  // namespace
+kg_status image_view(const kg_image* image, ImageView& view) {
+  if (image->data == nullptr) return fail(KG_INVALID_ARGUMENT, "image data is NULL");
+  if (image->width <= 0 || image->height <= 0 || image->stride < image->width)
+    return fail(KG_INVALID_ARGUMENT,
+                "bad image layout (width and height must be > 0, stride >= width)");
+  view = ImageView(image->data, image->width, image->height, image->stride);
+  return KG_OK;
+}
+
+}  // namespace kg::capi
 
 extern "C" {
 
@@ -132,17 +155,12 @@ kg_status kg_detect(kg_detector* detector, const kg_image* image, kg_detection* 
   if (detector == nullptr || image == nullptr || count == nullptr ||
       (out == nullptr && capacity > 0))
     return fail(KG_INVALID_ARGUMENT, "kg_detect: NULL argument");
-  if (image->data == nullptr) return fail(KG_INVALID_ARGUMENT, "kg_detect: image data is NULL");
-  if (image->width <= 0 || image->height <= 0 || image->stride < image->width)
-    return fail(KG_INVALID_ARGUMENT,
-                "kg_detect: bad image layout (width and height must be > 0, stride >= width)");
-  const kg::ImageView frame(image->data, image->width, image->height, image->stride);
+  kg::ImageView frame;
+  if (const kg_status s = kg::capi::image_view(image, frame); s != KG_OK) return s;
   if (kg::Status s = detector->detector.detect(frame, detector->found); !s) return fail(s);
-  const std::size_t found = detector->found.size();
-  const std::size_t n = found < capacity ? found : capacity;
-  for (std::size_t i = 0; i < n; ++i) copy_detection(*detector->index, detector->found[i], out[i]);
-  detector->caller_truncated = n < found;  // kg_detector_stats() reports it
-  *count = n;
+  // kg_detector_stats() reports a cut by the caller's capacity.
+  *count = kg::capi::copy_detections(*detector->index, detector->found, out, capacity,
+                                     detector->caller_truncated);
   return KG_OK;
 }
 

@@ -12,6 +12,7 @@
 #include "keygraph/keygraph.h"
 #include "keygraph/model_index.h"
 #include "keygraph/status.h"
+#include "keygraph/tracker.h"
 
 // An index and the NUL-terminated copies of its model names (the C++
 // ModelInfo::name is a string_view into the file, not terminated), made
@@ -37,7 +38,25 @@ struct kg_detector {
   bool caller_truncated = false;     // the last frame found more than the caller's capacity
 };
 
+// A tracker over a detector handle, with the list its frames fill.
+struct kg_tracker {
+  kg_tracker(kg_detector& owner, const kg::TrackerOptions& options)
+      : detector(&owner), tracker(owner.detector, options) {}
+  kg_detector* detector;
+  kg::Tracker tracker;
+  kg::DetectionList found;
+  bool caller_truncated = false;
+};
+
 namespace kg::capi {
+
+// Copies the first `capacity` of `found` into `out` (names from `index`)
+// and returns how many; `truncated` says whether some did not fit.
+std::size_t copy_detections(const kg_index& index, const DetectionList& found, kg_detection* out,
+                            std::size_t capacity, bool& truncated);
+// The image checks of kg_detect() and kg_tracker_process(): KG_OK and the
+// view, or the error recorded.
+kg_status image_view(const kg_image* image, ImageView& view);
 
 // Records `status`'s message as this thread's last error (kg_last_error())
 // and returns its code.

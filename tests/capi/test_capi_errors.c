@@ -4,7 +4,9 @@
  * corrupt index buffers (truncated, bit-flipped). Every case must return
  * its status with a message, never crash, and the detector must still work
  * afterwards. Also run under the sanitizers (the sanitize preset).
- *   test_capi_errors INDEX.kgi
+ *   test_capi_errors INDEX.kgi OLD_INDEX.kgi
+ * OLD_INDEX is of format 6.1, without model appearances (tracking then
+ * detects every frame).
  * C99, compiled with -std=c99 -Wall -Wextra -pedantic -Werror. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -279,11 +281,93 @@ static void test_detector(const char* path) {
   free(pixels);
 }
 
+static void test_tracker(const char* path, const char* old_path) {
+  kg_index* index = NULL;
+  kg_detector* detector = NULL;
+  kg_tracker* tracker = (kg_tracker*)&g_passed;
+  kg_tracker_options options;
+  kg_tracking_stats stats;
+  kg_limits limits;
+  kg_detection found[KG_MAX_DETECTIONS];
+  kg_image image;
+  size_t count = 0;
+  uint8_t* pixels = (uint8_t*)calloc(320 * 240, 1);
+  kg_limits_default(&limits);
+  limits.max_width = 320;
+  limits.max_height = 240;
+  if (pixels == NULL || kg_index_read(path, &index) != KG_OK ||
+      kg_detector_create(index, &limits, &detector) != KG_OK) {
+    CHECK(!"setup");
+    free(pixels);
+    kg_index_destroy(index);
+    return;
+  }
+  kg_tracker_options_default(&options);
+  CHECK(options.detect_interval == 10 && options.max_tracks == 16 && options.smoothing == 0.0);
+  CHECK_FAILS(kg_tracker_create(NULL, &options, &tracker), KG_INVALID_ARGUMENT, "detector is NULL");
+  CHECK(tracker == NULL);
+  CHECK_FAILS(kg_tracker_create(detector, &options, NULL), KG_INVALID_ARGUMENT, "out is NULL");
+  options.detect_interval = 0;
+  CHECK_FAILS(kg_tracker_create(detector, &options, &tracker), KG_INVALID_ARGUMENT,
+              "detect_interval");
+  options.detect_interval = 10;
+  options.smoothing = 1.0;
+  CHECK_FAILS(kg_tracker_create(detector, &options, &tracker), KG_INVALID_ARGUMENT, "smoothing");
+  CHECK(tracker == NULL);
+  CHECK(kg_tracker_create(detector, NULL, &tracker) == KG_OK && kg_tracker_can_track(tracker) == 1);
+  image.data = pixels;
+  image.width = 321;
+  image.height = 240;
+  image.stride = 321;
+  CHECK_FAILS(kg_tracker_process(tracker, &image, found, KG_MAX_DETECTIONS, &count),
+              KG_INVALID_ARGUMENT, "larger than the detector's limits");
+  image.width = 320;
+  image.stride = 100;
+  CHECK_FAILS(kg_tracker_process(tracker, &image, found, KG_MAX_DETECTIONS, &count),
+              KG_INVALID_ARGUMENT, "stride >= width");
+  image.stride = 320;
+  CHECK_FAILS(kg_tracker_process(NULL, &image, found, KG_MAX_DETECTIONS, &count),
+              KG_INVALID_ARGUMENT, "NULL");
+  CHECK_FAILS(kg_tracker_process(tracker, &image, found, KG_MAX_DETECTIONS, NULL),
+              KG_INVALID_ARGUMENT, "NULL");
+  CHECK(kg_tracker_process(tracker, &image, found, KG_MAX_DETECTIONS, &count) == KG_OK &&
+        count == 0);
+  CHECK(kg_tracker_stats(tracker, &stats) == KG_OK && stats.frames == 1 && stats.detected == 1);
+  CHECK_FAILS(kg_tracker_stats(NULL, &stats), KG_INVALID_ARGUMENT, "NULL");
+  kg_tracker_reset(tracker);
+  kg_tracker_reset(NULL);
+  CHECK(kg_tracker_stats(tracker, &stats) == KG_OK && stats.frames == 0);
+  kg_tracker_destroy(tracker);
+  kg_tracker_destroy(NULL);
+  CHECK(kg_tracker_can_track(NULL) == 0);
+  kg_detector_destroy(detector);
+  kg_index_destroy(index);
+  /* An index without appearances (format 6.1): made, detects every frame. */
+  index = NULL;
+  detector = NULL;
+  tracker = NULL;
+  if (kg_index_read(old_path, &index) == KG_OK &&
+      kg_detector_create(index, &limits, &detector) == KG_OK) {
+    CHECK(kg_tracker_create(detector, NULL, &tracker) == KG_OK &&
+          kg_tracker_can_track(tracker) == 0);
+    CHECK(kg_tracker_process(tracker, &image, found, KG_MAX_DETECTIONS, &count) == KG_OK);
+    options.smoothing = 2.0; /* still an error there */
+    kg_tracker_destroy(tracker);
+    tracker = NULL;
+    CHECK_FAILS(kg_tracker_create(detector, &options, &tracker), KG_INVALID_ARGUMENT, "smoothing");
+  } else {
+    CHECK(!"the format 6.1 index opens");
+  }
+  kg_detector_destroy(detector);
+  kg_index_destroy(index);
+  free(pixels);
+}
+
 int main(int argc, char** argv) {
   uint8_t* bytes;
   size_t size = 0;
-  if (argc != 2) {
-    fprintf(stderr, "usage: test_capi_errors INDEX.kgi\n");
+  if (argc != 3) {
+    fprintf(stderr, "usage: test_capi_errors INDEX.kgi OLD_INDEX.kgi\n");
     return 2;
   }
   bytes = read_file(argv[1], &size);
@@ -295,6 +379,7 @@ int main(int argc, char** argv) {
   test_opening(argv[1]);
   test_corrupt_buffers(bytes, size);
   test_detector(argv[1]);
+  test_tracker(argv[1], argv[2]);
   free(bytes);
   printf("%d passed, %d failed\n", g_passed, g_failed);
   return g_failed == 0 ? 0 : 1;

@@ -15,6 +15,7 @@
 #include "builder/model_builder.h"
 #include "keygraph/detector.h"
 #include "keygraph/keygraph.h"
+#include "keygraph/tracker.h"
 #include "support/alloc_counter.h"
 #include "support/test_data.h"
 
@@ -184,6 +185,55 @@ TEST(CapiMemory, SameDetectionsAsTheCppApi) {
   ASSERT_EQ(kg_detector_set_option(h.detector, "min_confidence", "0"), KG_OK);
   ASSERT_EQ(kg_detect(h.detector, &frame, found, KG_MAX_DETECTIONS, &count), KG_OK);
   EXPECT_EQ(count, 1u);
+}
+
+// The tracker through the C API follows what kg::Tracker follows on the
+// same frames (windows of box_in_scene moving 4 px right, 2 px down each),
+// and kg_tracker_process() allocates nothing.
+TEST(CapiMemory, TrackerAsTheCppApiWithoutAllocating) {
+  const Fixture& f = fixture();
+  Handles h;
+  ASSERT_NO_FATAL_FAILURE(open_index(f, h));
+  ModelIndex index;
+  ASSERT_TRUE(ModelIndex::view(static_cast<const std::uint8_t*>(f.storage->data), f.bytes, index));
+  const Limits limits = Limits{}.for_frame(448, 336);
+  Detector detector(index, limits);
+  Tracker tracker(detector);
+  ASSERT_TRUE(tracker.status()) << tracker.status().message();
+  kg_limits c_limits;
+  kg_limits_default(&c_limits);
+  c_limits.max_width = 448;
+  c_limits.max_height = 336;
+  ASSERT_EQ(kg_detector_create(h.index, &c_limits, &h.detector), KG_OK) << kg_last_error();
+  kg_tracker* c_tracker = nullptr;
+  ASSERT_EQ(kg_tracker_create(h.detector, nullptr, &c_tracker), KG_OK) << kg_last_error();
+  kg_detection found[KG_MAX_DETECTIONS];
+  DetectionList expected;
+  int tracked = 0;
+  long allocations_in_c = 0;
+  for (int k = 0; k < 12; ++k) {
+    const cv::Mat window = f.box_scene(cv::Rect(4 * k, 2 * k, 448, 336));
+    ASSERT_TRUE(tracker.process(test::view(window), expected));
+    const kg_image frame = image_of(window);
+    std::size_t count = 0;
+    const test::AllocationCounter allocations;
+    ASSERT_EQ(kg_tracker_process(c_tracker, &frame, found, KG_MAX_DETECTIONS, &count), KG_OK)
+        << kg_last_error();
+    allocations_in_c += allocations.count();
+    ASSERT_EQ(count, expected.size()) << "frame " << k;
+    for (std::size_t i = 0; i < count; ++i) {
+      EXPECT_EQ(found[i].track_id, expected[i].track_id);
+      EXPECT_EQ(found[i].tracked != 0, expected[i].tracked);
+      for (int c = 0; c < 4; ++c) {
+        EXPECT_EQ(found[i].corners[c][0], double{expected[i].corners[c].x});
+        EXPECT_EQ(found[i].corners[c][1], double{expected[i].corners[c].y});
+      }
+      tracked += found[i].tracked;
+    }
+  }
+  EXPECT_EQ(allocations_in_c, 0) << "kg_tracker_process() allocated";
+  EXPECT_GE(tracked, 10) << "the box is followed between detections";
+  kg_tracker_destroy(c_tracker);
 }
 
 }  // namespace

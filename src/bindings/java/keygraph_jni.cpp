@@ -34,6 +34,9 @@ kg_index* as_index(jlong h) {
 kg_detector* as_detector(jlong h) {
   return reinterpret_cast<kg_detector*>(static_cast<std::intptr_t>(h));
 }
+kg_tracker* as_tracker(jlong h) {
+  return reinterpret_cast<kg_tracker*>(static_cast<std::intptr_t>(h));
+}
 jlong as_handle(const void* p) {
   return static_cast<jlong>(reinterpret_cast<std::intptr_t>(p));
 }
@@ -84,6 +87,53 @@ void release_bytes(JNIEnv* env, Bytes& bytes) {
   if (bytes.elements != nullptr)
     env->ReleaseByteArrayElements(bytes.array, bytes.elements, JNI_ABORT);
   bytes.elements = nullptr;
+}
+
+// A frame through `call` (kg_detect or kg_tracker_process on a handle):
+// the plane checked and wrapped, the results written per detection as
+// Detection.DOUBLES doubles and Detection.INTS ints; their count.
+template <class Call>
+jint run_frame(JNIEnv* env, Call call, jobject buffer, jbyteArray array, jint offset, jint width,
+               jint height, jint row_stride, jdoubleArray doubles, jintArray ints) {
+  if (width <= 0 || height <= 0 || row_stride < width) {
+    throw_illegal(env, "bad frame layout (width and height > 0, row stride >= width)");
+    return 0;
+  }
+  constexpr int kDoubles = 20, kInts = 4;  // Detection.DOUBLES, Detection.INTS
+  if (doubles == nullptr || ints == nullptr ||
+      env->GetArrayLength(doubles) < KG_MAX_DETECTIONS * kDoubles ||
+      env->GetArrayLength(ints) < KG_MAX_DETECTIONS * kInts) {
+    throw_illegal(env, "result arrays too small");
+    return 0;
+  }
+  Bytes bytes;
+  const jlong size = static_cast<jlong>(height - 1) * row_stride + width;
+  if (!get_bytes(env, buffer, array, offset, size, bytes)) return 0;
+  const kg_image image{bytes.data, width, height, static_cast<std::ptrdiff_t>(row_stride)};
+  kg_detection found[KG_MAX_DETECTIONS];
+  std::size_t count = 0;
+  const kg_status s = call(&image, found, &count);
+  release_bytes(env, bytes);
+  if (s != KG_OK) {
+    throw_status(env, s);
+    return 0;
+  }
+  for (std::size_t i = 0; i < count; ++i) {
+    const kg_detection& d = found[i];
+    jdouble row[kDoubles];
+    for (int k = 0; k < 9; ++k) row[k] = d.homography[k];
+    for (int c = 0; c < 4; ++c) {
+      row[9 + 2 * c] = d.corners[c][0];
+      row[10 + 2 * c] = d.corners[c][1];
+    }
+    row[17] = d.score;
+    row[18] = d.appearance;
+    row[19] = d.confidence;
+    const jint numbers[kInts] = {d.model_id, d.inliers, d.track_id, d.tracked};
+    env->SetDoubleArrayRegion(doubles, static_cast<jsize>(i) * kDoubles, kDoubles, row);
+    env->SetIntArrayRegion(ints, static_cast<jsize>(i) * kInts, kInts, numbers);
+  }
+  return static_cast<jint>(count);
 }
 
 }  // namespace
@@ -218,45 +268,46 @@ JNIEXPORT jint JNICALL Java_org_keygraph_Native_detect(JNIEnv* env, jclass, jlon
                                                        jint offset, jint width, jint height,
                                                        jint row_stride, jdoubleArray doubles,
                                                        jintArray ints) {
-  if (width <= 0 || height <= 0 || row_stride < width) {
-    throw_illegal(env, "bad frame layout (width and height > 0, row stride >= width)");
-    return 0;
-  }
-  constexpr int kDoubles = 20, kInts = 2;  // Detection.DOUBLES, Detection.INTS
-  if (doubles == nullptr || ints == nullptr ||
-      env->GetArrayLength(doubles) < KG_MAX_DETECTIONS * kDoubles ||
-      env->GetArrayLength(ints) < KG_MAX_DETECTIONS * kInts) {
-    throw_illegal(env, "result arrays too small");
-    return 0;
-  }
-  Bytes bytes;
-  const jlong size = static_cast<jlong>(height - 1) * row_stride + width;
-  if (!get_bytes(env, buffer, array, offset, size, bytes)) return 0;
-  const kg_image image{bytes.data, width, height, static_cast<std::ptrdiff_t>(row_stride)};
-  kg_detection found[KG_MAX_DETECTIONS];
-  std::size_t count = 0;
-  const kg_status s = kg_detect(as_detector(handle), &image, found, KG_MAX_DETECTIONS, &count);
-  release_bytes(env, bytes);
-  if (s != KG_OK) {
+  return run_frame(
+      env,
+      [handle](const kg_image* image, kg_detection* out, std::size_t* count) {
+        return kg_detect(as_detector(handle), image, out, KG_MAX_DETECTIONS, count);
+      },
+      buffer, array, offset, width, height, row_stride, doubles, ints);
+}
+
+JNIEXPORT jlong JNICALL Java_org_keygraph_Native_trackerCreate(JNIEnv* env, jclass, jlong detector,
+                                                               jint detect_interval,
+                                                               jdouble min_correlation,
+                                                               jint max_tracks, jdouble smoothing) {
+  const kg_tracker_options options{detect_interval, min_correlation, max_tracks, smoothing};
+  kg_tracker* tracker = nullptr;
+  if (const kg_status s = kg_tracker_create(as_detector(detector), &options, &tracker); s != KG_OK)
     throw_status(env, s);
-    return 0;
-  }
-  for (std::size_t i = 0; i < count; ++i) {
-    const kg_detection& d = found[i];
-    jdouble row[kDoubles];
-    for (int k = 0; k < 9; ++k) row[k] = d.homography[k];
-    for (int c = 0; c < 4; ++c) {
-      row[9 + 2 * c] = d.corners[c][0];
-      row[10 + 2 * c] = d.corners[c][1];
-    }
-    row[17] = d.score;
-    row[18] = d.appearance;
-    row[19] = d.confidence;
-    const jint numbers[kInts] = {d.model_id, d.inliers};
-    env->SetDoubleArrayRegion(doubles, static_cast<jsize>(i) * kDoubles, kDoubles, row);
-    env->SetIntArrayRegion(ints, static_cast<jsize>(i) * kInts, kInts, numbers);
-  }
-  return static_cast<jint>(count);
+  return as_handle(tracker);
+}
+
+JNIEXPORT void JNICALL Java_org_keygraph_Native_trackerDestroy(JNIEnv*, jclass, jlong handle) {
+  kg_tracker_destroy(as_tracker(handle));
+}
+
+JNIEXPORT jboolean JNICALL Java_org_keygraph_Native_trackerCanTrack(JNIEnv*, jclass, jlong handle) {
+  return kg_tracker_can_track(as_tracker(handle)) != 0 ? JNI_TRUE : JNI_FALSE;
+}
+
+JNIEXPORT void JNICALL Java_org_keygraph_Native_trackerReset(JNIEnv*, jclass, jlong handle) {
+  kg_tracker_reset(as_tracker(handle));
+}
+
+JNIEXPORT jint JNICALL Java_org_keygraph_Native_trackerProcess(
+    JNIEnv* env, jclass, jlong handle, jobject buffer, jbyteArray array, jint offset, jint width,
+    jint height, jint row_stride, jdoubleArray doubles, jintArray ints) {
+  return run_frame(
+      env,
+      [handle](const kg_image* image, kg_detection* out, std::size_t* count) {
+        return kg_tracker_process(as_tracker(handle), image, out, KG_MAX_DETECTIONS, count);
+      },
+      buffer, array, offset, width, height, row_stride, doubles, ints);
 }
 
 }  // extern "C"

@@ -22,7 +22,7 @@ import numpy as np
 
 from . import _native
 
-__all__ = ["Error", "Index", "Detector", "Detection", "build", "__version__"]
+__all__ = ["Error", "Index", "Detector", "Detection", "Tracker", "build", "__version__"]
 
 __version__ = _native.version().decode()
 
@@ -125,7 +125,7 @@ class Index:
 class Detection:
     """One object found in a frame."""
     __slots__ = ("model", "model_id", "corners", "homography", "inliers", "confidence", "score",
-                 "appearance", "rms_error")
+                 "appearance", "rms_error", "track_id", "tracked")
 
     def __init__(self, raw):
         self.model = raw.model_name.decode(errors="replace")  # the model's name
@@ -138,6 +138,8 @@ class Detection:
         self.score = raw.score  # fraction of the model's keypoints confirmed
         self.appearance = raw.appearance  # appearance correlation in [0, 1]; -1: not measured
         self.rms_error = raw.rms_error  # reprojection error of the inliers, pixels
+        self.track_id = raw.track_id  # Tracker only: the object's id while followed; -1 otherwise
+        self.tracked = bool(raw.tracked)  # Tracker only: confirmed around its prediction
 
     def __repr__(self):
         corners = ", ".join(f"({x:.1f}, {y:.1f})" for x, y in self.corners)
@@ -200,12 +202,16 @@ class Detector:
     def detect(self, image):
         """The detections in `image`, a 2-D uint8 numpy array (any strides;
         rows with contiguous pixels are read in place, without a copy)."""
+        return self._run(_native.detect, self._handle, image)
+
+    def _run(self, function, handle, image):
+        """A frame through `function` (kg_detect, kg_tracker_process on `handle`)."""
         plane, stride = _gray_plane(image)
         height, width = plane.shape
         frame = _native.Image(plane.ctypes.data, width, height, stride)
         count = _native.c_size_t()
         with self._lock:
-            _check(_native.detect(self._handle, frame, self._found, _native.MAX_DETECTIONS, count))
+            _check(function(handle, frame, self._found, _native.MAX_DETECTIONS, count))
             return [Detection(self._found[i]) for i in range(count.value)]
 
     @property
@@ -223,6 +229,57 @@ class Detector:
         handle = getattr(self, "_handle", None)
         if handle:
             _native.detector_destroy(handle)
+            self._handle = None
+
+
+class Tracker:
+    """Follows what a Detector finds from frame to frame (live video): each
+    object's corners are predicted and confirmed by aligning the model's
+    stored appearance; full detection runs when nothing is followed, when an
+    object is lost and every detect_interval frames; an object keeps its
+    .track_id while followed (.tracked: confirmed without a detection).
+
+    Options: detect_interval=10, min_correlation=0.75, max_tracks=16,
+    smoothing=0.0 (keygraph/tracker.h). Frames in order; the detector's lock
+    is held for each frame, so it serves no one else meanwhile."""
+
+    def __init__(self, detector, **options):
+        if not isinstance(detector, Detector):
+            raise TypeError(f"Tracker needs a keygraph.Detector, got {type(detector).__name__}")
+        settings = _native.TrackerOptions()
+        _native.tracker_options_default(settings)
+        for key, value in options.items():
+            if key not in dict(_native.TrackerOptions._fields_):
+                raise TypeError(f"unknown tracker option {key!r}")
+            setattr(settings, key, value)
+        handle = _native.c_void_p()
+        with detector._lock:
+            _check(_native.tracker_create(detector._handle, settings, handle))
+        self._handle = handle
+        self._detector = detector  # outlives the tracker
+        self.can_track = bool(_native.tracker_can_track(handle))
+
+    def process(self, image):
+        """The objects in `image` (as Detector.detect takes it)."""
+        return self._detector._run(_native.tracker_process, self._handle, image)
+
+    def reset(self):
+        """Forgets every track (a new scene, a camera switch)."""
+        with self._detector._lock:
+            _native.tracker_reset(self._handle)
+
+    @property
+    def stats(self):
+        """The last frame's tracking statistics (kg_tracker_stats) as a dict."""
+        stats = _native.TrackerStats()
+        with self._detector._lock:
+            _check(_native.tracker_stats(self._handle, stats))
+        return {name: getattr(stats, name) for name, _ in _native.TrackerStats._fields_}
+
+    def __del__(self):
+        handle = getattr(self, "_handle", None)
+        if handle:
+            _native.tracker_destroy(handle)
             self._handle = None
 
 

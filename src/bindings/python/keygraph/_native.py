@@ -31,7 +31,20 @@ class RawDetection(ctypes.Structure):
         ("corners", (c_double * 2) * 4), ("inliers", c_int), ("inlier_keygraphs", c_int),
         ("score", c_double), ("chance", c_double), ("rms_error", c_double),
         ("verification_z", c_double), ("appearance", c_double), ("confidence", c_double),
-        ("ransac_iterations", c_int)]
+        ("ransac_iterations", c_int), ("track_id", c_int), ("tracked", c_int)]
+
+
+class TrackerOptions(ctypes.Structure):
+    """kg_tracker_options"""
+    _fields_ = [("detect_interval", c_int), ("min_correlation", c_double), ("max_tracks", c_int),
+                ("smoothing", c_double)]
+
+
+class TrackerStats(ctypes.Structure):
+    """kg_tracking_stats"""
+    _fields_ = [("tracks", c_int), ("confirmed", c_int), ("lost", c_int), ("detected", c_int),
+                ("ms_track", c_double), ("ms_detect", c_double), ("frames", ctypes.c_longlong),
+                ("detected_frames", ctypes.c_longlong)]
 
 
 class Stats(ctypes.Structure):
@@ -73,6 +86,14 @@ detector_set_option = _declare("kg_detector_set_option", c_int, c_void_p, c_char
 detector_set_models = _declare("kg_detector_set_models", c_int, c_void_p, _P(ctypes.c_int32), c_size_t)
 detect = _declare("kg_detect", c_int, c_void_p, _P(Image), _P(RawDetection), c_size_t, _P(c_size_t))
 detector_stats = _declare("kg_detector_stats", c_int, c_void_p, _P(Stats))
+tracker_options_default = _declare("kg_tracker_options_default", None, _P(TrackerOptions))
+tracker_create = _declare("kg_tracker_create", c_int, c_void_p, _P(TrackerOptions), _P(c_void_p))
+tracker_destroy = _declare("kg_tracker_destroy", None, c_void_p)
+tracker_can_track = _declare("kg_tracker_can_track", c_int, c_void_p)
+tracker_process = _declare("kg_tracker_process", c_int, c_void_p, _P(Image), _P(RawDetection), c_size_t,
+                           _P(c_size_t))
+tracker_reset = _declare("kg_tracker_reset", None, c_void_p)
+tracker_stats = _declare("kg_tracker_stats", c_int, c_void_p, _P(TrackerStats))
 build = _declare("kgpy_build", c_int, c_char_p, c_int, _P(c_char_p), _P(c_void_p), _P(c_int),
                  _P(c_int), _P(c_ssize_t), _P(c_int), _P(c_char_p), c_int, _P(c_char_p),
                  _P(c_char_p), c_char_p, c_int, c_int, ctypes.c_char_p, c_size_t)

@@ -7,7 +7,7 @@ package org.keygraph;
  */
 public final class Detection {
   static final int DOUBLES = 9 + 8 + 3; // homography, corners, score, appearance, confidence
-  static final int INTS = 2;            // model id, inliers
+  static final int INTS = 4;            // model id, inliers, track id, tracked
 
   /** The model's index in the index, and its name. */
   public final int modelId;
@@ -24,12 +24,18 @@ public final class Detection {
   public final double appearance;
   /** Estimated probability, in [0, 1], that the detection is right. */
   public final double confidence;
+  /** {@link Tracker} only: the object's id while it is followed (-1: not tracked). */
+  public final int trackId;
+  /** {@link Tracker} only: confirmed around its prediction (no detection ran). */
+  public final boolean tracked;
 
   Detection(String[] names, double[] d, int[] n, int i) {
     final int o = i * DOUBLES;
     modelId = n[i * INTS];
     model = names[modelId];
     inliers = n[i * INTS + 1];
+    trackId = n[i * INTS + 2];
+    tracked = n[i * INTS + 3] != 0;
     homography = java.util.Arrays.copyOfRange(d, o, o + 9);
     corners = java.util.Arrays.copyOfRange(d, o + 9, o + 17);
     score = d[o + 17];

@@ -13,6 +13,7 @@ public final class Detector implements AutoCloseable {
   private final Index index;
   private final String[] names;
   private long handle;
+  private int openTrackers;
   private final double[] doubles = new double[64 * Detection.DOUBLES];
   private final int[] ints = new int[64 * Detection.INTS];
 
@@ -87,18 +88,31 @@ public final class Detector implements AutoCloseable {
   @Override
   public synchronized void close() {
     if (handle == 0) return;
+    if (openTrackers > 0) {
+      throw new IllegalStateException("the detector still has " + openTrackers + " open tracker(s): close them first");
+    }
     Native.detectorDestroy(handle);
     handle = 0;
     index.detach();
   }
 
-  private long live() {
+  long live() {
     if (handle == 0) throw new IllegalStateException("the detector is closed");
     return handle;
   }
 
+  synchronized long attach() {
+    final long h = live();
+    ++openTrackers;
+    return h;
+  }
+
+  synchronized void detach() {
+    --openTrackers;
+  }
+
   // The plane must hold every row it claims: (height - 1) * rowStride + width bytes.
-  private static void checkLayout(long available, int width, int height, int rowStride) {
+  static void checkLayout(long available, int width, int height, int rowStride) {
     if (width <= 0 || height <= 0) {
       throw new IllegalArgumentException("detect: width and height must be > 0 (got " + width + "x" + height + ")");
     }
@@ -112,7 +126,11 @@ public final class Detector implements AutoCloseable {
     }
   }
 
-  private Detection[] results(int count) {
+  String[] names() {
+    return names;
+  }
+
+  Detection[] results(int count) {
     Detection[] out = new Detection[count];
     for (int i = 0; i < count; ++i) out[i] = new Detection(names, doubles, ints, i);
     return out;

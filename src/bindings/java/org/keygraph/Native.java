@@ -46,4 +46,17 @@ final class Native {
    */
   static native int detect(long handle, java.nio.ByteBuffer buffer, byte[] array, int offset, int width,
       int height, int rowStride, double[] doubles, int[] ints);
+
+  static native long trackerCreate(long detector, int detectInterval, double minCorrelation, int maxTracks,
+      double smoothing);
+
+  static native void trackerDestroy(long handle);
+
+  static native boolean trackerCanTrack(long handle);
+
+  static native void trackerReset(long handle);
+
+  /** As {@link #detect}, through the tracker. */
+  static native int trackerProcess(long handle, java.nio.ByteBuffer buffer, byte[] array, int offset, int width,
+      int height, int rowStride, double[] doubles, int[] ints);
 }

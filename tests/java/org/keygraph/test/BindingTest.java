@@ -8,6 +8,7 @@ import org.keygraph.Detection;
 import org.keygraph.Detector;
 import org.keygraph.Index;
 import org.keygraph.KeygraphException;
+import org.keygraph.Tracker;
 
 /**
  * The Java binding's contract: bad input (null arguments, bad layouts,
@@ -127,6 +128,34 @@ public final class BindingTest {
         check(detector.detect(direct, w, h, w).length == 0, "model selection survives setOption");
         detector.setModels();
         check(detector.detect(direct, w, h, w).length == 1, "every model again");
+
+        // The tracker on windows of the scene moving 4 px right, 2 px down a frame.
+        throwsWith(IllegalArgumentException.class, 0, "null", "Tracker(null)", () -> new Tracker(null));
+        throwsWith(KeygraphException.class, 1, "detect_interval", "bad tracker option",
+            () -> new Tracker(detector, 0, 0.75, 16, 0.0));
+        try (Tracker tracker = new Tracker(detector)) {
+          check(tracker.canTrack(), "the scenes' index can be tracked");
+          throwsWith(IllegalStateException.class, 0, "open tracker", "detector closed under a tracker", detector::close);
+          int id = -1;
+          int tracked = 0;
+          boolean sameId = true;
+          for (int k = 0; k < 12; ++k) {
+            ByteBuffer window = direct.duplicate();
+            window.position(2 * k * w + 4 * k);
+            Detection[] t = tracker.process(window, w - 48, h - 24, w);
+            if (t.length != 1) {
+              check(false, "frame " + k + ": " + t.length + " objects");
+              continue;
+            }
+            if (k == 0) id = t[0].trackId;
+            sameId &= t[0].trackId == id && id >= 0;
+            tracked += t[0].tracked ? 1 : 0;
+          }
+          check(sameId, "one track id over the sequence");
+          check(tracked >= 10, "tracked on " + tracked + " of 12 frames");
+          throwsWith(KeygraphException.class, 1, "larger than", "frame over the tracker's limits",
+              () -> tracker.process(large, w + 1, h, w + 1));
+        }
         detector.close();
         throwsWith(IllegalStateException.class, 0, "closed", "detect after close", () -> detector.detect(direct, w, h, w));
       }
