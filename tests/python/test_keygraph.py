@@ -200,3 +200,49 @@ def test_build_bad_input_raises_and_leaves_nothing(tmp_path):
     with pytest.raises(ValueError, match="2-D"):
         keygraph.build([np.zeros((50, 50, 3), dtype=np.uint8)], out)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_tracker_follows_the_box(index, box_scene):
+    detector = keygraph.Detector(index)
+    tracker = keygraph.Tracker(detector)
+    assert tracker.can_track
+    h, w = box_scene.shape
+    ids, tracked = set(), 0
+    for k in range(12):
+        window = box_scene[2 * k:2 * k + h - 24, 4 * k:4 * k + w - 48]  # a view, no copy
+        found = tracker.process(window)
+        assert [d.model for d in found] == ["box"], k
+        ids.add(found[0].track_id)
+        tracked += found[0].tracked
+    assert len(ids) == 1 and min(ids) >= 0
+    assert tracked >= 10
+    assert tracker.stats["frames"] == 12
+    tracker.reset()
+    assert tracker.stats["frames"] == 0
+    with pytest.raises(keygraph.Error, match="detect_interval"):
+        keygraph.Tracker(detector, detect_interval=0)
+    with pytest.raises(TypeError, match="unknown tracker option"):
+        keygraph.Tracker(detector, interval=3)
+    with pytest.raises(keygraph.Error, match="larger than"):
+        tracker.process(np.zeros((481, 640), dtype=np.uint8))
+
+
+def test_build_refuses_a_decompression_bomb_in_process(tmp_path):
+    """The pixel limit holds inside a Python process (issue 37, item 6): a
+    PNG of 5000x5000 (25 megapixels, 25 KB) is refused from its header,
+    before decoding, with no environment set."""
+    import struct
+    import zlib
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    rows = zlib.compress(b"\0" * (5001 * 5000), 9)
+    bomb = tmp_path / "bomb.png"
+    bomb.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 5000, 5000, 8, 0, 0, 0, 0))
+                     + chunk(b"IDAT", rows) + chunk(b"IEND", b""))
+    assert bomb.stat().st_size < 100_000
+    with pytest.raises(keygraph.Error, match="5000x5000 pixels is over 16777216 pixels.*not decoded") as e:
+        keygraph.build([bomb], tmp_path / "out.kgi")
+    assert e.value.status_name == "ResourceExhausted"
+    assert not (tmp_path / "out.kgi").exists()
