@@ -103,11 +103,14 @@ DeclaredSize tiff(const std::uint8_t* d, std::size_t size) {
   const std::uint64_t ifd = big ? u64(8) : u32(4);
   const std::size_t count_bytes = big ? 8 : 2, entry_bytes = big ? 20 : 12;
   if (ifd > size || size - ifd < count_bytes) return unreadable("TIFF");
-  const std::uint64_t entries = big ? u64(ifd) : u16(ifd);
+  const auto first = static_cast<std::size_t>(ifd);  // < size: fits
+  const std::uint64_t entries = big ? u64(first) : u16(first);
+  // Entries the data holds after the count; more declared is a truncated IFD.
+  const std::size_t room = (size - first - count_bytes) / entry_bytes;
   std::uint64_t width = 0, height = 0;
   for (std::uint64_t e = 0; e < entries; ++e) {
-    const std::uint64_t at = ifd + count_bytes + e * entry_bytes;
-    if (at > size || size - at < entry_bytes) return unreadable("TIFF");
+    if (e >= room) return unreadable("TIFF");
+    const std::size_t at = first + count_bytes + static_cast<std::size_t>(e) * entry_bytes;
     const std::uint32_t tag = u16(at), type = u16(at + 2);
     const std::size_t value = at + (big ? 12 : 8);
     std::uint64_t v = 0;
