@@ -80,7 +80,12 @@ std::size_t copy_detections(const kg_index& index, const DetectionList& found, k
   return n;
 }
 
-kg_status image_view(const kg_image* image, ImageView& view) {
+kg_status frame_arguments(const void* handle, const kg_image* image, const kg_detection* out,
+                          std::size_t capacity, std::size_t* count, const char* null_message,
+                          ImageView& view) {
+  if (count != nullptr) *count = 0;
+  if (handle == nullptr || image == nullptr || count == nullptr || (out == nullptr && capacity > 0))
+    return fail(KG_INVALID_ARGUMENT, null_message);
   if (image->data == nullptr) return fail(KG_INVALID_ARGUMENT, "image data is NULL");
   if (image->width <= 0 || image->height <= 0 || image->stride < image->width)
     return fail(KG_INVALID_ARGUMENT,
@@ -150,13 +155,12 @@ kg_status kg_detector_set_models(kg_detector* detector, const int32_t* ids, size
 
 kg_status kg_detect(kg_detector* detector, const kg_image* image, kg_detection* out,
                     size_t capacity, size_t* count) {
-  if (count != nullptr) *count = 0;
   if (detector != nullptr) detector->caller_truncated = false;
-  if (detector == nullptr || image == nullptr || count == nullptr ||
-      (out == nullptr && capacity > 0))
-    return fail(KG_INVALID_ARGUMENT, "kg_detect: NULL argument");
   kg::ImageView frame;
-  if (const kg_status s = kg::capi::image_view(image, frame); s != KG_OK) return s;
+  if (const kg_status s = kg::capi::frame_arguments(detector, image, out, capacity, count,
+                                                    "kg_detect: NULL argument", frame);
+      s != KG_OK)
+    return s;
   if (kg::Status s = detector->detector.detect(frame, detector->found); !s) return fail(s);
   // kg_detector_stats() reports a cut by the caller's capacity.
   *count = kg::capi::copy_detections(*detector->index, detector->found, out, capacity,

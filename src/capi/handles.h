@@ -54,9 +54,12 @@ namespace kg::capi {
 // and returns how many; `truncated` says whether some did not fit.
 std::size_t copy_detections(const kg_index& index, const DetectionList& found, kg_detection* out,
                             std::size_t capacity, bool& truncated);
-// The image checks of kg_detect() and kg_tracker_process(): KG_OK and the
-// view, or the error recorded.
-kg_status image_view(const kg_image* image, ImageView& view);
+// The argument checks of kg_detect() and kg_tracker_process() (`handle` is
+// theirs; `null_message` static text naming the function): `*count` set to
+// 0, then KG_OK and the frame's view, or the error recorded.
+kg_status frame_arguments(const void* handle, const kg_image* image, const kg_detection* out,
+                          std::size_t capacity, std::size_t* count, const char* null_message,
+                          ImageView& view);
 
 // Records `status`'s message as this thread's last error (kg_last_error())
 // and returns its code.

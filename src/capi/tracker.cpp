@@ -66,12 +66,11 @@ int kg_tracker_can_track(const kg_tracker* tracker) {
 
 kg_status kg_tracker_process(kg_tracker* tracker, const kg_image* image, kg_detection* out,
                              size_t capacity, size_t* count) {
-  if (count != nullptr) *count = 0;
-  if (tracker == nullptr || image == nullptr || count == nullptr ||
-      (out == nullptr && capacity > 0))
-    return fail(KG_INVALID_ARGUMENT, "kg_tracker_process: NULL argument");
   kg::ImageView frame;
-  if (const kg_status s = kg::capi::image_view(image, frame); s != KG_OK) return s;
+  if (const kg_status s = kg::capi::frame_arguments(tracker, image, out, capacity, count,
+                                                    "kg_tracker_process: NULL argument", frame);
+      s != KG_OK)
+    return s;
   if (kg::Status s = tracker->tracker.process(frame, tracker->found); !s) return fail(s);
   *count = kg::capi::copy_detections(*tracker->detector->index, tracker->found, out, capacity,
                                      tracker->caller_truncated);

@@ -11,6 +11,7 @@
 #include <memory>
 #include <vector>
 
+#include "builder/in_memory_index.h"
 #include "builder/index_writer.h"
 #include "builder/model_builder.h"
 #include "keygraph/detector.h"
@@ -22,20 +23,10 @@
 namespace kg {
 namespace {
 
-// 64-byte aligned memory from malloc (not operator new, so it is not counted).
-struct AlignedBlock {
-  explicit AlignedBlock(std::size_t size) {
-    if (::posix_memalign(&data, 64, size == 0 ? 1 : size) != 0) data = nullptr;
-  }
-  ~AlignedBlock() { std::free(data); }
-  AlignedBlock(const AlignedBlock&) = delete;
-  AlignedBlock& operator=(const AlignedBlock&) = delete;
-  void* data = nullptr;
-};
-
 struct Fixture {
-  std::unique_ptr<AlignedBlock> storage;
+  std::unique_ptr<std::uint8_t[]> storage;  // holds the index's bytes, from index.data() on
   std::size_t bytes = 0;
+  ModelIndex index;   // the C++ API's view of them
   cv::Mat box_scene;  // box_in_scene.png, 512 x 384
   cv::Mat aero;       // aero1.jpg, 640 x 480
 };
@@ -49,11 +40,9 @@ const Fixture& fixture() {
     const Params params;
     std::vector<std::uint8_t> bytes;
     if (box.empty() || !build_model(box, "box", params, models[0]) ||
-        !serialize_index(models, params, bytes))
+        !serialize_index(models, params, bytes) ||
+        !view_aligned_copy(bytes, out->storage, out->index))
       return out;
-    out->storage = std::make_unique<AlignedBlock>(bytes.size());
-    if (out->storage->data == nullptr) return out;
-    std::memcpy(out->storage->data, bytes.data(), bytes.size());
     out->bytes = bytes.size();
     out->box_scene = test::load_gray(test::opencv_data("box_in_scene.png"));
     out->aero = test::load_gray(test::opencv_data("aero1.jpg"));
@@ -79,7 +68,7 @@ void open_index(const Fixture& f, Handles& h) {
   ASSERT_GT(f.bytes, 0u) << "box.png missing or the index failed to build";
   ASSERT_EQ(f.box_scene.cols, 512);
   ASSERT_EQ(f.aero.cols, 640);
-  ASSERT_EQ(kg_index_from_memory(f.storage->data, f.bytes, &h.index), KG_OK) << kg_last_error();
+  ASSERT_EQ(kg_index_from_memory(f.index.data(), f.bytes, &h.index), KG_OK) << kg_last_error();
 }
 
 TEST(CapiMemory, DetectAllocatesNothingOnRealFrames) {
@@ -113,12 +102,14 @@ TEST(CapiMemory, CallersWorkspaceAllocatesOnlyTheHandle) {
   ASSERT_NO_FATAL_FAILURE(open_index(f, h));
   const std::size_t bytes = kg_detector_workspace_bytes(h.index, nullptr);
   ASSERT_GT(bytes, 0u);
-  AlignedBlock workspace(bytes);
-  ASSERT_NE(workspace.data, nullptr);
+  std::vector<std::uint8_t> block(bytes + 64);
+  void* workspace = block.data();
+  std::size_t room = block.size();
+  ASSERT_NE(std::align(64, bytes, workspace, room), nullptr);
   kg_detector* detector = nullptr;
   {
     const test::AllocationCounter allocations;
-    ASSERT_EQ(kg_detector_create_in(h.index, nullptr, workspace.data, bytes, &detector), KG_OK)
+    ASSERT_EQ(kg_detector_create_in(h.index, nullptr, workspace, bytes, &detector), KG_OK)
         << kg_last_error();
     // The handle; its detector's workspace is the caller's.
     EXPECT_LE(allocations.count(), 1);
@@ -140,9 +131,7 @@ TEST(CapiMemory, SameDetectionsAsTheCppApi) {
   const Fixture& f = fixture();
   Handles h;
   ASSERT_NO_FATAL_FAILURE(open_index(f, h));
-  ModelIndex index;
-  ASSERT_TRUE(ModelIndex::view(static_cast<const std::uint8_t*>(f.storage->data), f.bytes, index));
-  Detector detector(index);
+  Detector detector(f.index);
   DetectionList expected;
   ASSERT_TRUE(detector.detect(test::view(f.box_scene), expected));
   ASSERT_EQ(expected.size(), 1u);
@@ -194,10 +183,8 @@ TEST(CapiMemory, TrackerAsTheCppApiWithoutAllocating) {
   const Fixture& f = fixture();
   Handles h;
   ASSERT_NO_FATAL_FAILURE(open_index(f, h));
-  ModelIndex index;
-  ASSERT_TRUE(ModelIndex::view(static_cast<const std::uint8_t*>(f.storage->data), f.bytes, index));
   const Limits limits = Limits{}.for_frame(448, 336);
-  Detector detector(index, limits);
+  Detector detector(f.index, limits);
   Tracker tracker(detector);
   ASSERT_TRUE(tracker.status()) << tracker.status().message();
   kg_limits c_limits;
