@@ -34,23 +34,30 @@
  * the limits is KG_INVALID_ARGUMENT, never a crash.
  *
  * Ownership and lifetime:
- *  - Handles (kg_index, kg_detector) are made by the *_open / *_create
- *    functions and released by the matching *_destroy, which accepts NULL.
- *  - An index must outlive every detector made from it; memory given to
- *    kg_index_from_memory() must outlive the index, unchanged.
+ *  - Handles (kg_index, kg_detector, kg_tracker) are made by the *_open,
+ *    *_read, *_from_memory and *_create functions and released by the
+ *    matching *_destroy, which accepts NULL. A handle is never used after
+ *    its *_destroy (the C API cannot detect a dangling handle; the Java and
+ *    Python bindings refuse closed ones).
+ *  - An index must outlive every detector made from it, a detector every
+ *    tracker made from it; memory given to kg_index_from_memory() must
+ *    outlive the index, unchanged.
  *  - Model names (kg_index_model_name(), kg_detection::model_name) are
  *    NUL-terminated strings owned by the index, valid while it lives.
  *  - Results are copied into arrays the caller owns.
  *
  * Threads: an index is read-only once open and may be shared by any number
- * of detectors on any threads. A detector is not thread-safe: use one per
- * thread (or lock around it). kg_last_error() is per thread.
+ * of detectors on any threads. A detector (with its tracker) is not
+ * thread-safe: use one per thread (or lock around it); kg_limits::threads
+ * lets one detector use several threads for a frame. kg_last_error() is
+ * per thread.
  *
  * Memory: opening an index allocates its handle and a name table (and,
  * for kg_index_read(), a copy of the file); creating a detector allocates
  * its handle and its workspace, sized once from kg_limits, unless the
- * caller supplies the workspace (kg_detector_create_in). kg_detect() and
- * kg_detector_set_option() allocate nothing when they succeed.
+ * caller supplies the workspace (kg_detector_create_in). kg_detect(),
+ * kg_tracker_process() and kg_detector_set_option() allocate nothing when
+ * they succeed (tests/capi/test_capi_memory.cpp counts).
  */
 #ifndef KEYGRAPH_KEYGRAPH_H
 #define KEYGRAPH_KEYGRAPH_H

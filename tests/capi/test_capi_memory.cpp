@@ -91,6 +91,9 @@ TEST(CapiMemory, DetectAllocatesNothingOnRealFrames) {
     ASSERT_EQ(kg_detector_set_option(h.detector, "ransac.seed", run % 3 == 0 ? "7" : "1802071399"),
               KG_OK)
         << kg_last_error();
+    ASSERT_EQ(kg_detector_set_option(h.detector, "min_confidence", run % 2 == 0 ? "0" : "0.25"),
+              KG_OK);
+    ASSERT_EQ(kg_detector_set_option(h.detector, "descriptor.max_search_leaves", "8"), KG_OK);
   }
   EXPECT_EQ(allocations.count(), 0) << "kg_detect() or kg_detector_set_option() allocated";
   EXPECT_EQ(box_found, 30) << "the box is found in box_in_scene every time";
