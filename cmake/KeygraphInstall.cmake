@@ -3,6 +3,7 @@
 #
 #   component  CMake target         pkg-config          brings along
 #   core       keygraph::core       keygraph            nothing (libkeygraph_core.a)
+#   capi       keygraph::capi       keygraph-c          core; the C API (keygraph/keygraph.h)
 #   platform   keygraph::platform   keygraph-platform   core
 #   files      keygraph::files      keygraph-files      platform; OpenCV imgcodecs when built with it
 #   v4l2       keygraph::v4l2       keygraph-v4l2       platform
@@ -38,11 +39,12 @@ foreach(_kg_dir IN ITEMS LIBDIR INCLUDEDIR)
   endif()
 endforeach()
 
-# kg_install_component(COMPONENT TARGET PC_NAME DESCRIPTION [REQUIRES pc...]):
-# the library with its own export file (keygraph<Component>Targets.cmake),
-# its public headers (platform/) and its pkg-config file.
+# kg_install_component(COMPONENT TARGET PC_NAME DESCRIPTION [REQUIRES pc...]
+#                      [LIBS flag...]): the library with its own export file
+# (keygraph<Component>Targets.cmake), its public headers (platform/) and its
+# pkg-config file, whose Libs line ends with LIBS.
 function(kg_install_component component target pc_name description)
-  cmake_parse_arguments(ARG "" "" "REQUIRES" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "REQUIRES;LIBS" ${ARGN})
   string(SUBSTRING ${component} 0 1 _first)
   string(SUBSTRING ${component} 1 -1 _rest)
   string(TOUPPER ${_first} _first)
@@ -66,6 +68,11 @@ function(kg_install_component component target pc_name description)
   set(KG_PC_NAME ${pc_name})
   set(KG_PC_DESCRIPTION "${description}")
   set(KG_PC_LIB ${_output})
+  set(KG_PC_EXTRA_LIBS "")
+  if(ARG_LIBS)
+    list(JOIN ARG_LIBS " " _libs)
+    set(KG_PC_EXTRA_LIBS " ${_libs}")
+  endif()
   # Requires, not Requires.private: the libraries are static, so a
   # consumer links what they link.
   set(KG_PC_REQUIRES_LINE "")
@@ -82,6 +89,13 @@ set(KG_INSTALLED_COMPONENTS core)
 kg_install_component(core keygraph_core keygraph "Planar object detection with keygraphs (runtime core)")
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/keygraph DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
         COMPONENT dev)
+# The C API: C programs link with a C driver, which adds no C++ runtime,
+# so its .pc names it, after the core (the core's leaves it to the C++
+# driver). The core's library is named here rather than required through
+# keygraph.pc, which would put it after the runtime.
+list(APPEND KG_INSTALLED_COMPONENTS capi)
+kg_install_component(capi keygraph_capi keygraph-c "keygraph's C API (keygraph/keygraph.h)"
+                     LIBS -lkeygraph_core -lstdc++ -lm)
 if(TARGET keygraph_platform)
   list(APPEND KG_INSTALLED_COMPONENTS platform)
   kg_install_component(platform keygraph_platform keygraph-platform

@@ -40,6 +40,8 @@ foreach(_kg_platform IN ITEMS keygraph_platform keygraph_platform_files keygraph
                               keygraph_platform_libcamera)
   kg_forbid_links(${_kg_platform} "keygraph_(builder|eval|cli)" "opencv_(imgproc|features2d|calib3d)")
 endforeach()
+kg_forbid_links(keygraph_capi "keygraph_(builder|eval|cli|platform)" "opencv")
+kg_forbid_links(keygraph_jni "keygraph_(builder|eval|cli|platform)" "opencv")
 kg_forbid_links(keygraph_builder "keygraph_(eval|cli)")
 kg_forbid_links(keygraph_eval "keygraph_cli")
 

@@ -9,6 +9,10 @@
 #                      and Eigen; no OpenCV, no platform/, builder/, eval/
 #                      or cli/
 #   platform           platform/ and keygraph/ headers; never src/
+#   src/capi           keygraph/ headers and the standard library: the C API
+#                      wraps the public contract, never the core's internals
+#   src/bindings       the C API (and, for Python's build(), the builder);
+#                      never core/, eval/ or cli/
 #   src/builder        core/, builder/, platform/files, keygraph/; never
 #                      eval/ or cli/
 #   src/eval           anything but cli/
@@ -42,6 +46,9 @@ kg_layer(src/core "^(builder|eval|cli|platform|opencv2)/"
          "the core is the device library: no OpenCV, no desktop layer")
 kg_layer(platform "^(core|builder|eval|cli)/|^opencv2/(features2d|calib3d)"
          "frame sources use the public contract only")
+kg_layer(src/capi "^(core|builder|eval|cli|platform|opencv2|Eigen)/"
+         "the C API wraps the public contract (keygraph/) only")
+kg_layer(src/bindings "^(core|eval|cli)/" "the bindings go through the C API (and the builder)")
 kg_layer(src/builder "^(eval|cli)/" "the builder is below the evaluation and the CLI")
 kg_layer(src/eval "^cli/" "the evaluation is below the CLI")
 

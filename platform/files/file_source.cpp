@@ -10,6 +10,7 @@
 
 #include "platform/convert.h"
 #include "platform/files/held_stderr.h"
+#include "platform/files/image_header.h"
 #include "platform/files/image_limits.h"
 #include "platform/files/jpeg_structure.h"
 
@@ -47,8 +48,11 @@ Status decode_with_opencv(std::vector<std::uint8_t>& bytes, const std::string& p
                           StderrHold& decoder_messages) {
   if (const std::string problem = problem_before_decoding(bytes, path); !problem.empty())
     return {kBadFrameCode, "files: " + problem};
+  // The pixel limit, from the header (image_header.h).
+  if (Status s = check_declared_size(bytes, path); !s)
+    return {kBadFrameCode, "files: " + s.message()};
   // imdecode reports most problems with an empty result; some throw, among
-  // them an image over OPENCV_IO_MAX_IMAGE_PIXELS (limit_image_decoders()).
+  // them an image over OpenCV's own limit (OPENCV_IO_MAX_IMAGE_PIXELS).
   bool too_large = false;
   decoder_messages.hold();
   try {
@@ -83,16 +87,6 @@ struct FileSource::Decoded {
   StderrHold decoder_messages;
 #endif
 };
-
-void limit_image_decoders() {
-  const char* set = std::getenv("OPENCV_IO_MAX_IMAGE_PIXELS");
-  char* end = nullptr;
-  const unsigned long long value = set != nullptr ? std::strtoull(set, &end, 10) : 0;
-  if (set != nullptr && end != set && *end == '\0' && value > 0 &&
-      value <= static_cast<unsigned long long>(kMaxImagePixels))
-    return;
-  ::setenv("OPENCV_IO_MAX_IMAGE_PIXELS", kMaxImagePixelsText, 1);
-}
 
 bool is_size_limit_error(const std::string& opencv_error) {
   // The assertion in imgcodecs' validateInputImageSize() names the limit.

@@ -47,7 +47,9 @@ Status read_image(const std::string& path, GrayImage& out);
 std::string problem_before_decoding(const std::vector<std::uint8_t>& bytes,
                                     const std::string& path);
 // Whether an OpenCV exception's text is imgcodecs refusing an image over its
-// size limits (limit_image_decoders(), image_limits.h), and the message for it.
+// own size limits (OPENCV_IO_MAX_IMAGE_PIXELS; keygraph's limit,
+// image_limits.h, is checked before that: image_header.h), and the message
+// for it.
 bool is_size_limit_error(const std::string& opencv_error);
 std::string over_pixel_limit(const std::string& path);
 // The message for a file a decoder turns into something other than 8-bit

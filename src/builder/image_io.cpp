@@ -6,6 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "platform/files/file_source.h"
+#include "platform/files/image_header.h"
 #include "platform/files/image_limits.h"
 #include "platform/files/pgm.h"
 
@@ -14,12 +15,13 @@ namespace kg {
 Status load_gray(const std::string& path, cv::Mat& out) {
   out.release();
   // The file's bytes first (a regular file only, never a blocking open),
-  // checked before a decoder sees them; imdecode then checks the declared
-  // size against OPENCV_IO_MAX_IMAGE_PIXELS before allocating.
+  // checked before a decoder sees them: complete, and within the pixel
+  // limit by the size its header declares.
   std::vector<std::uint8_t> bytes;
   if (Status s = platform::read_file(path, bytes); !s) return s;
   if (const std::string problem = platform::problem_before_decoding(bytes, path); !problem.empty())
     return {StatusCode::kCorruptData, problem};
+  if (Status s = platform::check_declared_size(bytes, path); !s) return s;
   try {
     const cv::Mat raw(1, static_cast<int>(bytes.size()), CV_8U, bytes.data());
     out = cv::imdecode(raw, cv::IMREAD_GRAYSCALE);

@@ -11,10 +11,10 @@
 namespace kg {
 
 // Loads `path` as 8-bit gray: a regular file (platform/files/regular_file.h)
-// of at most platform::kMaxImagePixels pixels (refused before decoding once
-// platform::limit_image_decoders() has run; after decoding otherwise), not a
-// truncated JPEG. Errors: missing file, not a regular file (saying what it
-// is), unreadable, truncated, too small or too large an image.
+// of at most platform::kMaxImagePixels pixels (the size its header declares
+// is checked before decoding: platform/files/image_header.h, an error
+// kResourceExhausted), not a truncated JPEG. Errors: missing file, not a regular file (saying what
+// it is), unreadable, truncated, too small or too large an image.
 Status load_gray(const std::string& path, cv::Mat& out);
 
 inline ImageView view_of(const cv::Mat& gray) {

@@ -10,6 +10,7 @@
 #include "cli/commands.h"
 #include "platform/files/file_source.h"
 #include "platform/files/held_stderr.h"
+#include "platform/files/image_header.h"
 #include "platform/files/image_limits.h"
 #include "platform/files/jpeg_structure.h"
 #include "platform/files/output_file.h"
@@ -19,12 +20,31 @@ namespace kg::cli {
 
 namespace {
 
+// The factor by which cv::IMREAD_* `flags` divide each side.
+int reduction_of(int flags) {
+  switch (flags) {
+    case cv::IMREAD_REDUCED_GRAYSCALE_2:
+    case cv::IMREAD_REDUCED_COLOR_2:
+      return 2;
+    case cv::IMREAD_REDUCED_GRAYSCALE_4:
+    case cv::IMREAD_REDUCED_COLOR_4:
+      return 4;
+    case cv::IMREAD_REDUCED_GRAYSCALE_8:
+    case cv::IMREAD_REDUCED_COLOR_8:
+      return 8;
+    default:
+      return 1;
+  }
+}
+
 // Decodes `path` with `flags` (cv::IMREAD_*) under the checks of
 // load_gray(): a regular file, checked before decoding, within the pixel
-// limit (imgcodecs refuses larger before allocating). `bytes` is the file.
+// limit at the size decoded (the header's size, platform/files/
+// image_header.h, reduced as `flags` ask). `bytes` is the file.
 Status decode(const std::string& path, const std::vector<std::uint8_t>& bytes, int flags,
               cv::Mat& out) {
   out.release();
+  if (Status s = platform::check_declared_size(bytes, path, reduction_of(flags)); !s) return s;
   platform::StderrHold decoder_messages;
   decoder_messages.hold();
   bool over_limit = false;

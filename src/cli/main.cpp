@@ -3,8 +3,6 @@
 // One main for both builds of the tool (src/cli/CMakeLists.txt): the
 // desktop keygraph (KG_CLI_DESKTOP, with OpenCV) has every command; the
 // device keygraph has the commands of cli/device/ only.
-#include <unistd.h>
-
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -14,7 +12,6 @@
 #include "cli/device/options.h"
 #include "core/index/index_format.h"
 #include "keygraph/detector.h"
-#include "platform/files/file_source.h"
 #include "platform/files/image_limits.h"
 #if KG_CLI_DESKTOP
 #include "cli/commands.h"
@@ -147,27 +144,9 @@ int run(int argc, char** argv) {
                       : unknown_command(command);
 }
 
-// OpenCV imgcodecs reads its image size limit from the environment once,
-// while its library is loaded (image_limits.h): setting it from main() is
-// too late, and so is an ELF pre-initialiser (the C library's start-up
-// resets the environment after it). So the first time, keygraph sets the
-// variable and executes itself again (same process id, same arguments);
-// if that fails it carries on, and images are then size-checked after
-// decoding only.
-void limit_image_decoders_before_load(char** argv) {
-  if (!kg::platform::file_source_uses_opencv()) return;
-  const char* before = std::getenv("OPENCV_IO_MAX_IMAGE_PIXELS");
-  const std::string previous = before != nullptr ? before : "";
-  kg::platform::limit_image_decoders();
-  const char* after = std::getenv("OPENCV_IO_MAX_IMAGE_PIXELS");
-  if (after != nullptr && previous == after) return;  // already in force
-  ::execv("/proc/self/exe", argv);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  limit_image_decoders_before_load(argv);
   // Last resort (e.g. std::bad_alloc, cv::Exception): one line and a
   // non-zero exit instead of std::terminate's multi-line abort.
   int exit_code = 0;

@@ -3,7 +3,9 @@
 // from a buffer of exactly its size (so AddressSanitizer sees any read past
 // its end). A decoded image must have the size its header declares, within
 // the limits (image_limits.h), and pixels for all of it; the JPEG structure
-// check (jpeg_structure.h) runs on the same bytes.
+// check (jpeg_structure.h) and the header size reader of every other format
+// (image_header.h, at each reduction of JPEG's reduced decoding) run on the
+// same bytes.
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -11,6 +13,7 @@
 #include <cstring>
 #include <vector>
 
+#include "platform/files/image_header.h"
 #include "platform/files/image_limits.h"
 #include "platform/files/jpeg_structure.h"
 #include "platform/files/pgm.h"
@@ -46,5 +49,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   if (kg::platform::is_jpeg(bytes.data(), bytes.size()))
     (void)kg::platform::jpeg_is_complete(bytes.data(), bytes.size());
+  const kg::platform::DeclaredSize declared =
+      kg::platform::declared_image_size(bytes.data(), bytes.size());
+  require(declared.kind != kg::platform::DeclaredSize::kKnown ||
+              (declared.width > 0 && declared.height > 0),
+          "a known declared size of zero");
+  for (int reduction : {1, 2, 4, 8}) {
+    const kg::Status checked = kg::platform::check_declared_size(bytes, "fuzz", reduction);
+    require(checked || !checked.message().empty(), "a refused size without a message");
+  }
   return 0;
 }

@@ -15,6 +15,7 @@ of `keygraph inspect` on a real index: its parameter lines become --set seeds.
 """
 import os
 import random
+import struct
 import sys
 
 out, data, inspect_text = sys.argv[1], sys.argv[2], sys.argv[3]
@@ -46,6 +47,18 @@ if jpegs:
         jpeg = f.read()
     write("pgm", "whole.jpg", jpeg)
     write("pgm", "cut.jpg", jpeg[: len(jpeg) // 2])
+# The starts of other formats whose header size image_header.h reads.
+pngs = sorted((os.path.getsize(os.path.join(data, f)), f) for f in os.listdir(data)
+              if f.lower().endswith(".png"))
+if pngs:
+    with open(os.path.join(data, pngs[0][1]), "rb") as f:
+        write("pgm", "start.png", f.read()[:256])
+write("pgm", "header.bmp", b"BM" + bytes(12) + struct.pack("<IiiHH", 40, 300, -200, 1, 8))
+write("pgm", "header.tif", b"II*\0" + struct.pack("<IH", 8, 2) + struct.pack("<HHII", 256, 3, 1, 300)
+      + struct.pack("<HHII", 257, 4, 1, 200) + bytes(4))
+write("pgm", "header.webp", b"RIFF" + struct.pack("<I", 30) + b"WEBPVP8X" + struct.pack("<I", 10)
+      + bytes(4) + (299).to_bytes(3, "little") + (199).to_bytes(3, "little"))
+write("pgm", "header.pam", b"P7\nWIDTH 300\nHEIGHT 200\nDEPTH 1\nMAXVAL 255\nENDHDR\n")
 
 # convert: format, width (2 bytes), height (2 bytes), extra stride, flags,
 # buffer slack (8 = exact), then pixels.
