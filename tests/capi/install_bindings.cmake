@@ -19,4 +19,7 @@ add_test(NAME bindings_install
          COMMAND bash ${CMAKE_CURRENT_LIST_DIR}/install_bindings.sh ${PROJECT_BINARY_DIR} ${PROJECT_SOURCE_DIR}
                  ${CMAKE_COMMAND} ${CMAKE_C_COMPILER} ${KG_BINDINGS_SCENES} "${_kg_python}" "${_kg_java}"
                  "${_kg_test_jar}" "${CMAKE_GENERATOR}" "${CMAKE_MAKE_PROGRAM}")
-set_tests_properties(bindings_install PROPERTIES FIXTURES_REQUIRED bindings_scenes TIMEOUT 600)
+set_tests_properties(bindings_install PROPERTIES FIXTURES_REQUIRED bindings_scenes TIMEOUT 600
+                     # installs the build tree, as install_consume and the cpack of
+                     # install_debian_packages do: one at a time
+                     RESOURCE_LOCK build_tree_install)
