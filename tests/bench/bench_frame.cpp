@@ -56,6 +56,7 @@
 #include "eval/baselines.h"
 #include "keygraph/detector.h"
 #include "keygraph/param_text.h"
+#include "keygraph/tracker.h"
 
 namespace kg {
 namespace {
@@ -258,6 +259,52 @@ void detect_angled(benchmark::State& state, const Frame* f) {
 
 void detect_upsampled(benchmark::State& state, const Frame* f) {
   detect_with(state, f, data().upsampled.index());
+}
+
+// The 10-model index with Limits::threads = 2 (the same detections as one
+// thread, tests/core/test_threads.cpp): real time is the one to compare.
+void detect_threads2(benchmark::State& state, const Frame* f) {
+  Limits limits = data().limits;
+  limits.threads = 2;
+  Detector detector(data().index.index(), limits);
+  DetectionList found;
+  for (auto _ : state) {
+    const Status s = detector.detect(view_of(f->gray), found);
+    if (!s) {
+      state.SkipWithError(s.message().c_str());
+      break;
+    }
+    benchmark::DoNotOptimize(found.size());
+  }
+}
+
+// A tracked frame (keygraph/tracker.h): the tracker has found the frame's
+// objects once (a full detection, untimed) and then follows them in the
+// same frame, as on a camera that does not move; a detect_interval longer
+// than any run keeps it from re-detecting. Frames where nothing is found have nothing to
+// follow and are skipped.
+void tracked_frame(benchmark::State& state, const Frame* f) {
+  Detector detector(data().index.index(), data().limits);
+  TrackerOptions options;
+  options.detect_interval = 1 << 30;
+  Tracker tracker(detector, options);
+  DetectionList found;
+  if (!tracker.process(view_of(f->gray), found) || found.empty()) {
+    state.SkipWithError("nothing found to track in this frame");
+    return;
+  }
+  long long tracked = 0;
+  for (auto _ : state) {
+    const Status s = tracker.process(view_of(f->gray), found);
+    if (!s) {
+      state.SkipWithError(s.message().c_str());
+      break;
+    }
+    tracked += tracker.stats().detected ? 0 : 1;
+    benchmark::DoNotOptimize(found.size());
+  }
+  state.counters["tracked_fraction"] =
+      benchmark::Counter(static_cast<double>(tracked), benchmark::Counter::kAvgIterations);
 }
 
 // The same frames against an index of box.png alone (the paper's timing
@@ -552,6 +599,34 @@ void print_summary(const SummaryReporter& reporter) {
           angled_total.first / n, angled_total.second / n, angled_total.first / kg_total.first,
           angled_total.second / kg_total.second, orb_total.first / angled_total.first,
           orb_total.second / angled_total.second);
+    // Two threads against one, and a tracked frame against its detection,
+    // over the frames where both ran.
+    std::pair<double, double> one_thread{0, 0}, two_threads{0, 0}, detected{0, 0}, tracked{0, 0};
+    int tracked_frames = 0;
+    for (const Frame& f : data().frames) {
+      const auto d = reporter.ms("detect/" + f.name);
+      const auto t2 = reporter.ms("detect_threads2/" + f.name);
+      if (t2.first > 0) {
+        one_thread = {one_thread.first + d.first, one_thread.second + d.second};
+        two_threads = {two_threads.first + t2.first, two_threads.second + t2.second};
+      }
+      const auto t = reporter.ms("tracked/" + f.name);
+      if (t.first > 0) {
+        detected = {detected.first + d.first, detected.second + d.second};
+        tracked = {tracked.first + t.first, tracked.second + t.second};
+        ++tracked_frames;
+      }
+    }
+    if (two_threads.first > 0)
+      // Real time only: the CPU column counts the calling thread alone.
+      std::printf("2 threads: %.2fx one thread's speed (real time)\n",
+                  one_thread.first / two_threads.first);
+    if (tracked_frames > 0)
+      std::printf(
+          "tracked frame: %.2f (%.2f) ms, %.3fx a detection's time, over the %d frames "
+          "with an object to follow\n",
+          tracked.first / tracked_frames, tracked.second / tracked_frames,
+          tracked.first / detected.first, tracked_frames);
   } else {
     std::printf(
         "(the ratio needs detect/ and orb_pipeline/ of every frame: run without a filter)\n");
@@ -566,6 +641,8 @@ void register_benchmarks() {
                                               {"detect_upsampled/", detect_upsampled},
                                               {"detect_frontal/", detect_frontal},
                                               {"detect_angled/", detect_angled},
+                                              {"detect_threads2/", detect_threads2},
+                                              {"tracked/", tracked_frame},
                                               {"orb_pipeline/", orb_pipeline},
                                               {"hessian/", hessian_stage},
                                               {"blur/", blur_stage},
