@@ -9,11 +9,13 @@ namespace kg {
 
 Status DesktopDetector::detect(const cv::Mat& gray, DetectionList& out) {
   // Desktop frames come in any size: grow the core's workspace to fit
-  // (by the frame, never to the product of two thin frames' sides).
+  // (by the frame, never to the product of two thin frames' sides), with
+  // the options set on core() kept.
   const Limits& current = detector_.limits();
   if (gray.cols > current.max_width || gray.rows > current.max_height)
     detector_ =
-        Detector(detector_.index(), platform::limits_for_frame(current, gray.cols, gray.rows));
+        Detector(detector_.index(), platform::limits_for_frame(current, gray.cols, gray.rows),
+                 detector_.options());
   const Params& params = detector_.index().params();
   if (params.descriptor.vertex_descriptor == VertexDescriptor::kSift) {
     if (gray.empty() || gray.type() != CV_8UC1)

@@ -21,6 +21,7 @@
 
 #include <sys/stat.h>
 
+#include "cli/device/detect_settings.h"
 #include "cli/device/detector_fit.h"
 #include "cli/device/device_commands.h"
 #include "cli/device/frame_output.h"
@@ -62,9 +63,10 @@ struct LiveOptions {
   bool loop = false;
   bool json = false;
   std::string draw_dir;
-  int max_frames = 0;     // 0: no limit
-  bool quiet = false;     // no status lines on stderr (warnings stay)
-  bool no_track = false;  // detection alone on every frame
+  int max_frames = 0;       // 0: no limit
+  bool quiet = false;       // no status lines on stderr (warnings stay)
+  bool no_track = false;    // detection alone on every frame
+  DetectSettings settings;  // --set, --threads
 };
 
 double seconds(Clock::duration d) {
@@ -84,7 +86,8 @@ Options live_options(LiveOptions& o) {
   Options options(
       "live",
       "--index I.kgi (--v4l2 /dev/videoN | --libcamera [ID] | --images PATH)\n"
-      "       [--size WxH] [--loop] [--json] [--draw DIR] [--frames N] [--no-track] [-q]",
+      "       [--size WxH] [--loop] [--json] [--draw DIR] [--frames N] [--no-track]\n"
+      "       [--set NAME=VALUE]... [--threads N] [-q]",
       "Follows the index's objects through the frames of a camera or of image files:\n"
       "full detection when nothing is followed, when an object is lost and every 10th\n"
       "frame; on the other frames each object is confirmed around its predicted pose\n"
@@ -131,8 +134,9 @@ Options live_options(LiveOptions& o) {
             "tracked false; every frame counts as detected)")
       .flag("-q, --quiet", o.quiet,
             "no status on stderr: the source, the frames per second and the summary\n"
-            "(warnings and errors stay)")
-      .example("keygraph live --index signs.kgi --v4l2 /dev/video0 --size 1280x720")
+            "(warnings and errors stay)");
+  o.settings.declare(options);
+  options.example("keygraph live --index signs.kgi --v4l2 /dev/video0 --size 1280x720")
       .example("keygraph live --index signs.kgi --images frames/ --json --frames 100")
       .note(
           "JSON lines: those of keygraph detect --json, with \"detected\" after \"time_ms\"\n"
@@ -395,6 +399,9 @@ int cmd_live(const Args& args) {
   if (std::string error = check_draw(o); !error.empty()) return fail("live: " + error);
   LiveIndex live_index(o.index_path);
   if (Status s = live_index.load(); !s) return fail("live: " + s.message());
+  DetectOptions runtime;
+  if (Status s = o.settings.options_for(live_index.index(), runtime); !s)
+    return options.usage_error(s.message());
   std::string error;
   std::unique_ptr<platform::FrameSource> source = make_source(o, error);
   if (source == nullptr) return fail("live: " + error);
@@ -403,7 +410,8 @@ int cmd_live(const Args& args) {
   // Everything the loop needs is allocated here, before the first frame.
   // The workspace is allocated here for 640x480 and again, once, if the
   // first frame (or a later, larger one) needs more.
-  Detector detector(live_index.index());
+  Detector detector(live_index.index(), o.settings.limits(), runtime);
+  if (!detector.status()) return fail("live: " + detector.status().message());
   LiveTracker tracker(!o.no_track, o.quiet);
   if (Status t = tracker.fit(detector); !t) return fail("live: " + t.message());
   DetectionList found;
@@ -483,9 +491,13 @@ int cmd_live(const Args& args) {
 
     if (live_index.reload_if_changed()) {
       tracker.drop();  // its tracks are of the old index's models
-      detector = Detector(live_index.index(), detector.limits());
-      if (!detector.status()) {
-        exit_code = fail("live: " + detector.status().message());
+      Status rebuilt = o.settings.options_for(live_index.index(), runtime);
+      if (rebuilt) {
+        detector = Detector(live_index.index(), detector.limits(), runtime);
+        rebuilt = detector.status();
+      }
+      if (!rebuilt) {
+        exit_code = fail("live: " + rebuilt.message());
         stopped_by.clear();
         break;
       }

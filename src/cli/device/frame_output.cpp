@@ -42,8 +42,11 @@ void print_detections(const std::string& name, const ImageView& frame, double ms
                 detection_json(name, frame.width, frame.height, ms, found, stats, tracked).c_str());
     return;
   }
-  std::printf("%s: %zu detection(s) in %.1f ms%s\n", name.c_str(), found.size(), ms,
+  std::printf("%s: %zu detection(s) in %.1f ms%s", name.c_str(), found.size(), ms,
               tracked != nullptr && !tracked->detected ? ", tracked" : "");
+  if (stats.stopped_early != nullptr)
+    std::printf(" (stopped early: time budget spent in the %s)", stats.stopped_early);
+  std::printf("\n");
   for (const Detection& d : found) {
     std::printf("  %.*s: inliers %d, score %.3f, appearance %.2f, confidence %.2f, corners",
                 static_cast<int>(d.model_name.size()), d.model_name.data(), d.inliers, d.score,

@@ -143,7 +143,10 @@ std::string detection_json(const std::string& scene, int width, int height, doub
     s += (first ? "" : ", ") + json_string(name);
     first = false;
   }
-  s += "]}}";
+  // The stage a time budget (--set time_budget_ms) ran out in.
+  s += "], \"stopped_early\": " +
+       (stats.stopped_early == nullptr ? std::string("null") : json_string(stats.stopped_early));
+  s += "}}";
   return s;
 }
 

@@ -21,7 +21,9 @@ std::string json_number(double v);
 struct TrackedFrame {
   bool detected = true;
 };
-// One line: {"scene": ..., "width": ..., "detections": [...], "stats": {...}};
+// One line: {"scene": ..., "width": ..., "detections": [...], "stats": {...}}
+// (the stats end with "stopped_early": the stage a time budget ran out in,
+// or null);
 // with `tracked`, its additions too.
 std::string detection_json(const std::string& scene, int width, int height, double time_ms,
                            const DetectionList& detections, const DetectStats& stats,
