@@ -1,6 +1,7 @@
 #!/bin/bash
 # Runtime options of the commands that detect (issues 34 and 35), on real
-# images: --threads N and --set NAME=VALUE on detect, live and bench.
+# images: --threads N and --set NAME=VALUE on detect, live, bench and eval
+# (--truth, its keygraph method, with --index and with --models).
 #   --threads       detect --json and live --json give the same lines for 1
 #                   and 2 threads (times aside); bench says its thread count
 #   --set           time_budget_ms=0.001 stops early without an error (the
@@ -136,6 +137,40 @@ done
 run "$KG" detect --index "$INDEX" --json --set time_budget_ms=0.001 --set time_budget_ms=0 "$SCENE"
 untimed | cmp -s - <(sed -n 1p "$WORK/one.jsonl") ||
   bad "--set repeated: the last value of a name wins: $(cat "$ERR")"
+
+# --- eval --truth: the keygraph method's --threads and --set -------------------------
+MANIFEST=$WORK/truth.jsonl
+{
+  echo "{\"scene\": \"$DATA/box_in_scene.png\", \"instances\": [{\"model\": \"box\", \"corners\": [[118, 161], [284, 175], [268, 298], [90, 272]]}]}"
+  echo "{\"scene\": \"$DATA/baboon.jpg\", \"instances\": []}"
+} >"$MANIFEST"
+# The "found" count of eval's keygraph row in $OUT.
+found() { awk '$1 == "keygraph" { print $3; exit }' "$OUT"; }
+for n in 1 2; do
+  run "$KG" eval --truth "$MANIFEST" --index "$INDEX" -q --threads $n -o "$WORK/eval$n"
+  [ "$rc" -eq 0 ] && [ "$(found)" = 1 ] || bad "eval --threads $n: exit $rc, found $(found): $(cat "$ERR")"
+done
+cmp -s "$WORK/eval1/truth-detections.csv" "$WORK/eval2/truth-detections.csv" ||
+  bad "eval --truth: --threads 2 detections differ from --threads 1"
+run "$KG" eval --truth "$MANIFEST" --index "$INDEX" -q --set time_budget_ms=0.001
+[ "$rc" -eq 0 ] && [ "$(found)" = 0 ] ||
+  bad "eval --index --set time_budget_ms=0.001: exit $rc, found $(found) (expected 0): $(cat "$ERR")"
+mkdir "$WORK/models"
+cp "$DATA/box.png" "$WORK/models/"
+run "$KG" eval --truth "$MANIFEST" --models "$WORK/models" -q --set views.max_tilt=0 --threads 2
+[ "$rc" -eq 0 ] && [ "$(found)" = 1 ] ||
+  bad "eval --models --threads 2: exit $rc, found $(found) (expected 1): $(cat "$ERR")"
+run "$KG" eval --truth "$MANIFEST" --models "$WORK/models" -q --set views.max_tilt=0 \
+  --set time_budget_ms=0.001
+[ "$rc" -eq 0 ] && [ "$(found)" = 0 ] ||
+  bad "eval --models --set time_budget_ms=0.001: exit $rc, found $(found) (expected 0): $(cat "$ERR")"
+run "$KG" eval --truth "$MANIFEST" --index "$INDEX" -q --set min_confidence=2
+one_error 2 "min_confidence must be in [0, 1]" || bad "eval --set min_confidence=2: exit $rc: $(cat "$ERR")"
+run "$KG" eval --truth "$MANIFEST" --index "$INDEX" -q --set bogus=1
+one_error 2 "--set bogus=1: unknown option 'bogus'" && grep -q "time_budget_ms" "$ERR" ||
+  bad "eval --set bogus=1: exit $rc: $(cat "$ERR")"
+run "$KG" eval --truth "$MANIFEST" --index "$INDEX" -q --threads 0
+one_error 2 "--threads 0" || bad "eval --threads 0: exit $rc: $(cat "$ERR")"
 
 echo "cli_detect_settings: $checks runs, $failures failure(s)"
 [ "$failures" -eq 0 ]
