@@ -345,7 +345,6 @@ struct FrameTally {
 class LiveTracker {
  public:
   LiveTracker(bool enabled, bool quiet) : enabled_(enabled), quiet_(quiet) {}
-  bool enabled() const { return enabled_; }
   // Forgets the tracker (before the detector is replaced).
   void drop() { tracker_.reset(); }
   // Makes the tracker for `detector` when there is none or the detector's
