@@ -7,6 +7,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "builder/detector_settings.h"
 #include "builder/keypoints.h"
 #include "builder/sift_descriptors.h"
 #include "keygraph/detector.h"
@@ -17,6 +18,9 @@ class DesktopDetector {
  public:
   explicit DesktopDetector(const ModelIndex& index, const Limits& limits = Limits{})
       : detector_(index, limits), limits_(limits) {}
+  // With `settings` applied; a setting that does not apply is the status
+  // detect() returns.
+  DesktopDetector(const ModelIndex& index, const Limits& limits, const DetectorSettings& settings);
   Status detect(const cv::Mat& gray, DetectionList& out);
   const DetectStats& stats() const { return detector_.stats(); }
   Detector& core() { return detector_; }
@@ -24,6 +28,7 @@ class DesktopDetector {
  private:
   Detector detector_;
   Limits limits_;
+  Status settings_status_;
   KeypointExtractor extractor_;
   std::vector<Keypoint> keypoints_;
   SiftDescriber sift_;

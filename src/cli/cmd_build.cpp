@@ -3,6 +3,9 @@
 // (views.min_size, views.max_scale, views.max_tilt; --max-tilt also sets the
 // tilt levels, steps of about 0.5 in t as ASIFT's, unless views.tilt_levels
 // is --set).
+// --preset NAME starts from a named parameter set (keygraph/param_text.h)
+// instead of the defaults, wherever it is on the command line: every other
+// option applies over it.
 // --name and --roi apply to the model image that follows them: --roi makes
 // the model that rectangle of the image (model pixel (0,0) is image pixel
 // (X,Y)); without --name the model is named after the file's stem.
@@ -156,6 +159,17 @@ Status prepare_model_images(std::vector<ModelSource>& sources, int max_side) {
   return Status::ok();
 }
 
+// The --preset of `args` (before `--`), found before the options are
+// parsed so that it applies under every other option whatever the order;
+// empty when none is given.
+std::string preset_argument(const Args& args) {
+  std::string name;
+  for (std::size_t i = 0; i + 1 < args.size() && args[i] != "--"; ++i) {
+    if (args[i] == "--preset") name = args[++i];
+  }
+  return name;
+}
+
 // load_image() with a hint for photos over the pixel limit.
 Status load_model_image_or_hint(const std::string& path, cv::Mat& gray) {
   Status s = load_image(path, gray);
@@ -178,6 +192,11 @@ int cmd_build(const Args& args) {
   int max_side = 0;
   bool look_alikes = true;
   Params params;
+  if (const std::string preset = preset_argument(args); !preset.empty()) {
+    Params preset_set;
+    // An unknown name is reported by the --preset option below.
+    if (preset_params(preset, preset_set)) params = preset_set;
+  }
   bool tilt_given = false, tilt_levels_given = false;
   bool quiet = false;
   int jobs = 0;
@@ -228,6 +247,21 @@ int cmd_build(const Args& args) {
                return {};
              })
       .repeatable()
+      .value(
+          "--preset", "NAME",
+          "start from a named parameter set instead of the defaults (every other\n"
+          "option applies over it, wherever it is given): defaults; frontal: no tilted\n"
+          "views, no triangle check or circuit completion, arcs between every pair in\n"
+          "range, 20 search leaves (the cheapest frame, for objects seen face on);\n"
+          "angled: tilts to 60 degrees in two levels, arcs between every pair in range,\n"
+          "10 search leaves (a little more recall at an angle for about 1.5x the frame)",
+          [](const std::string& v) -> std::string {
+            Params unused;
+            if (Status s = preset_params(v, unused); !s)
+              return "--preset " + v + ": " + s.message();
+            return {};
+          },
+          "defaults")
       .value(
           "--detector", "hessian|mser", "the keypoint detector",
           [&params](const std::string& v) -> std::string {
@@ -321,7 +355,10 @@ int cmd_build(const Args& args) {
             "no progress on stderr (by default one line rewritten in place on a\n"
             "terminal, otherwise a line per model)")
       .example("keygraph build --name exit --roi 10,10,200,120 exit.png stairs.png -o signs.kgi")
-      .example("keygraph build --max-side 2000 photos/ -o signs.kgi");
+      .example("keygraph build --max-side 2000 photos/ -o signs.kgi")
+      .example(
+          "keygraph build --preset frontal --set descriptor.max_search_leaves=10 signs/ -o "
+          "signs.kgi");
   if (const int exit_code = table.parse(args); exit_code >= 0) return exit_code;
   if (tilt_given && !tilt_levels_given)
     params.views.tilt_levels =

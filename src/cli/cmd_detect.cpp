@@ -21,7 +21,9 @@ int cmd_detect(const Args& args) {
   std::string index_path, draw;
   bool json = false;
   std::vector<std::string> scene_args, scenes;
-  const Options options = detect_options(index_path, draw, json, scene_args, "PNG, in colour");
+  DetectSettings settings;
+  const Options options =
+      detect_options(index_path, draw, json, scene_args, settings, "PNG, in colour");
   if (const int exit_code = options.parse(args); exit_code >= 0) return exit_code;
   if (index_path.empty()) return options.usage_error("no index given (--index I.kgi)");
   if (scene_args.empty()) return options.usage_error("no scene images given");
@@ -42,7 +44,10 @@ int cmd_detect(const Args& args) {
   ModelIndex index;
   Status s = ModelIndex::read(index_path, index);
   if (!s) return fail(s.message());
-  DesktopDetector detector(index);
+  DetectOptions runtime;
+  if (s = settings.options_for(index, runtime); !s) return options.usage_error(s.message());
+  DesktopDetector detector(index, settings.limits());
+  if (s = detector.core().set_options(runtime); !s) return fail(s.message());
   int exit_code = 0;
   DetectionList found;
   for (std::size_t i = 0; i < scenes.size(); ++i) {

@@ -41,14 +41,47 @@ std::string joined(const std::vector<std::string>& items) {
   return out;
 }
 
-Options::Apply set_param(Params& params) {
-  return [&params](const std::string& v) {
-    const Status s = set_param(params, v);
-    return s ? std::string() : s.message();
-  };
-}
-
 }  // namespace
+
+void declare_eval_settings(Options& options, Params& params, DetectorSettings& detector,
+                           bool* params_set, const std::string& set_help) {
+  options
+      .value(
+          "--set", "NAME=VALUE", set_help,
+          [&params, &detector, params_set](const std::string& v) -> std::string {
+            const std::size_t eq = v.find('=');
+            std::string unused;
+            if (eq != std::string::npos && !param_value_text(Params{}, v.substr(0, eq), unused)) {
+              // Not a parameter of the index: a runtime option (checked
+              // against the defaults: its range depends on no index).
+              DetectOptions o;
+              Status s = set_detect_option(o, v.substr(0, eq), v.substr(eq + 1));
+              if (s) s = Detector::check_options(ModelIndex{}, o);
+              if (!s)
+                return "--set " + v + ": " + s.message() +
+                       " (a parameter of keygraph/params.h, as keygraph inspect lists them, "
+                       "or min_confidence or time_budget_ms)";
+              detector.options.push_back(v);
+              return {};
+            }
+            const Status s = set_param(params, v);
+            if (!s) return s.message();
+            // A runtime option stored in the index (ransac.*, the search
+            // effort) also applies to an --index eval did not build.
+            DetectOptions o;
+            if (eq != std::string::npos &&
+                set_detect_option(o, v.substr(0, eq), v.substr(eq + 1))) {
+              detector.options.push_back(v);
+            } else if (params_set != nullptr) {
+              *params_set = true;
+            }
+            return {};
+          })
+      .repeatable()
+      .integer("--threads", "N", detector.threads, 1, 64,
+               "threads per detection of the keygraph methods, the caller's included (the\n"
+               "detections are the same for any count)");
+}
 
 Options::Apply method_list_option(std::vector<std::string>& methods, bool* given) {
   return [&methods, given](const std::string& v) -> std::string {
@@ -67,6 +100,10 @@ Options::Apply method_list_option(std::vector<std::string>& methods, bool* given
 
 namespace {
 
+const char* const kSetHelp =
+    "a parameter of keygraph/params.h, or a runtime option of the keygraph\n"
+    "methods' detectors: min_confidence, time_budget_ms";
+
 const char* const kQuietHelp =
     "no progress on stderr (by default one line rewritten in place on a\n"
     "terminal, otherwise a line every 10 %)";
@@ -78,8 +115,8 @@ Options oxford_options(OxfordEvalOptions& o, std::string& out_dir, std::string& 
   Options options(
       "eval",
       "--dataset DIR [--subsets a,b] [--crops N] [--size S] [--centre] [--seed N]\n"
-      "       [--set NAME=VALUE]... [--methods M,...|all] [--negatives] [--curves]\n"
-      "       [-o DIR] [--csv FILE] [-q]",
+      "       [--set NAME=VALUE]... [--threads N] [--methods M,...|all] [--negatives]\n"
+      "       [--curves] [-o DIR] [--csv FILE] [-q]",
       "The paper's second experiment on the Oxford layout: crops of img1 are the models,\n"
       "img2..img6 the scenes; a detection counts when its four corners are within 3\n"
       "(or 10) pixels of the ground truth.");
@@ -93,10 +130,10 @@ Options oxford_options(OxfordEvalOptions& o, std::string& out_dir, std::string& 
       .integer("--size", "S", o.crop_size, 32, Limits::kMaxSide, "crop side, pixels")
       .flag("--centre", o.centre_crop, "one crop, centred, instead of random ones")
       .unsigned64("--seed", "N", o.seed, "seed of the random crops")
-      .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h", set_param(o.params))
-      .repeatable()
       .value("--methods", "M,...|all", kMethodsHelp, method_list_option(o.methods, nullptr),
-             joined(o.methods))
+             joined(o.methods));
+  declare_eval_settings(options, o.params, o.detector, nullptr, kSetHelp);
+  options
       .flag("--negatives", o.negatives,
             "also run each crop on the next subset's scenes (false detections)")
       .flag("--curves", o.curves, "precision-recall of correspondences and RANSAC iterations")
@@ -110,7 +147,7 @@ Options oxford_options(OxfordEvalOptions& o, std::string& out_dir, std::string& 
 Options synth_options(SynthEvalOptions& o, std::string& out_dir, bool& quiet) {
   Options options("eval",
                   "--synth DIR [--sizes 1,10,50] [--frames N] [--methods M,...|all]\n"
-                  "       [--set NAME=VALUE]... [-o DIR] [-q]",
+                  "       [--set NAME=VALUE]... [--threads N] [-o DIR] [-q]",
                   "The sign benchmark written by keygraph synth: each frame searched with indexes\n"
                   "of N signs; found within 10 pixels, false detections, time, by sign scale.");
   options.text("--synth", "DIR", o.directory, "the benchmark's directory (required)")
@@ -141,9 +178,9 @@ Options synth_options(SynthEvalOptions& o, std::string& out_dir, bool& quiet) {
           },
           "every frame")
       .value("--methods", "M,...|all", kMethodsHelp, method_list_option(o.methods, nullptr),
-             joined(o.methods))
-      .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h", set_param(o.params))
-      .repeatable()
+             joined(o.methods));
+  declare_eval_settings(options, o.params, o.detector, nullptr, kSetHelp);
+  options
       .text("-o, --out, --output", "DIR", out_dir, "also write the report (tables, plots) into DIR")
       .flag("-q, --quiet", quiet, kQuietHelp)
       .example("keygraph eval --synth signs-bench --sizes 1,50 --methods keygraph,sift-ransac");
@@ -186,7 +223,10 @@ int cmd_eval(const Args& args) {
     return table.usage_error(
         "give one of --dataset DIR (Oxford layout), --synth DIR (keygraph synth) or --truth "
         "MANIFEST");
-  if (synth_mode) options.params = synth.params;
+  if (synth_mode) {
+    options.params = synth.params;
+    options.detector = synth.detector;
+  }
   // Parameters out of range (--set) are the command line's fault.
   if (Status s = format::validate_params(options.params); !s) return table.usage_error(s.message());
   // The outputs before the (long) run, so that a bad one fails at once;

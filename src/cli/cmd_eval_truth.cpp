@@ -20,11 +20,13 @@ namespace kg::cli {
 Options truth_options(TruthEvalOptions& o, std::string& out_dir, bool& quiet) {
   std::string methods;
   for (const std::string& m : o.methods) methods += (methods.empty() ? "" : ",") + m;
-  Options options("eval",
-                  "--truth MANIFEST (--models DIR|M.json | --index I.kgi) [--methods M,...|all]\n"
-                  "       [--tolerance PX] [--set NAME=VALUE]... [-o DIR] [--gallery] [-q]",
-                  "Detectors scored against hand-marked ground truth (docs/EVAL.md): found, false\n"
-                  "detections, by size, time. Every input is checked before the first detection.");
+  Options options(
+      "eval",
+      "--truth MANIFEST (--models DIR|M.json | --index I.kgi) [--methods M,...|all]\n"
+      "       [--tolerance PX] [--set NAME=VALUE]... [--threads N] [-o DIR] [--gallery]\n"
+      "       [-q]",
+      "Detectors scored against hand-marked ground truth (docs/EVAL.md): found, false\n"
+      "detections, by size, time. Every input is checked before the first detection.");
   options.text("--truth", "MANIFEST", o.manifest, "the ground-truth manifest (.jsonl; required)")
       .text("--models", "DIR|M.json", o.models,
             "model images: a directory (each image a model) or a models.json")
@@ -34,14 +36,11 @@ Options truth_options(TruthEvalOptions& o, std::string& out_dir, bool& quiet) {
              "(with --index: keygraph)",
              method_list_option(o.methods, &o.methods_set), methods)
       .number("--tolerance", "PX", o.tolerance, 0, 1e6, true,
-              "a detection is correct when every corner is within PX pixels")
-      .value("--set", "NAME=VALUE", "a parameter of keygraph/params.h (with --models)",
-             [&o](const std::string& v) {
-               const Status s = set_param(o.params, v);
-               o.params_set = true;
-               return s ? std::string() : s.message();
-             })
-      .repeatable()
+              "a detection is correct when every corner is within PX pixels");
+  declare_eval_settings(options, o.params, o.detector, &o.params_set,
+                        "a parameter of keygraph/params.h (with --models), or a runtime option\n"
+                        "of the keygraph methods' detectors: min_confidence, time_budget_ms");
+  options
       .text("-o, --out, --output", "DIR", out_dir,
             "also write the report (tables, pictures) into DIR")
       .flag("--gallery", o.gallery,

@@ -28,6 +28,12 @@ int cmd_manifest(const Args& args);
 // The --methods option of eval: every name checked (a usage error names
 // the unknown one); `given` (may be null) is set when the option is used.
 Options::Apply method_list_option(std::vector<std::string>& methods, bool* given);
+// eval's --set NAME=VALUE and --threads N on `options`: --set takes a
+// parameter of the indexes eval builds (into `params`; `params_set`, when
+// not null, is set) or a runtime option no index stores (min_confidence,
+// time_budget_ms: into `detector`); --threads is the keygraph detectors'.
+void declare_eval_settings(Options& options, Params& params, DetectorSettings& detector,
+                           bool* params_set, const std::string& set_help);
 int cmd_synth(const Args& args);
 int cmd_repeatability(const Args& args);
 

@@ -50,7 +50,7 @@ constexpr Command kCommands[] = {
     {"synth", "(desktop keygraph only)", nullptr},
     {"repeatability", "(desktop keygraph only)", nullptr},
 #endif
-    {"live", "detect on every camera frame or image file", kg::cli::cmd_live},
+    {"live", "follow the models through camera frames or image files", kg::cli::cmd_live},
     {"bench", "time detect() per stage on frames in memory", kg::cli::cmd_bench},
     {"inspect", "an index's header, parameters, sections and models", kg::cli::cmd_inspect},
 };

@@ -226,7 +226,8 @@ Status evaluate_oxford(const OxfordEvalOptions& options, std::vector<OxfordCase>
         Status s = build_model(crop, "crop", run.params, run.model);
         if (s) s = run.index.build({run.model}, run.params);
         if (!s) return {s.code(), where + s.message()};
-        run.detector = std::make_unique<DesktopDetector>(run.index.index());
+        run.detector =
+            std::make_unique<DesktopDetector>(run.index.index(), Limits{}, options.detector);
         if (options.curves) {
           s = run.curve_index.build({run.model}, curve_params(run.params, grids.arc.back()));
           if (!s) return {s.code(), where + s.message()};

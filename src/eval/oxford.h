@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "builder/detector_settings.h"
 #include "builder/progress.h"
 #include "eval/pr_curves.h"
 #include "keygraph/params.h"
@@ -27,6 +28,7 @@ struct OxfordEvalOptions {
   bool centre_crop = false;  // one crop, centred, instead of random ones
   std::uint64_t seed = 1;
   Params params;
+  DetectorSettings detector;  // the keygraph methods' threads and runtime options
   // "keygraph" (the index's keypoint detector, Hessian by default),
   // "keygraph-mser" (the same with MSER keypoints) and/or baseline names
   // (eval/baselines.h: "sift-ransac", ...).

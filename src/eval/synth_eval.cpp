@@ -178,7 +178,8 @@ Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& c
         indexes.push_back(std::make_unique<InMemoryIndex>());
         const std::vector<BuiltModel> models(k.models.begin() + begin, k.models.begin() + end);
         if (s = indexes.back()->build(models, k.params); !s) return s;
-        detectors.push_back(std::make_unique<DesktopDetector>(indexes.back()->index()));
+        detectors.push_back(
+            std::make_unique<DesktopDetector>(indexes.back()->index(), Limits{}, options.detector));
       }
       std::vector<BaselineDetector> base;
       const std::vector<cv::Mat> group_signs(signs.begin() + begin, signs.begin() + end);

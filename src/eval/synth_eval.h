@@ -14,6 +14,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "builder/detector_settings.h"
 #include "builder/progress.h"
 #include "eval/synth/synth_frame.h"
 #include "keygraph/detector.h"
@@ -29,7 +30,8 @@ struct SynthEvalOptions {
   // "keygraph", "keygraph-mser" and/or baseline names (eval/baselines.h).
   std::vector<std::string> methods = {"keygraph"};
   Params params;
-  int max_frames = 0;  // 0: every frame
+  DetectorSettings detector;  // the keygraph methods' threads and runtime options
+  int max_frames = 0;         // 0: every frame
 };
 
 // One detection as scored: right when of the frame's sign within 10 px.

@@ -506,13 +506,14 @@ Status evaluate_truth(const TruthEvalOptions& options, TruthResults& results,
                                                  std::max(gray.rows, Limits{}.max_height));
         if (m.keygraph && !options.index.empty()) {
           // The file's index as it is: other models' detections are dropped below.
-          d.keygraph = std::make_unique<DesktopDetector>(file_index, limits);
+          d.keygraph = std::make_unique<DesktopDetector>(file_index, limits, options.detector);
         } else if (m.keygraph) {
           std::vector<BuiltModel> subset;
           for (const int id : searched) subset.push_back(m.built[static_cast<std::size_t>(id)]);
           d.index = std::make_unique<InMemoryIndex>();
           if (s = d.index->build(subset, m.params); !s) return s;
-          d.keygraph = std::make_unique<DesktopDetector>(d.index->index(), limits);
+          d.keygraph =
+              std::make_unique<DesktopDetector>(d.index->index(), limits, options.detector);
         } else {
           std::vector<cv::Mat> subset;
           for (const int id : searched) subset.push_back(grays[static_cast<std::size_t>(id)]);

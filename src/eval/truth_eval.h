@@ -17,6 +17,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "builder/detector_settings.h"
 #include "builder/progress.h"
 #include "eval/truth_manifest.h"
 #include "keygraph/params.h"
@@ -36,9 +37,10 @@ struct TruthEvalOptions {
   bool methods_set = false;
   double tolerance = 10;  // px, every corner
   double min_iou = 0.5;
-  Params params;            // for building the keygraph models
-  bool params_set = false;  // --set given (not allowed with an index)
-  bool gallery = false;     // draw the scenes with a miss or a false detection
+  Params params;              // for building the keygraph models
+  bool params_set = false;    // --set given (not allowed with an index)
+  DetectorSettings detector;  // the keygraph methods' threads and runtime options
+  bool gallery = false;       // draw the scenes with a miss or a false detection
 };
 
 struct TruthModel {

@@ -241,7 +241,7 @@ grep -qx "wrote $WORK/one.kgi (1 model)" "$OUT" || bad "build of one model: $(ta
 run "$KG" inspect "$WORK/one.kgi"
 grep -q '^total: 1 model, ' "$OUT" || bad "inspect of one model: $(grep '^total' "$OUT")"
 run "$KG" bench --index "$WORK/one.kgi" --repeat 1 "$SCENE"
-grep -Eq ': 1 model, .*; 1 frame( file)?, 1 run each$' "$OUT" || bad "bench of one model: $(head -n 1 "$OUT")"
+grep -Eq ': 1 model, .*; 1 frame( file)?, 1 run each, 1 thread$' "$OUT" || bad "bench of one model: $(head -n 1 "$OUT")"
 run "$KG" build "${QUICK[@]}" --detector mser "$DATA/box.png" -o "$WORK/mser.kgi"
 run "$KG" live --index "$WORK/mser.kgi" --images "$FRAMES"
 if ! one_error 1 "keygraph: live: " || grep -q "needs OpenCV" "$ERR" || ! grep -q "core detector" "$ERR"; then

@@ -4,8 +4,9 @@
 A directory of frames made from opencv-doc images (box_in_scene as PNG and as
 PGM, the box model itself as PGM, fruits.jpg without the box) goes through
 `keygraph live --images` (platform/files -> the core detector -> JSON lines).
-Checked: one JSON line per frame in file order, exactly the keys and the
-detections of `keygraph detect --json` on the same files, the box found
+Checked: one JSON line per frame in file order, the keys and the detections
+of `keygraph detect --json` on the same files (live --no-track; live's
+additions, "detected", "track" and "tracked", aside), the box found
 where detect finds it, nothing found in fruits.jpg, PNG and PGM of the same
 picture giving the same result, --frames, --draw (PGM pictures, outlines
 only where something was found), text output, SIGINT and SIGTERM on a
@@ -25,6 +26,7 @@ import time
 
 KG, TO_PGM, DATA = (os.path.abspath(a) for a in sys.argv[1:4])
 DETECT_KEYS = ["scene", "width", "height", "time_ms", "detections", "stats"]
+LIVE_KEYS = ["scene", "width", "height", "time_ms", "detected", "detections", "stats"]
 failures = []
 
 
@@ -43,7 +45,11 @@ def json_lines(text):
 
 
 def without_time(record):
-    return {k: v for k, v in record.items() if k not in ("time_ms", "scene")}
+    """The record without its time, its name and live's additions."""
+    out = {k: v for k, v in record.items() if k not in ("time_ms", "scene", "detected")}
+    out["detections"] = [{k: v for k, v in d.items() if k not in ("track", "tracked")}
+                         for d in record.get("detections", [])]
+    return out
 
 
 def read_pgm(path):
@@ -71,8 +77,10 @@ try:
     names = sorted(os.listdir(frames))
     paths = [os.path.join(frames, n) for n in names]
 
-    # 1. JSON lines, compared with detect on the same files.
-    live = run("live", "--index", index, "--images", frames, "--json")
+    # 1. JSON lines, compared with detect on the same files (detection on
+    # every frame: tracking would follow the box from 0_scene.png into
+    # 1_scene.pgm instead; tests/cli/cli_live_track.py tests it).
+    live = run("live", "--index", index, "--images", frames, "--json", "--no-track")
     check(live.returncode == 0, "live --images exits 0 (got %d: %s)" % (live.returncode, live.stderr))
     lines = json_lines(live.stdout)
     detect = run("detect", "--index", index, "--json", *paths)
@@ -80,7 +88,11 @@ try:
     reference = json_lines(detect.stdout)
     check(len(lines) == len(paths), "one line per frame (%d lines, %d frames)" % (len(lines), len(paths)))
     for record, ref, path in zip(lines, reference, paths):
-        check(list(record) == DETECT_KEYS, "%s: keys %s" % (path, list(record)))
+        check(list(record) == LIVE_KEYS, "%s: keys %s" % (path, list(record)))
+        check(list(ref) == DETECT_KEYS, "detect %s: keys %s" % (path, list(ref)))
+        check(record["detected"] is True and
+              all(d["track"] == -1 and d["tracked"] is False for d in record["detections"]),
+              "%s: --no-track: detected, no track" % path)
         check(record["scene"] == path, "scene %s is the file %s" % (record["scene"], path))
         check(without_time(record) == without_time(ref), "%s: same result as detect" % path)
         check(record["time_ms"] > 0, "%s: time_ms > 0" % path)
@@ -95,7 +107,8 @@ try:
     # The box's outline in box_in_scene (cf. tests/core/test_detection.cpp).
     check(100 < corners[0][0] < 135 and 145 < corners[0][1] < 180,
           "box top-left corner near (117, 161): %s" % corners[0])
-    check("live: files " in live.stderr and "live: 4 frames in" in live.stderr,
+    check("live: files " in live.stderr and "live: 4 frames in" in live.stderr and
+          "; 0 tracked, 4 detected (mean " in live.stderr,
           "stderr names the source and gives the summary: " + live.stderr)
 
     # 2. --frames, text output.

@@ -89,6 +89,32 @@ TEST(CliJson, SceneErrorLine) {
             "{\"scene\": \"x\\ufffd.png\", \"error\": \"x\\ufffd.png: no such file\"}");
 }
 
+// live's additions (a frame without detection, a followed object) and the
+// stage a time budget ran out in: where they go in the line.
+TEST(CliJson, TrackFieldsAndStoppedEarly) {
+  DetectionList found;
+  Detection d;
+  d.model_name = "box";
+  d.track_id = 3;
+  d.tracked = true;
+  ASSERT_TRUE(found.push_back(d));
+  DetectStats stats;
+  const std::string plain = detection_json("f.pgm", 64, 48, 1.5, found, stats);
+  EXPECT_EQ(plain.find("\"detected\""), std::string::npos);
+  EXPECT_EQ(plain.find("\"track\""), std::string::npos);
+  EXPECT_NE(plain.find("\"truncated\": [], \"stopped_early\": null}}"), std::string::npos) << plain;
+
+  const TrackedFrame followed{false};
+  stats.stopped_early = "selection";
+  const std::string live = detection_json("f.pgm", 64, 48, 1.5, found, stats, &followed);
+  EXPECT_NE(live.find("\"time_ms\": 1.5, \"detected\": false, \"detections\": ["),
+            std::string::npos)
+      << live;
+  EXPECT_NE(live.find("\"confidence\": 0, \"track\": 3, \"tracked\": true}]"), std::string::npos)
+      << live;
+  EXPECT_NE(live.find("\"stopped_early\": \"selection\"}}"), std::string::npos) << live;
+}
+
 Detection detection_with_corners(Point2f a, Point2f b, Point2f c, Point2f d) {
   Detection det;
   det.corners[0] = a;

@@ -75,11 +75,13 @@ void print_text(const std::string& name, ImageView frame, int repeat, int min_fo
   }
 }
 
-void print_json(const std::string& name, ImageView frame, int repeat, int min_found, int max_found,
-                std::optional<std::size_t> workspace, const Summary (&rows)[kSeries]) {
+void print_json(const std::string& name, ImageView frame, int repeat, int threads, int min_found,
+                int max_found, std::optional<std::size_t> workspace,
+                const Summary (&rows)[kSeries]) {
   std::string s =
       "{\"frame\": " + json_string(name) + ", \"width\": " + std::to_string(frame.width) +
       ", \"height\": " + std::to_string(frame.height) + ", \"repeat\": " + std::to_string(repeat) +
+      ", \"threads\": " + std::to_string(threads) +
       ", \"workspace_bytes\": " + (workspace ? std::to_string(*workspace) : std::string("null")) +
       ", \"detections\": {\"min\": " + std::to_string(min_found) +
       ", \"max\": " + std::to_string(max_found) + "}, \"ms\": {";
@@ -99,7 +101,10 @@ int cmd_bench(const Args& args) {
   int repeat = 20;
   bool json = false;
   std::vector<std::string> paths;
-  Options options("bench", "--index I.kgi [--repeat N] [--json] FRAME...",
+  DetectSettings settings;
+  Options options("bench",
+                  "--index I.kgi [--repeat N] [--json] [--set NAME=VALUE]... [--threads N]\n"
+                  "       FRAME...",
                   "Times Detector::detect() per stage on each frame in memory: min, median, p90\n"
                   "and max milliseconds of each stage and in total, and the workspace bytes.");
   options
@@ -110,8 +115,10 @@ int cmd_bench(const Args& args) {
                   })
       .text("--index", "I.kgi", index_path, "the model index to detect with (required)")
       .integer("--repeat", "N", repeat, 1, 1000000, "detect() runs per frame")
-      .flag("--json", json, "one JSON object per frame on stdout instead of the table")
-      .example("keygraph bench --index signs.kgi --repeat 50 frames/");
+      .flag("--json", json, "one JSON object per frame on stdout instead of the table");
+  settings.declare(options);
+  options.example("keygraph bench --index signs.kgi --repeat 50 frames/")
+      .example("keygraph bench --index signs.kgi --threads 2 frames/");
   if (const int exit_code = options.parse(args); exit_code >= 0) return exit_code;
   if (index_path.empty()) return options.usage_error("no index given (--index I.kgi)");
   if (paths.empty()) return options.usage_error("no frames given (image files or directories)");
@@ -124,7 +131,9 @@ int cmd_bench(const Args& args) {
   if (Status s = source.start(); !s) return fail("bench: " + s.message());
   // The workspace for 640x480, grown when a frame does not fit
   // (fit_detector()), before that frame's timed loop.
-  Detector detector(index);
+  DetectOptions runtime;
+  if (Status s = settings.options_for(index, runtime); !s) return options.usage_error(s.message());
+  Detector detector(index, settings.limits(), runtime);
   if (!detector.status()) return fail("bench: " + detector.status().message());
   DetectionList found;
   // One row per run: the five stages and the total, filled by the timed loop.
@@ -132,11 +141,11 @@ int cmd_bench(const Args& args) {
   std::vector<double> series(static_cast<std::size_t>(repeat));
 
   if (!json) {
-    std::printf("index %s: %s, %u arcs, %s descriptors; %s, %s each\n", index_path.c_str(),
+    std::printf("index %s: %s, %u arcs, %s descriptors; %s, %s each, %s\n", index_path.c_str(),
                 counted(index.model_count(), "model").c_str(), index.arc_count(),
                 encoding_name(index.descriptor_encoding()),
                 counted(static_cast<long long>(source.files().size()), "frame file").c_str(),
-                counted(repeat, "run").c_str());
+                counted(repeat, "run").c_str(), counted(settings.threads(), "thread").c_str());
   }
   std::fflush(stdout);
   std::optional<std::size_t> printed_workspace;
@@ -204,7 +213,8 @@ int cmd_bench(const Args& args) {
       rows[i] = summarize(series);
     }
     if (json) {
-      print_json(name, view, repeat, min_found, max_found, workspace, rows);
+      print_json(name, view, repeat, detector.limits().threads, min_found, max_found, workspace,
+                 rows);
     } else {
       print_text(name, view, repeat, min_found, max_found, detector.stats(), rows);
     }

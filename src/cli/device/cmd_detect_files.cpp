@@ -19,9 +19,12 @@
 namespace kg::cli {
 
 Options detect_options(std::string& index_path, std::string& draw, bool& json,
-                       std::vector<std::string>& scenes, const std::string& draw_format) {
+                       std::vector<std::string>& scenes, DetectSettings& settings,
+                       const std::string& draw_format) {
   const bool pgm = draw_format == "PGM";
-  Options options("detect", "--index I.kgi [--json] [--draw DIR|OUT] SCENE...",
+  Options options("detect",
+                  "--index I.kgi [--json] [--draw DIR|OUT] [--set NAME=VALUE]... [--threads N]\n"
+                  "       SCENE...",
                   "Finds the index's models in scene images: per scene, the detections with their\n"
                   "inliers, score and corners (scene pixels), and the time.");
   options
@@ -37,9 +40,13 @@ Options detect_options(std::string& index_path, std::string& draw, bool& json,
       .text("--draw", "DIR|OUT", draw,
             "draw what was found (" + draw_format +
                 "): into DIR, an existing directory, one picture per scene named after it;\n"
-                "or into the file OUT for one scene (OUT_<scene name> beside it for several)")
+                "or into the file OUT for one scene (OUT_<scene name> beside it for several)");
+  settings.declare(options);
+  options
       .example(std::string("keygraph detect --index signs.kgi --draw found/ ") +
                (pgm ? "frames/" : "photos/"))
+      .example("keygraph detect --index signs.kgi --threads 4 --set min_confidence=0.5 " +
+               std::string(pgm ? "frames/" : "photos/"))
       .example("keygraph detect --index signs.kgi --json " +
                std::string(pgm ? "scene.pgm" : "scene.jpg"));
   return options;
@@ -49,7 +56,8 @@ int cmd_detect_files(const Args& args) {
   std::string index_path, draw;
   bool json = false;
   std::vector<std::string> scene_args, scenes;
-  Options options = detect_options(index_path, draw, json, scene_args, "PGM");
+  DetectSettings settings;
+  Options options = detect_options(index_path, draw, json, scene_args, settings, "PGM");
   if (const int exit_code = options.parse(args); exit_code >= 0) return exit_code;
   if (index_path.empty()) return options.usage_error("no index given (--index I.kgi)");
   if (scene_args.empty()) return options.usage_error("no scene images given");
@@ -74,7 +82,9 @@ int cmd_detect_files(const Args& args) {
   if (const std::string problem = core_detector_problem(index); !problem.empty())
     return fail(index_path + ": " + problem);
 
-  Detector detector(index);
+  DetectOptions runtime;
+  if (Status s = settings.options_for(index, runtime); !s) return options.usage_error(s.message());
+  Detector detector(index, settings.limits(), runtime);
   DetectionList found;
   platform::GrayImage scene_image, canvas;
   int exit_code = 0;

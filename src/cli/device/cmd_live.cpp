@@ -1,9 +1,14 @@
 // keygraph live: its options are the Options table below (keygraph live --help).
-// Detects on every frame of a camera or of image files. stdout gets the
-// same lines as `keygraph detect` (with --json, exactly its JSON lines);
-// stderr gets the source's description, a frames-per-second line about
-// once a second, and a summary at the end. Ctrl-C (SIGINT) or SIGTERM
-// finishes the current frame, stops the source and exits 0.
+// Follows the index's objects through the frames of a camera or of image
+// files with kg::Tracker (keygraph/tracker.h: detection when nothing is
+// followed, when an object is lost and every few frames; an alignment per
+// object on the others), or detects on every frame with --no-track. stdout
+// gets the lines of `keygraph detect` (with --json, its JSON lines) plus
+// each detection's track and whether the frame was detected on; stderr
+// gets the source's description, a frames-per-second line about once a
+// second, and a summary at the end (frames tracked and detected, and the
+// mean time of each). Ctrl-C (SIGINT) or SIGTERM finishes the current
+// frame, stops the source and exits 0.
 #include <cerrno>
 #include <chrono>
 #include <cinttypes>
@@ -16,12 +21,14 @@
 
 #include <sys/stat.h>
 
+#include "cli/device/detect_settings.h"
 #include "cli/device/detector_fit.h"
 #include "cli/device/device_commands.h"
 #include "cli/device/frame_output.h"
 #include "cli/device/options.h"
 #include "cli/device/stop_signal.h"
 #include "keygraph/detector.h"
+#include "keygraph/tracker.h"
 #include "platform/files/file_source.h"
 #include "platform/frame_source.h"
 #if KG_CLI_HAVE_V4L2
@@ -56,8 +63,10 @@ struct LiveOptions {
   bool loop = false;
   bool json = false;
   std::string draw_dir;
-  int max_frames = 0;  // 0: no limit
-  bool quiet = false;  // no status lines on stderr (warnings stay)
+  int max_frames = 0;       // 0: no limit
+  bool quiet = false;       // no status lines on stderr (warnings stay)
+  bool no_track = false;    // detection alone on every frame
+  DetectSettings settings;  // --set, --threads
 };
 
 double seconds(Clock::duration d) {
@@ -77,9 +86,14 @@ Options live_options(LiveOptions& o) {
   Options options(
       "live",
       "--index I.kgi (--v4l2 /dev/videoN | --libcamera [ID] | --images PATH)\n"
-      "       [--size WxH] [--loop] [--json] [--draw DIR] [--frames N] [-q]",
-      "Detects on every frame of a camera or of image files: stdout gets the lines of\n"
-      "keygraph detect, stderr the frames per second about once a second and a summary.\n"
+      "       [--size WxH] [--loop] [--json] [--draw DIR] [--frames N] [--no-track]\n"
+      "       [--set NAME=VALUE]... [--threads N] [-q]",
+      "Follows the index's objects through the frames of a camera or of image files:\n"
+      "full detection when nothing is followed, when an object is lost and every 10th\n"
+      "frame; on the other frames each object is confirmed around its predicted pose\n"
+      "(a fraction of a detection's time) and keeps its track id. stdout gets the lines\n"
+      "of keygraph detect with each detection's track, stderr the frames per second\n"
+      "about once a second and a summary (frames tracked and detected, mean ms of each).\n"
       "Ctrl-C (SIGINT) or SIGTERM finishes the current frame and exits 0.");
   options
       .text("--index", "I.kgi", o.index_path,
@@ -89,7 +103,9 @@ Options live_options(LiveOptions& o) {
       .optional_value("--libcamera", "ID",
                       "frames from a libcamera camera (CSI); ID: its id, default the first",
                       source(SourceKind::kLibcamera))
-      .value("--images", "PATH", "frames from an image file or a directory of them (name order)",
+      .value("--images", "PATH",
+             "frames from an image file or a directory of them, in name order (byte order:\n"
+             "number them with leading zeros, frame_0009 before frame_0010)",
              source(SourceKind::kImages))
       .value(
           "--size", "WxH", "the camera's frame size in pixels (cameras only)",
@@ -113,11 +129,23 @@ Options live_options(LiveOptions& o) {
             return {};
           },
           "no limit")
+      .flag("--no-track", o.no_track,
+            "detect on every frame, no tracking (each detection's track is -1 and\n"
+            "tracked false; every frame counts as detected)")
       .flag("-q, --quiet", o.quiet,
             "no status on stderr: the source, the frames per second and the summary\n"
-            "(warnings and errors stay)")
-      .example("keygraph live --index signs.kgi --v4l2 /dev/video0 --size 1280x720")
-      .example("keygraph live --index signs.kgi --images frames/ --json --frames 100");
+            "(warnings and errors stay)");
+  o.settings.declare(options);
+  options.example("keygraph live --index signs.kgi --v4l2 /dev/video0 --size 1280x720")
+      .example("keygraph live --index signs.kgi --images frames/ --json --frames 100")
+      .note(
+          "JSON lines: those of keygraph detect --json, with \"detected\" after \"time_ms\"\n"
+          "(false on a frame where every object was followed and no detection ran: its stats\n"
+          "are then zero) and \"track\" (the object's id while it is followed, -1 otherwise)\n"
+          "and \"tracked\" (true when confirmed around its prediction, false when detection\n"
+          "found it on this frame) in each detection. An index without model appearances\n"
+          "(built before format 6.2, or with views.appearance_size 0) cannot be tracked:\n"
+          "every frame is then detected, and live says so once on stderr.");
   return options;
 }
 
@@ -274,8 +302,8 @@ class RateMeter {
   }
   void report(Clock::time_point now, std::uint64_t total) {
     const double s = seconds(now - window_start_);
-    std::fprintf(stderr, "live: %" PRIu64 " frames, %.1f fps, detect %.1f ms/frame (last %.1f s)\n",
-                 total, frames_ / s, detect_ms_ / frames_, s);
+    std::fprintf(stderr, "live: %" PRIu64 " frames, %.1f fps, %.1f ms/frame (last %.1f s)\n", total,
+                 frames_ / s, detect_ms_ / frames_, s);
     window_start_ = now;
     frames_ = 0;
     detect_ms_ = 0;
@@ -285,6 +313,79 @@ class RateMeter {
   Clock::time_point window_start_;
   int frames_ = 0;
   double detect_ms_ = 0;
+};
+
+// Frames and their time, split by whether detection ran on them.
+struct FrameTally {
+  std::uint64_t tracked = 0, detected = 0;
+  double tracked_ms = 0, detected_ms = 0;
+  void add(bool detection_ran, double ms) {
+    (detection_ran ? detected : tracked) += 1;
+    (detection_ran ? detected_ms : tracked_ms) += ms;
+  }
+  // "3 tracked (mean 1.2 ms), 1 detected (mean 30.5 ms)"
+  std::string text() const {
+    const auto part = [](std::uint64_t n, double ms, const char* what) {
+      char buf[96];
+      if (n == 0) {
+        std::snprintf(buf, sizeof(buf), "0 %s", what);
+      } else {
+        std::snprintf(buf, sizeof(buf), "%" PRIu64 " %s (mean %.1f ms)", n, what,
+                      ms / static_cast<double>(n));
+      }
+      return std::string(buf);
+    };
+    return part(tracked, tracked_ms, "tracked") + ", " + part(detected, detected_ms, "detected");
+  }
+};
+
+// The tracker over live's detector, made again whenever the detector is
+// (a new index, a larger frame): a tracker is made for one detector's
+// index and limits.
+class LiveTracker {
+ public:
+  LiveTracker(bool enabled, bool quiet) : enabled_(enabled), quiet_(quiet) {}
+  // Forgets the tracker (before the detector is replaced).
+  void drop() { tracker_.reset(); }
+  // Makes the tracker for `detector` when there is none or the detector's
+  // frame size changed. An index without appearances is said once on
+  // stderr, as a status line, not an error (the tracker then detects every
+  // frame); any other failure is returned.
+  Status fit(Detector& detector) {
+    if (!enabled_) return Status::ok();
+    const Limits& l = detector.limits();
+    if (tracker_ != nullptr && l.max_width == width_ && l.max_height == height_)
+      return Status::ok();
+    tracker_ = std::make_unique<Tracker>(detector);
+    width_ = l.max_width;
+    height_ = l.max_height;
+    if (tracker_->status()) return Status::ok();
+    if (detector.index().has_appearance()) return tracker_->status();
+    if (!untrackable_said_ && !quiet_) {
+      std::fprintf(stderr,
+                   "live: the index stores no model appearances (built before format "
+                   "6.2, or with views.appearance_size 0): every frame is detected; rebuild it "
+                   "with keygraph build to track\n");
+      untrackable_said_ = true;
+    }
+    return Status::ok();
+  }
+  // The frame's objects, and whether detection ran on it.
+  Status process(Detector& detector, ImageView frame, DetectionList& found, bool& detected) {
+    if (!enabled_) {
+      detected = true;
+      return detector.detect(frame, found);
+    }
+    const Status s = tracker_->process(frame, found);
+    detected = tracker_->stats().detected;
+    return s;
+  }
+
+ private:
+  bool enabled_, quiet_;
+  std::unique_ptr<Tracker> tracker_;
+  int width_ = 0, height_ = 0;
+  bool untrackable_said_ = false;
 };
 
 }  // namespace
@@ -297,6 +398,9 @@ int cmd_live(const Args& args) {
   if (std::string error = check_draw(o); !error.empty()) return fail("live: " + error);
   LiveIndex live_index(o.index_path);
   if (Status s = live_index.load(); !s) return fail("live: " + s.message());
+  DetectOptions runtime;
+  if (Status s = o.settings.options_for(live_index.index(), runtime); !s)
+    return options.usage_error(s.message());
   std::string error;
   std::unique_ptr<platform::FrameSource> source = make_source(o, error);
   if (source == nullptr) return fail("live: " + error);
@@ -305,7 +409,10 @@ int cmd_live(const Args& args) {
   // Everything the loop needs is allocated here, before the first frame.
   // The workspace is allocated here for 640x480 and again, once, if the
   // first frame (or a later, larger one) needs more.
-  Detector detector(live_index.index());
+  Detector detector(live_index.index(), o.settings.limits(), runtime);
+  if (!detector.status()) return fail("live: " + detector.status().message());
+  LiveTracker tracker(!o.no_track, o.quiet);
+  if (Status t = tracker.fit(detector); !t) return fail("live: " + t.message());
   DetectionList found;
   platform::GrayImage canvas;
   std::string name;
@@ -330,6 +437,7 @@ int cmd_live(const Args& args) {
   RateMeter meter(start);
   Clock::time_point last_frame = start;
   std::uint64_t frames = 0, with_detections = 0;
+  FrameTally tally;
   int bad_frames = 0;
   // Bad frames in a row: a whole pass of a looping file source without one
   // good frame would otherwise loop for ever.
@@ -381,9 +489,14 @@ int cmd_live(const Args& args) {
     last_frame = Clock::now();
 
     if (live_index.reload_if_changed()) {
-      detector = Detector(live_index.index(), detector.limits());
-      if (!detector.status()) {
-        exit_code = fail("live: " + detector.status().message());
+      tracker.drop();  // its tracks are of the old index's models
+      Status rebuilt = o.settings.options_for(live_index.index(), runtime);
+      if (rebuilt) {
+        detector = Detector(live_index.index(), detector.limits(), runtime);
+        rebuilt = detector.status();
+      }
+      if (!rebuilt) {
+        exit_code = fail("live: " + rebuilt.message());
         stopped_by.clear();
         break;
       }
@@ -399,7 +512,13 @@ int cmd_live(const Args& args) {
       continue;
     }
     bad_in_a_row = 0;
-    const Status d = detector.detect(frame.image, found);
+    if (Status t = tracker.fit(detector); !t) {
+      exit_code = fail("live: " + t.message());
+      stopped_by.clear();
+      break;
+    }
+    bool detected = true;
+    const Status d = tracker.process(detector, frame.image, found, detected);
     const Clock::time_point done = Clock::now();
     const double ms = std::chrono::duration<double, std::milli>(done - last_frame).count();
     if (files != nullptr) {
@@ -416,7 +535,12 @@ int cmd_live(const Args& args) {
     }
     ++frames;
     if (!found.empty()) ++with_detections;
-    print_detections(name, frame.image, ms, found, detector.stats(), o.json);
+    tally.add(detected, ms);
+    // A frame without detection has no detection stats (zero, not the last
+    // detected frame's).
+    const TrackedFrame tracked{detected};
+    print_detections(name, frame.image, ms, found, detected ? detector.stats() : DetectStats{},
+                     o.json, &tracked);
     if (std::fflush(stdout) != 0) {
       // A closed pipe (e.g. `| head`) is a normal way to stop.
       stopped_by = "stdout closed";
@@ -450,11 +574,11 @@ int cmd_live(const Args& args) {
   if (!o.quiet) {
     std::fprintf(stderr,
                  "live: %" PRIu64 " frame%s in %.1f s (%.1f fps), %" PRIu64
-                 " with detections, %d bad frame%s skipped%s%s\n",
+                 " with detections, %d bad frame%s skipped; %s%s%s\n",
                  frames, frames == 1 ? "" : "s", total_s,
                  total_s > 0 ? static_cast<double>(frames) / total_s : 0.0, with_detections,
-                 bad_frames, bad_frames == 1 ? "" : "s", stopped_by.empty() ? "" : "; stopped by ",
-                 stopped_by.c_str());
+                 bad_frames, bad_frames == 1 ? "" : "s", tally.text().c_str(),
+                 stopped_by.empty() ? "" : "; stopped by ", stopped_by.c_str());
   }
   // Image files that could not be read are errors, as in `keygraph detect`;
   // a camera's occasional bad frame is not.

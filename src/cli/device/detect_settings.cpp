@@ -15,27 +15,45 @@ bool split(const std::string& assignment, std::string_view& name, std::string_vi
   return true;
 }
 
-std::string names_for_help() {
+std::string option_names() {
   std::string text;
   for (const std::string& n : detect_option_names()) text += (text.empty() ? "" : ", ") + n;
   return text;
 }
 
+// The most threads a detector takes (Limits::threads).
+constexpr int kMaxThreads = 64;
+
 }  // namespace
 
+std::string DetectSettings::add(const std::string& assignment) {
+  std::string_view name, value;
+  if (!split(assignment, name, value))
+    return "--set " + assignment + ": takes NAME=VALUE (runtime options: " + option_names() + ")";
+  DetectOptions scratch;
+  if (Status s = set_detect_option(scratch, name, value); !s) {
+    const bool known = s.message().rfind("unknown option", 0) != 0;
+    return "--set " + assignment + ": " + s.message() +
+           (known ? "" : " (runtime options: " + option_names() + ")");
+  }
+  assignments_.push_back(assignment);
+  return {};
+}
+
 void DetectSettings::declare(Options& options) {
-  options.value(
-      "--set", "NAME=VALUE",
-      "a runtime option of the detector over the index's own, repeatable: " + names_for_help() +
-          " (the other parameters are fixed by the index: rebuild it to change them)",
-      [this](const std::string& v) -> std::string {
-        std::string_view name, value;
-        if (!split(v, name, value)) return "takes NAME=VALUE";
-        DetectOptions scratch;
-        if (Status s = set_detect_option(scratch, name, value); !s) return s.message();
-        assignments_.push_back(v);
-        return {};
-      });
+  options
+      .value("--set", "NAME=VALUE",
+             "a runtime option of the detector over the index's own: " + option_names() +
+                 " (the other parameters are fixed by the index: rebuild it to change them)",
+             [this](const std::string& v) { return add(v); })
+      .repeatable();
+  declare_threads(options);
+}
+
+void DetectSettings::declare_threads(Options& options) {
+  options.integer("--threads", "N", threads_, 1, kMaxThreads,
+                  "threads per detection, the caller's included (the detections are the same\n"
+                  "for any count)");
 }
 
 Status DetectSettings::options_for(const ModelIndex& index, DetectOptions& out) const {
@@ -48,6 +66,11 @@ Status DetectSettings::options_for(const ModelIndex& index, DetectOptions& out) 
   if (Status s = Detector::check_options(index, out); !s)
     return {StatusCode::kInvalidArgument, "--set: " + s.message()};
   return Status::ok();
+}
+
+Limits DetectSettings::limits(Limits base) const {
+  base.threads = threads_;
+  return base;
 }
 
 }  // namespace kg::cli

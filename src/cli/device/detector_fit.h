@@ -12,7 +12,8 @@ namespace kg::cli {
 // Rebuilds `detector` with room for `frame` when the frame does not fit
 // its limits (platform::limits_for_frame(): the workspace is allocated
 // again, once per frame that does not fit, never for frames that do, and
-// never for the product of two thin frames' sides). When the frame cannot
+// never for the product of two thin frames' sides), with the same options
+// (--set) and thread count. When the frame cannot
 // be detected on (platform::frame_size_problem(), or no memory for the
 // workspace), returns why and leaves `detector` as it was, so the caller
 // can skip the frame.
@@ -23,7 +24,8 @@ inline Status fit_detector(Detector& detector, ImageView frame) {
   const Limits& limits = detector.limits();
   if (frame.width <= limits.max_width && frame.height <= limits.max_height)
     return detector.status();
-  Detector larger(detector.index(), platform::limits_for_frame(limits, frame.width, frame.height));
+  Detector larger(detector.index(), platform::limits_for_frame(limits, frame.width, frame.height),
+                  detector.options());
   if (!larger.status()) {
     return {larger.status().code(),
             "frame " + std::to_string(frame.width) + "x" + std::to_string(frame.height) +

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cli/device/command_line.h"
+#include "cli/device/detect_settings.h"
 #include "cli/device/options.h"
 
 namespace kg::cli {
@@ -22,6 +23,7 @@ int cmd_bench(const Args& args);
 int cmd_detect_files(const Args& args);
 // The options of both detects; `draw_format`: the picture format --draw writes.
 Options detect_options(std::string& index_path, std::string& draw, bool& json,
-                       std::vector<std::string>& scenes, const std::string& draw_format);
+                       std::vector<std::string>& scenes, DetectSettings& settings,
+                       const std::string& draw_format);
 
 }  // namespace kg::cli

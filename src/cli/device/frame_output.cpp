@@ -35,17 +35,24 @@ std::string core_detector_problem(const ModelIndex& index) {
 }
 
 void print_detections(const std::string& name, const ImageView& frame, double ms,
-                      const DetectionList& found, const DetectStats& stats, bool json) {
+                      const DetectionList& found, const DetectStats& stats, bool json,
+                      const TrackedFrame* tracked) {
   if (json) {
-    std::printf("%s\n", detection_json(name, frame.width, frame.height, ms, found, stats).c_str());
+    std::printf("%s\n",
+                detection_json(name, frame.width, frame.height, ms, found, stats, tracked).c_str());
     return;
   }
-  std::printf("%s: %zu detection(s) in %.1f ms\n", name.c_str(), found.size(), ms);
+  std::printf("%s: %zu detection(s) in %.1f ms%s", name.c_str(), found.size(), ms,
+              tracked != nullptr && !tracked->detected ? ", tracked" : "");
+  if (stats.stopped_early != nullptr)
+    std::printf(" (stopped early: time budget spent in the %s)", stats.stopped_early);
+  std::printf("\n");
   for (const Detection& d : found) {
     std::printf("  %.*s: inliers %d, score %.3f, appearance %.2f, confidence %.2f, corners",
                 static_cast<int>(d.model_name.size()), d.model_name.data(), d.inliers, d.score,
                 d.appearance, d.confidence);
     for (const Point2f& c : d.corners) std::printf(" (%.1f, %.1f)", c.x, c.y);
+    if (tracked != nullptr) std::printf(", track %d%s", d.track_id, d.tracked ? " (tracked)" : "");
     std::printf("\n");
   }
 }

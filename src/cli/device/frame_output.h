@@ -5,6 +5,7 @@
 
 #include <string>
 
+#include "cli/device/json.h"
 #include "keygraph/detector.h"
 #include "keygraph/image.h"
 #include "keygraph/model_index.h"
@@ -17,9 +18,12 @@ namespace kg::cli {
 std::string core_detector_problem(const ModelIndex& index);
 
 // Prints one frame's result on stdout: the JSON line of cli/device/json.h,
-// or "NAME: K detection(s) in T ms" and a line per detection.
+// or "NAME: K detection(s) in T ms" and a line per detection. With
+// `tracked` (keygraph live), each detection's track too, and "tracked" after
+// the time of a frame on which no detection ran.
 void print_detections(const std::string& name, const ImageView& frame, double ms,
-                      const DetectionList& found, const DetectStats& stats, bool json);
+                      const DetectionList& found, const DetectStats& stats, bool json,
+                      const TrackedFrame* tracked = nullptr);
 
 // A scene that could not be read or detected on: one error line (fail()),
 // and with `json` also its line {"scene": ..., "error": ...} on stdout, so

@@ -92,10 +92,14 @@ std::string json_number(double v) {
 }
 
 std::string detection_json(const std::string& scene, int width, int height, double time_ms,
-                           const DetectionList& detections, const DetectStats& stats) {
+                           const DetectionList& detections, const DetectStats& stats,
+                           const TrackedFrame* tracked) {
   std::string s = "{\"scene\": " + json_string(scene) + ", \"width\": " + std::to_string(width) +
                   ", \"height\": " + std::to_string(height) +
                   ", \"time_ms\": " + json_number(std::round(time_ms * 1000.0) / 1000.0) +
+                  (tracked == nullptr  ? ""
+                   : tracked->detected ? ", \"detected\": true"
+                                       : ", \"detected\": false") +
                   ", \"detections\": [";
   for (std::size_t i = 0; i < detections.size(); ++i) {
     const Detection& d = detections[i];
@@ -110,7 +114,12 @@ std::string detection_json(const std::string& scene, int width, int height, doub
     }
     s += "], \"inliers\": " + std::to_string(d.inliers) + ", \"score\": " + json_number(d.score) +
          ", \"appearance\": " + json_number(d.appearance) +
-         ", \"confidence\": " + json_number(d.confidence) + "}";
+         ", \"confidence\": " + json_number(d.confidence);
+    if (tracked != nullptr) {
+      s += ", \"track\": " + std::to_string(d.track_id) +
+           ", \"tracked\": " + (d.tracked ? "true" : "false");
+    }
+    s += "}";
   }
   s += "], \"stats\": {\"keypoints\": " + std::to_string(stats.keypoints) +
        ", \"sampled_keypoints\": " + std::to_string(stats.sampled_keypoints) +
@@ -134,7 +143,10 @@ std::string detection_json(const std::string& scene, int width, int height, doub
     s += (first ? "" : ", ") + json_string(name);
     first = false;
   }
-  s += "]}}";
+  // The stage a time budget (--set time_budget_ms) ran out in.
+  s += "], \"stopped_early\": " +
+       (stats.stopped_early == nullptr ? std::string("null") : json_string(stats.stopped_early));
+  s += "}}";
   return s;
 }
 
