@@ -1,11 +1,12 @@
 // keygraph live: its options are the Options table below (keygraph live --help).
-// Follows the index's objects through the frames of a camera or of image
-// files with kg::Tracker (keygraph/tracker.h: detection when nothing is
-// followed, when an object is lost and every few frames; an alignment per
-// object on the others), or detects on every frame with --no-track. stdout
-// gets the lines of `keygraph detect` (with --json, its JSON lines) plus
-// each detection's track and whether the frame was detected on; stderr
-// gets the source's description, a frames-per-second line about once a
+// Follows the index's objects through the frames of a camera, of image
+// files or of a video file (OpenCV videoio, desktop builds) with kg::Tracker
+// (keygraph/tracker.h: detection when nothing is followed, when an object is
+// lost and every few frames; an alignment per object on the others), or
+// detects on every frame with --no-track. stdout gets the lines of
+// `keygraph detect` (with --json, its JSON lines) plus each detection's
+// track and whether the frame was detected on; stderr gets the source's
+// description, a frames-per-second line about once a
 // second, and a summary at the end (frames tracked and detected, and the
 // mean time of each). Ctrl-C (SIGINT) or SIGTERM finishes the current
 // frame, stops the source and exits 0.
@@ -31,6 +32,9 @@
 #include "keygraph/tracker.h"
 #include "platform/files/file_source.h"
 #include "platform/frame_source.h"
+#if KG_CLI_HAVE_VIDEO
+#include "platform/files/video_source.h"
+#endif
 #if KG_CLI_HAVE_V4L2
 #include "platform/v4l2/v4l2_source.h"
 #endif
@@ -52,12 +56,12 @@ constexpr double kNoFrameLimitS = 10.0;
 // Bad frames beyond this many are counted, not shown one by one.
 constexpr int kShownBadFrames = 5;
 
-enum class SourceKind { kNone, kV4l2, kLibcamera, kImages };
+enum class SourceKind { kNone, kV4l2, kLibcamera, kImages, kVideo };
 
 struct LiveOptions {
   std::string index_path;
   SourceKind kind = SourceKind::kNone;
-  std::string source;  // device path, camera id (may be empty) or image path
+  std::string source;  // device path, camera id (may be empty), image or video path
   int width = 640, height = 480;
   bool size_given = false;
   bool loop = false;
@@ -77,7 +81,8 @@ double seconds(Clock::duration d) {
 Options live_options(LiveOptions& o) {
   auto source = [&o](SourceKind kind) {
     return [&o, kind](const std::string& value) -> std::string {
-      if (o.kind != SourceKind::kNone) return "give one source: --v4l2, --libcamera or --images";
+      if (o.kind != SourceKind::kNone)
+        return "give one source: --v4l2, --libcamera, --images or --video";
       o.kind = kind;
       o.source = value;
       return {};
@@ -85,15 +90,16 @@ Options live_options(LiveOptions& o) {
   };
   Options options(
       "live",
-      "--index I.kgi (--v4l2 /dev/videoN | --libcamera [ID] | --images PATH)\n"
-      "       [--size WxH] [--loop] [--json] [--draw DIR] [--frames N] [--no-track]\n"
-      "       [--set NAME=VALUE]... [--threads N] [-q]",
-      "Follows the index's objects through the frames of a camera or of image files:\n"
-      "full detection when nothing is followed, when an object is lost and every 10th\n"
-      "frame; on the other frames each object is confirmed around its predicted pose\n"
-      "(a fraction of a detection's time) and keeps its track id. stdout gets the lines\n"
-      "of keygraph detect with each detection's track, stderr the frames per second\n"
-      "about once a second and a summary (frames tracked and detected, mean ms of each).\n"
+      "--index I.kgi (--v4l2 /dev/videoN | --libcamera [ID] | --images PATH |\n"
+      "       --video FILE) [--size WxH] [--loop] [--json] [--draw DIR] [--frames N]\n"
+      "       [--no-track] [--set NAME=VALUE]... [--threads N] [-q]",
+      "Follows the index's objects through the frames of a camera, of image files or of\n"
+      "a video file: full detection when nothing is followed, when an object is lost\n"
+      "and every 10th frame; on the other frames each object is confirmed around its\n"
+      "predicted pose (a fraction of a detection's time) and keeps its track id. stdout\n"
+      "gets the lines of keygraph detect with each detection's track, stderr the frames\n"
+      "per second about once a second and a summary (frames tracked and detected, mean\n"
+      "ms of each).\n"
       "Ctrl-C (SIGINT) or SIGTERM finishes the current frame and exits 0.");
   options
       .text("--index", "I.kgi", o.index_path,
@@ -107,6 +113,9 @@ Options live_options(LiveOptions& o) {
              "frames from an image file or a directory of them, in name order (byte order:\n"
              "number them with leading zeros, frame_0009 before frame_0010)",
              source(SourceKind::kImages))
+      .value("--video", "FILE",
+             "frames from a video file (AVI, MP4, MKV, ...; OpenCV videoio, desktop builds)",
+             source(SourceKind::kVideo))
       .value(
           "--size", "WxH", "the camera's frame size in pixels (cameras only)",
           [&o](const std::string& v) -> std::string {
@@ -116,11 +125,14 @@ Options live_options(LiveOptions& o) {
             return {};
           },
           std::to_string(o.width) + "x" + std::to_string(o.height))
-      .flag("--loop", o.loop, "start the images again after the last one (--images only)")
+      .flag("--loop", o.loop,
+            "start the images or the video again after the last frame (--images and\n"
+            "--video only)")
       .flag("--json", o.json, "one JSON object per frame on stdout (as keygraph detect --json)")
       .text("--draw", "DIR", o.draw_dir,
             "write each frame with the outlines found to DIR as PGM\n"
-            "(frame_NNNNNN.pgm; <image name>.pgm with --images)")
+            "(frame_NNNNNN.pgm, NNNNNN the frame's number from 0; <image name>.pgm\n"
+            "with --images)")
       .value(
           "--frames", "N", "stop after N frames, 1..1073741824",
           [&o](const std::string& v) -> std::string {
@@ -138,6 +150,7 @@ Options live_options(LiveOptions& o) {
   o.settings.declare(options);
   options.example("keygraph live --index signs.kgi --v4l2 /dev/video0 --size 1280x720")
       .example("keygraph live --index signs.kgi --images frames/ --json --frames 100")
+      .example("keygraph live --index signs.kgi --video drive.mp4 --json")
       .note(
           "JSON lines: those of keygraph detect --json, with \"detected\" after \"time_ms\"\n"
           "(false on a frame where every object was followed and no detection ran: its stats\n"
@@ -153,9 +166,11 @@ Options live_options(LiveOptions& o) {
 std::string usage_problem(const LiveOptions& o) {
   if (o.index_path.empty()) return "no index given (--index I.kgi)";
   if (o.kind == SourceKind::kNone)
-    return "no frame source given (--v4l2 /dev/videoN, --libcamera [ID] or --images DIR)";
-  if (o.loop && o.kind != SourceKind::kImages) return "--loop applies to --images only";
-  if (o.size_given && o.kind == SourceKind::kImages) return "--size applies to cameras only";
+    return "no frame source given (--v4l2 /dev/videoN, --libcamera [ID], --images DIR or "
+           "--video FILE)";
+  const bool from_files = o.kind == SourceKind::kImages || o.kind == SourceKind::kVideo;
+  if (o.loop && !from_files) return "--loop applies to --images and --video only";
+  if (o.size_given && from_files) return "--size applies to cameras only";
   return {};
 }
 
@@ -177,6 +192,18 @@ std::unique_ptr<platform::FrameSource> make_source(const LiveOptions& o, std::st
       platform::FileSourceOptions options;
       options.loop = o.loop;
       return std::make_unique<platform::FileSource>(std::vector<std::string>{o.source}, options);
+    }
+    case SourceKind::kVideo: {
+#if KG_CLI_HAVE_VIDEO
+      platform::VideoSourceOptions options;
+      options.loop = o.loop;
+      return std::make_unique<platform::VideoSource>(o.source, options);
+#else
+      error =
+          "--video: this keygraph was built without video support (no OpenCV videoio; "
+          "read the frames as image files with --images)";
+      return nullptr;
+#endif
     }
     case SourceKind::kV4l2: {
 #if KG_CLI_HAVE_V4L2
@@ -442,7 +469,7 @@ int cmd_live(const Args& args) {
   // Bad frames in a row: a whole pass of a looping file source without one
   // good frame would otherwise loop for ever.
   std::size_t bad_in_a_row = 0;
-  std::string stopped_by = "end of the images";
+  std::string stopped_by = o.kind == SourceKind::kVideo ? "end of the video" : "end of the images";
   // Counts and shows a skipped frame; true when, with --loop, a whole pass
   // of the image files had no usable frame (the loop would never end).
   auto skip_frame = [&](const std::string& why) {
@@ -502,6 +529,12 @@ int cmd_live(const Args& args) {
       }
     }
     if (const Status fit = fit_detector(detector, frame.image); !fit) {
+      // A video's frames share one size: skipping one would skip them all.
+      if (o.kind == SourceKind::kVideo) {
+        exit_code = fail("live: " + o.source + ": " + fit.message());
+        stopped_by.clear();
+        break;
+      }
       if (skip_frame((files != nullptr ? files->last_path() + ": " : std::string()) +
                      fit.message())) {
         exit_code = fail("live: none of the " + std::to_string(files->files().size()) +
@@ -557,9 +590,9 @@ int cmd_live(const Args& args) {
       std::snprintf(numbered, sizeof(numbered), "frame_%06" PRIu64 ".pgm", frame.sequence);
       const fs::path out = fs::path(o.draw_dir) /
                            (files != nullptr ? fs::path(name).stem().string() + ".pgm" : numbered);
-      const std::vector<std::string> inputs = files != nullptr
-                                                  ? std::vector<std::string>{name, o.index_path}
-                                                  : std::vector<std::string>{o.index_path};
+      std::vector<std::string> inputs{o.index_path};
+      if (files != nullptr) inputs.push_back(name);
+      if (o.kind == SourceKind::kVideo) inputs.push_back(o.source);
       if (Status w = platform::write_pgm(out.string(), canvas.view(), inputs); !w) {
         exit_code = fail("live: " + w.message());
         stopped_by.clear();
