@@ -134,7 +134,7 @@ class ModelIndex {
 
   bool empty() const { return model_count_ == 0; }
   // Whether the index is a read-only mapping of its file (open()).
-  bool is_mapped() const { return owned_ != nullptr && owned_.get_deleter().mapped > 0; }
+  bool is_mapped() const { return owned_ != nullptr && owned_.get_deleter().of_file; }
   const Params& params() const { return params_; }
   std::uint16_t version_major() const { return version_major_; }
   std::uint16_t version_minor() const { return version_minor_; }
@@ -208,12 +208,14 @@ class ModelIndex {
   Status validate_appearances(const std::uint8_t* records, std::uint32_t record_count,
                               std::uint64_t pixel_count, int& max_pixels) const;
 
-  // Releases open()'s memory: unmaps a mapping of `mapped` bytes, or frees
-  // the aligned fallback buffer when `mapped` is 0.
+  // Releases open()'s and read()'s memory: unmaps a mapping of `mapped`
+  // bytes (of the file, or anonymous pages read() copied it into), or frees
+  // the aligned heap buffer when `mapped` is 0.
   struct Release {
-    Release() noexcept : mapped(0) {}
-    explicit Release(std::size_t bytes) noexcept : mapped(bytes) {}
+    Release() noexcept : mapped(0), of_file(false) {}
+    Release(std::size_t bytes, bool file) noexcept : mapped(bytes), of_file(file) {}
     std::size_t mapped;
+    bool of_file;  // a mapping of the index file (is_mapped())
     void operator()(std::uint8_t* p) const;
   };
   // Validates `memory` (open(), read()) and moves it into `out`.

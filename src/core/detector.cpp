@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "core/pipeline/frame_pipeline.h"
+#include "core/support/page_memory.h"
 #include "core/support/workspace.h"
 #include "keygraph/param_text.h"
 
@@ -130,7 +131,12 @@ Detector::Detector(const ModelIndex& index, const Limits& limits, const DetectOp
   if (status_) status_ = FramePipeline::check_options(index, options);
   if (!status_) return;
   const std::size_t bytes = workspace_bytes(index, limits);
-  owned_ = ::operator new (bytes, std::align_val_t{kWorkspaceAlignment});
+  owned_ = allocate_pages(bytes);
+  if (owned_ == nullptr) {
+    status_ = {StatusCode::kResourceExhausted,
+               "cannot allocate the detector's workspace of " + std::to_string(bytes) + " bytes"};
+    return;
+  }
   place(owned_, bytes, options);
 }
 
@@ -162,7 +168,7 @@ void Detector::place(void* buffer, std::size_t size, const DetectOptions& option
 
 void Detector::release() {
   if (header_ != nullptr) header_->~Header();
-  if (owned_ != nullptr) ::operator delete (owned_, std::align_val_t{kWorkspaceAlignment});
+  if (owned_ != nullptr) release_pages(owned_, workspace_size_);
   header_ = nullptr;
   pipeline_ = nullptr;
   owned_ = nullptr;

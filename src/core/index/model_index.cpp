@@ -174,10 +174,21 @@ Status ModelIndex::read(const std::string& path, ModelIndex& out) {
   int fd = -1;
   std::uint64_t size = 0;
   if (Status s = open_index_file(path, fd, size); !s) return s;
-  std::unique_ptr<std::uint8_t, Release> buffer(
+  std::unique_ptr<std::uint8_t, Release> buffer;
+#if KG_HAVE_MMAP
+  // Anonymous pages, not the heap: a process that reloads its index (keygraph
+  // live) gives each copy back to the system whole (core/support/page_memory.h).
+  void* pages = ::mmap(nullptr, static_cast<std::size_t>(size), PROT_READ | PROT_WRITE,
+                       MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  if (pages != MAP_FAILED)
+    buffer = std::unique_ptr<std::uint8_t, Release>(static_cast<std::uint8_t*>(pages),
+                                                    Release{static_cast<std::size_t>(size), false});
+#else
+  buffer = std::unique_ptr<std::uint8_t, Release>(
       static_cast<std::uint8_t*>(::operator new[](static_cast<std::size_t>(size),
                                                   std::align_val_t(kAlignment), std::nothrow)),
-      Release{0});
+      Release{});
+#endif
   if (!buffer) {
     close_file(fd);
     return {StatusCode::kResourceExhausted, path + ": not enough memory for the index"};
@@ -197,7 +208,7 @@ Status ModelIndex::open(const std::string& path, ModelIndex& out) {
   ::close(fd);  // the mapping keeps the file
   if (mapped != MAP_FAILED) {
     std::unique_ptr<std::uint8_t, Release> memory(static_cast<std::uint8_t*>(mapped),
-                                                  Release{static_cast<std::size_t>(size)});
+                                                  Release{static_cast<std::size_t>(size), true});
     return adopt(std::move(memory), static_cast<std::size_t>(size), path, out);
   }
 #endif
