@@ -134,7 +134,9 @@ class ModelIndex {
 
   bool empty() const { return model_count_ == 0; }
   // Whether the index is a read-only mapping of its file (open()).
-  bool is_mapped() const { return owned_ != nullptr && owned_.get_deleter().of_file; }
+  bool is_mapped() const {
+    return owned_ != nullptr && owned_.get_deleter().kind == Release::Kind::kFileMapping;
+  }
   const Params& params() const { return params_; }
   std::uint16_t version_major() const { return version_major_; }
   std::uint16_t version_minor() const { return version_minor_; }
@@ -208,14 +210,15 @@ class ModelIndex {
   Status validate_appearances(const std::uint8_t* records, std::uint32_t record_count,
                               std::uint64_t pixel_count, int& max_pixels) const;
 
-  // Releases open()'s and read()'s memory: unmaps a mapping of `mapped`
-  // bytes (of the file, or anonymous pages read() copied it into), or frees
-  // the aligned heap buffer when `mapped` is 0.
+  // Releases open()'s and read()'s memory: unmaps a mapping of the index
+  // file, gives read()'s copy back (`pages`: core/support/page_memory.h), or
+  // frees an aligned heap buffer; `bytes` is the block's size.
   struct Release {
-    Release() noexcept : mapped(0), of_file(false) {}
-    Release(std::size_t bytes, bool file) noexcept : mapped(bytes), of_file(file) {}
-    std::size_t mapped;
-    bool of_file;  // a mapping of the index file (is_mapped())
+    enum class Kind : std::uint8_t { kHeap, kFileMapping, kPages };
+    Release() noexcept : bytes(0), kind(Kind::kHeap) {}
+    Release(std::size_t size, Kind k) noexcept : bytes(size), kind(k) {}
+    std::size_t bytes;
+    Kind kind;
     void operator()(std::uint8_t* p) const;
   };
   // Validates `memory` (open(), read()) and moves it into `out`.

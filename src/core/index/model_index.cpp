@@ -26,6 +26,7 @@
 #include "core/index/index_format.h"
 #include "core/index/index_internals.h"
 #include "core/index/kdtree.h"
+#include "core/support/page_memory.h"
 
 namespace kg {
 
@@ -146,12 +147,18 @@ bool header_crc_matches(const std::uint8_t* d, std::size_t size) {
 }  // namespace
 
 void ModelIndex::Release::operator()(std::uint8_t* p) const {
+  switch (kind) {
+    case Kind::kPages:
+      release_pages(p, bytes);
+      return;
+    case Kind::kFileMapping:
 #if KG_HAVE_MMAP
-  if (mapped > 0) {
-    ::munmap(p, mapped);
-    return;
-  }
+      ::munmap(p, bytes);
 #endif
+      return;
+    case Kind::kHeap:
+      break;
+  }
   ::operator delete[](p, std::align_val_t(kAlignment));
 }
 
@@ -174,21 +181,11 @@ Status ModelIndex::read(const std::string& path, ModelIndex& out) {
   int fd = -1;
   std::uint64_t size = 0;
   if (Status s = open_index_file(path, fd, size); !s) return s;
-  std::unique_ptr<std::uint8_t, Release> buffer;
-#if KG_HAVE_MMAP
-  // Anonymous pages, not the heap: a process that reloads its index (keygraph
+  // Pages rather than the heap: a process that reloads its index (keygraph
   // live) gives each copy back to the system whole (core/support/page_memory.h).
-  void* pages = ::mmap(nullptr, static_cast<std::size_t>(size), PROT_READ | PROT_WRITE,
-                       MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-  if (pages != MAP_FAILED)
-    buffer = std::unique_ptr<std::uint8_t, Release>(static_cast<std::uint8_t*>(pages),
-                                                    Release{static_cast<std::size_t>(size), false});
-#else
-  buffer = std::unique_ptr<std::uint8_t, Release>(
-      static_cast<std::uint8_t*>(::operator new[](static_cast<std::size_t>(size),
-                                                  std::align_val_t(kAlignment), std::nothrow)),
-      Release{});
-#endif
+  std::unique_ptr<std::uint8_t, Release> buffer(
+      static_cast<std::uint8_t*>(allocate_pages(static_cast<std::size_t>(size))),
+      Release{static_cast<std::size_t>(size), Release::Kind::kPages});
   if (!buffer) {
     close_file(fd);
     return {StatusCode::kResourceExhausted, path + ": not enough memory for the index"};
@@ -207,8 +204,9 @@ Status ModelIndex::open(const std::string& path, ModelIndex& out) {
   void* mapped = ::mmap(nullptr, static_cast<std::size_t>(size), PROT_READ, MAP_PRIVATE, fd, 0);
   ::close(fd);  // the mapping keeps the file
   if (mapped != MAP_FAILED) {
-    std::unique_ptr<std::uint8_t, Release> memory(static_cast<std::uint8_t*>(mapped),
-                                                  Release{static_cast<std::size_t>(size), true});
+    std::unique_ptr<std::uint8_t, Release> memory(
+        static_cast<std::uint8_t*>(mapped),
+        Release{static_cast<std::size_t>(size), Release::Kind::kFileMapping});
     return adopt(std::move(memory), static_cast<std::size_t>(size), path, out);
   }
 #endif

@@ -2,7 +2,18 @@
 
 #include <new>
 
-#if defined(__unix__) || defined(__APPLE__)
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define KG_UNDER_ASAN 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__)
+#define KG_UNDER_ASAN 1
+#endif
+
+// Under AddressSanitizer from the heap, where an access past the block is
+// caught.
+#if (defined(__unix__) || defined(__APPLE__)) && !defined(KG_UNDER_ASAN)
 #include <sys/mman.h>
 #define KG_HAVE_ANONYMOUS_PAGES 1
 #else
