@@ -2,7 +2,8 @@
 # through pkg-config and find_package, and the installed Python and Java
 # bindings, on the bindings' scenes. Included by tests/CMakeLists.txt after
 # tests/java and tests/python, whose programs it runs.
-if(NOT KG_BINDINGS_SCENES)
+if(NOT KG_BINDINGS_SCENES OR KG_SANITIZE OR KG_BUILD_FUZZERS)
+  # (sanitized builds: see tests/CMakeLists.txt, add_subdirectory(install))
   return()
 endif()
 set(_kg_python "")
