@@ -12,5 +12,9 @@ cmake --build --preset sanitize -j "$KG_CI_JOBS"
 # search (Selection.CompletedCircuitsRecoverArcsTheSearchBudgetMissed and
 # the other Selection tests on the same case, search tests at every budget),
 # 4-circuits and arcs end to end (test_keygraph, test_selection and
-# test_model_index build, search and select both structures).
-run_ctest sanitize -E '^(Selection\.CompletedCircuitsWithExactSearchEqualBruteForceJoin|Detection\.CircuitFourAndArcStructures)$'
+# test_model_index build, search and select both structures); and
+# cli_eval_truth_real, eval --truth's accuracy on the real photos, over 300 s
+# under the sanitizers: the readers it goes through are fuzzed in step 90 and
+# run under the sanitizers by the TruthManifest tests, cli_eval_truth and
+# cli_hostile.
+run_ctest sanitize -E '^(Selection\.CompletedCircuitsWithExactSearchEqualBruteForceJoin|Detection\.CircuitFourAndArcStructures|cli_eval_truth_real)$'
