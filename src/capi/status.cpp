@@ -50,7 +50,12 @@ kg_status fail(kg_status code, const char* message) {
 extern "C" {
 
 const char* kg_status_name(kg_status status) {
-  const int code = static_cast<int>(status);
+  // A C caller may pass any int (C's enums are ints): read it as one, since
+  // a value outside the enumerators is not a valid kg_status in C++ (UBSan's
+  // enum check).
+  static_assert(sizeof(kg_status) == sizeof(int), "kg_status is passed as a C int");
+  int code = 0;
+  std::memcpy(&code, &status, sizeof code);
   if (code < static_cast<int>(kg::StatusCode::kOk) ||
       code > static_cast<int>(kg::StatusCode::kBadFrame))
     return "Unknown";
