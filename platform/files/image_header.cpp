@@ -23,6 +23,9 @@ std::uint32_t be32(const std::uint8_t* p) {
 std::uint32_t le16(const std::uint8_t* p) {
   return std::uint32_t{p[0]} | (std::uint32_t{p[1]} << 8);
 }
+std::uint32_t le24(const std::uint8_t* p) {
+  return le16(p) | (std::uint32_t{p[2]} << 16);
+}
 std::uint32_t le32(const std::uint8_t* p) {
   return le16(p) | (le16(p + 2) << 16);
 }
@@ -129,7 +132,10 @@ DeclaredSize tiff(const std::uint8_t* d, std::size_t size) {
 DeclaredSize webp(const std::uint8_t* d, std::size_t size) {
   if (size < 30) return unreadable("WebP");
   if (std::memcmp(d + 12, "VP8X", 4) == 0)
-    return known("WebP", (le32(d + 24) & 0xFFFFFF) + 1, (le32(d + 27) & 0xFFFFFF) + 1);
+    // Canvas width and height minus one, 24 bits each at 24 and 27 (the
+    // header's last byte is d[29]: reading 4 bytes at 27 ran past a 30-byte
+    // file, fuzz_pgm).
+    return known("WebP", le24(d + 24) + 1, le24(d + 27) + 1);
   if (std::memcmp(d + 12, "VP8 ", 4) == 0) {
     if (d[23] != 0x9D || d[24] != 0x01 || d[25] != 0x2A) return unreadable("WebP");
     return known("WebP", le16(d + 26) & 0x3FFF, le16(d + 28) & 0x3FFF);

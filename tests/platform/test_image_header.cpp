@@ -140,5 +140,26 @@ TEST(ImageHeader, BrokenHeadersAreLeftToTheDecoder) {
   }
 }
 
+// An extended (VP8X) WebP header that ends where its canvas size does: the
+// 24-bit width and height are read from its last six bytes and nothing after
+// them (reading past a 30-byte file was a heap overflow fuzz_pgm found).
+TEST(ImageHeader, ShortestExtendedWebpIsReadWithinItsBytes) {
+  Bytes header(30, 0);
+  const char riff[] = "RIFF\x16\0\0\0WEBPVP8X";  // 16 bytes and the literal's NUL
+  std::copy(riff, riff + 16, header.begin());
+  const std::uint32_t width_minus_one = 0x0102FF, height_minus_one = 0x000300;
+  for (int i = 0; i < 3; ++i) {
+    header[static_cast<std::size_t>(24 + i)] =
+        static_cast<std::uint8_t>(width_minus_one >> (8 * i));
+    header[static_cast<std::size_t>(27 + i)] =
+        static_cast<std::uint8_t>(height_minus_one >> (8 * i));
+  }
+  const DeclaredSize size = of(header);
+  ASSERT_EQ(size.kind, DeclaredSize::kKnown);
+  EXPECT_STREQ(size.format, "WebP");
+  EXPECT_EQ(size.width, width_minus_one + 1u);
+  EXPECT_EQ(size.height, height_minus_one + 1u);
+}
+
 }  // namespace
 }  // namespace kg::platform
