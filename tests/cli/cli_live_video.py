@@ -14,7 +14,9 @@ a directory, a FIFO, --video with --images and --video with --size.
 With a third argument `without-video` (a build without OpenCV videoio):
 only the one error line of --video.
 
-usage: cli_live_video.py KEYGRAPH OPENCV_DATA_DIR [without-video]
+usage: cli_live_video.py KEYGRAPH OPENCV_DATA_DIR [without-video | sanitized]
+  sanitized: the --loop check (545 detections of Megamind.avi, over 300 s
+  under AddressSanitizer) is left out, and says so
 """
 import json
 import os
@@ -125,24 +127,27 @@ try:
           "live on the video's frame 0 finds what detect finds on its PGM")
 
     # 4. --loop: Megamind.avi (270 frames) played twice over.
-    megamind = os.path.join(DATA, "Megamind.avi")
-    once = run("live", "--index", box, "--video", megamind, "--json", "--no-track")
-    count = len(json_lines(once.stdout))
-    check(once.returncode == 0 and count > 10 and "stopped by end of the video" in once.stderr,
-          "Megamind.avi played to its end: %d frames (%s)" % (count, once.stderr))
-    looped = run("live", "--index", box, "--video", megamind, "--json", "--loop", "--no-track",
-                 "--frames", str(count + 5))
-    loop_lines = json_lines(looped.stdout)
-    check(looped.returncode == 0 and len(loop_lines) == count + 5,
-          "--loop: %d frames from a video of %d (rc %d: %s)"
-          % (len(loop_lines), count, looped.returncode, looped.stderr))
-    if len(loop_lines) == count + 5:
-        check([r["scene"] for r in loop_lines[count - 1:count + 1]] ==
-              ["%s:%d" % (megamind, count - 1), "%s:%d" % (megamind, count)],
-              "--loop: frame numbers go on after the last frame")
-        first = [(r["width"], r["height"], r["detections"]) for r in loop_lines[:5]]
-        again = [(r["width"], r["height"], r["detections"]) for r in loop_lines[count:]]
-        check(first == again, "--loop: the second pass starts with the first pass's frames")
+    if sys.argv[3:] == ["sanitized"]:
+        print("cli_live_video: the --loop check is not run in a sanitizer build (545 detections)")
+    else:
+        megamind = os.path.join(DATA, "Megamind.avi")
+        once = run("live", "--index", box, "--video", megamind, "--json", "--no-track")
+        count = len(json_lines(once.stdout))
+        check(once.returncode == 0 and count > 10 and "stopped by end of the video" in once.stderr,
+              "Megamind.avi played to its end: %d frames (%s)" % (count, once.stderr))
+        looped = run("live", "--index", box, "--video", megamind, "--json", "--loop", "--no-track",
+                     "--frames", str(count + 5))
+        loop_lines = json_lines(looped.stdout)
+        check(looped.returncode == 0 and len(loop_lines) == count + 5,
+              "--loop: %d frames from a video of %d (rc %d: %s)"
+              % (len(loop_lines), count, looped.returncode, looped.stderr))
+        if len(loop_lines) == count + 5:
+            check([r["scene"] for r in loop_lines[count - 1:count + 1]] ==
+                  ["%s:%d" % (megamind, count - 1), "%s:%d" % (megamind, count)],
+                  "--loop: frame numbers go on after the last frame")
+            first = [(r["width"], r["height"], r["detections"]) for r in loop_lines[:5]]
+            again = [(r["width"], r["height"], r["detections"]) for r in loop_lines[count:]]
+            check(first == again, "--loop: the second pass starts with the first pass's frames")
 
     # 5. One error line, nothing on stdout, exit != 0.
     text = os.path.join(work, "notes.avi")
