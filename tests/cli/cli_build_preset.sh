@@ -14,15 +14,8 @@ KG=${1:?usage: cli_build_preset.sh KEYGRAPH OPENCV_DATA_DIR}
 DATA=${2:?}
 MODEL=$DATA/box.png
 
-WORK=$(mktemp -d "${TMPDIR:-/tmp}/kg_preset.XXXXXX") || exit 1
-trap 'rm -rf "$WORK"' EXIT
-trap 'exit 1' HUP INT TERM
-ERR=$WORK/stderr
-failures=0
-bad() {
-  echo "FAIL: $*" >&2
-  failures=$((failures + 1))
-}
+TEST_NAME=cli_build_preset
+. "$(dirname "$0")/test_support.sh"
 # build OUT ARGS...: a quick build of box.png into $WORK/OUT.kgi.
 build() {
   local out=$1
@@ -79,5 +72,4 @@ grep -qF "keygraph: build: --preset sideways: unknown preset 'sideways' (default
   bad "an unknown preset names the known ones: $(cat "$ERR")"
 "$KG" build --help | grep -q -- "--preset NAME" || bad "build --help lacks --preset"
 
-echo "cli_build_preset: $failures failure(s)"
-[ "$failures" -eq 0 ]
+finish

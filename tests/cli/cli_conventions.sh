@@ -25,28 +25,8 @@ VERSION=${4:?}
 KG=$(cd "$(dirname "$KG")" && pwd)/$(basename "$KG")
 DATA=$(cd "$DATA" && pwd)
 
-WORK=$(mktemp -d "${TMPDIR:-/tmp}/kg_conv.XXXXXX") || exit 1
-trap 'rm -rf "$WORK"' EXIT
-trap 'exit 1' HUP INT TERM
-OUT=$WORK/stdout
-ERR=$WORK/stderr
-failures=0
-checks=0
-bad() {
-  echo "FAIL: $*" >&2
-  failures=$((failures + 1))
-}
-# run CMD...: stdout, stderr and exit status in $OUT, $ERR, $rc.
-run() {
-  checks=$((checks + 1))
-  "$@" >"$OUT" 2>"$ERR"
-  rc=$?
-}
-# one_error CODE NEEDLE: exit CODE and exactly one stderr line, which
-# contains NEEDLE.
-one_error() {
-  [ "$rc" -eq "$1" ] && [ "$(wc -l <"$ERR")" -eq 1 ] && grep -qF -- "$2" "$ERR"
-}
+TEST_NAME=cli_conventions
+. "$(dirname "$0")/test_support.sh"
 lines() { wc -l <"$1" | tr -d ' '; }
 # Quick builds for the checks that do not need the default views.
 QUICK=(-q --no-look-alikes --max-tilt 0 --min-size 0)
@@ -265,8 +245,4 @@ run "$KG" detect --index "$INDEX" --json --draw "$WORK/turned-drawn.png" "$WORK/
   python3 -c 'import json,sys; d=json.loads(open(sys.argv[1]).read()); assert d["detections"][0]["model"] == "box"' "$OUT" ||
   bad "detect on the turned scene: exit $rc: $(cat "$OUT" "$ERR")"
 
-if [ "$failures" -ne 0 ]; then
-  echo "cli_conventions: $failures failure(s) in $checks runs" >&2
-  exit 1
-fi
-echo "cli_conventions: all checks passed ($checks runs)"
+finish

@@ -19,28 +19,8 @@ KG=${1:?usage: cli_detect_settings.sh KEYGRAPH OPENCV_DATA_DIR KG_TO_PGM}
 DATA=${2:?}
 TO_PGM=${3:?}
 
-WORK=$(mktemp -d "${TMPDIR:-/tmp}/kg_settings.XXXXXX") || exit 1
-trap 'rm -rf "$WORK"' EXIT
-trap 'exit 1' HUP INT TERM
-OUT=$WORK/stdout
-ERR=$WORK/stderr
-failures=0
-checks=0
-bad() {
-  echo "FAIL: $*" >&2
-  failures=$((failures + 1))
-}
-# run CMD...: stdout, stderr and exit status in $OUT, $ERR, $rc.
-run() {
-  checks=$((checks + 1))
-  "$@" >"$OUT" 2>"$ERR"
-  rc=$?
-}
-# one_error CODE NEEDLE: exit CODE and exactly one stderr line, which
-# contains NEEDLE.
-one_error() {
-  [ "$rc" -eq "$1" ] && [ "$(wc -l <"$ERR")" -eq 1 ] && grep -qF -- "$2" "$ERR"
-}
+TEST_NAME=cli_detect_settings
+. "$(dirname "$0")/test_support.sh"
 # The JSON lines of $OUT without their times.
 untimed() { sed 's/"time_ms": [0-9.e+-]*, //' "$OUT"; }
 
@@ -172,5 +152,4 @@ one_error 2 "--set bogus=1: unknown option 'bogus'" && grep -q "time_budget_ms" 
 run "$KG" eval --truth "$MANIFEST" --index "$INDEX" -q --threads 0
 one_error 2 "--threads 0" || bad "eval --threads 0: exit $rc: $(cat "$ERR")"
 
-echo "cli_detect_settings: $checks runs, $failures failure(s)"
-[ "$failures" -eq 0 ]
+finish

@@ -9,13 +9,8 @@ KG=${1:?usage: cli_eval_synth.sh KEYGRAPH_BINARY}
 [ -x "$KG" ] || { echo "no keygraph binary at $KG" >&2; exit 1; }
 KG=$(cd "$(dirname "$KG")" && pwd)/$(basename "$KG")  # commands run in other directories
 command -v python3 >/dev/null 2>&1 || { echo "python3 is needed to validate JSON" >&2; exit 1; }
-WORK=$(mktemp -d "${TMPDIR:-/tmp}/kg_synth_cli.XXXXXX") || exit 1
-trap 'rm -rf "$WORK"' EXIT
-failures=0
-bad() {
-  echo "FAIL: $*" >&2
-  failures=$((failures + 1))
-}
+TEST_NAME=cli_eval_synth
+. "$(dirname "$0")/test_support.sh"
 
 # expect_failure NAME CMD...: one stderr line, non-zero exit, no new files in $WORK/case.
 expect_failure() {
@@ -70,8 +65,4 @@ python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert len(d['resul
 awk -F, 'NR==1 {n=NF} NF!=n {exit 1}' "$WORK/out/synth-cases.csv" ||
   bad "synth-cases.csv: rows and header disagree"
 
-if [ $failures -ne 0 ]; then
-  echo "$failures failure(s)" >&2
-  exit 1
-fi
-echo "cli_eval_synth: all checks passed"
+finish

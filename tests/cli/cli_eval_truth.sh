@@ -17,13 +17,8 @@ done
 command -v python3 >/dev/null 2>&1 || { echo "python3 is needed to validate JSON" >&2; exit 1; }
 KG=$(cd "$(dirname "$KG")" && pwd)/$(basename "$KG")
 DATA=$(cd "$DATA" && pwd)
-WORK=$(mktemp -d "${TMPDIR:-/tmp}/kg_truth_cli.XXXXXX") || exit 1
-trap 'rm -rf "$WORK"' EXIT
-failures=0
-bad() {
-  echo "FAIL: $*" >&2
-  failures=$((failures + 1))
-}
+TEST_NAME=cli_eval_truth
+. "$(dirname "$0")/test_support.sh"
 
 # expect_failure NAME PATTERN CMD...: one stderr line matching PATTERN, a
 # non-zero exit, and no new files in $WORK/case (the commands write --out there).
@@ -186,8 +181,4 @@ counts() { grep -m1 '^keygraph ' "$1" | awk '{print $2, $3, $5}'; }
 [ "$(counts "$WORK/stdout")" = "$(counts "$WORK/stdout2")" ] ||
   bad "--models and --index disagree: $(grep '^keygraph ' "$WORK/stdout" "$WORK/stdout2")"
 
-if [ $failures -ne 0 ]; then
-  echo "$failures failure(s)" >&2
-  exit 1
-fi
-echo "cli_eval_truth: all checks passed"
+finish

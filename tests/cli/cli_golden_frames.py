@@ -19,6 +19,8 @@ import os
 import subprocess
 import sys
 
+from cli_support import Checks, run_tool
+
 TOLERANCE = 0.5  # pixels: other targets' floating point differs in the last bits
 
 args = sys.argv[1:]
@@ -28,17 +30,11 @@ split = args.index("--")
 INDEX, FRAMES, EXPECTED = args[:3]
 LIBCAMERA = "--libcamera" in args[3:split]
 KG = args[split + 1 :]
-failures = []
-
-
-def check(ok, what):
-    print(("ok: " if ok else "FAIL: ") + what, file=sys.stdout if ok else sys.stderr)
-    if not ok:
-        failures.append(what)
+check = Checks("cli_golden_frames", verbose=True)
 
 
 def run(*command, timeout=300):
-    return subprocess.run(KG + list(command), capture_output=True, text=True, timeout=timeout)
+    return run_tool(KG, *command, timeout=timeout)
 
 
 def read_expected(path):
@@ -106,5 +102,4 @@ if LIBCAMERA:
     except subprocess.TimeoutExpired:
         check(False, "live --libcamera without a camera: still running after 120 s")
 
-if failures:
-    sys.exit(f"{len(failures)} checks failed")
+check.finish()

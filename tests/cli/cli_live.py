@@ -15,7 +15,6 @@ errors for bad command lines. Then `keygraph bench` on two frames.
 
 usage: cli_live.py KEYGRAPH KG_TO_PGM OPENCV_DATA_DIR
 """
-import json
 import os
 import shutil
 import signal
@@ -24,24 +23,16 @@ import sys
 import tempfile
 import time
 
+from cli_support import Checks, json_lines, read_pgm, run_tool
+
 KG, TO_PGM, DATA = (os.path.abspath(a) for a in sys.argv[1:4])
 DETECT_KEYS = ["scene", "width", "height", "time_ms", "detections", "stats"]
 LIVE_KEYS = ["scene", "width", "height", "time_ms", "detected", "detections", "stats"]
-failures = []
-
-
-def check(ok, what):
-    if not ok:
-        failures.append(what)
-        print("FAIL: " + what, file=sys.stderr)
+check = Checks("cli_live")
 
 
 def run(*args, timeout=120):
-    return subprocess.run([KG, *args], capture_output=True, text=True, timeout=timeout)
-
-
-def json_lines(text):
-    return [json.loads(line) for line in text.splitlines()]
+    return run_tool([KG], *args, timeout=timeout)
 
 
 def without_time(record):
@@ -50,16 +41,6 @@ def without_time(record):
     out["detections"] = [{k: v for k, v in d.items() if k not in ("track", "tracked")}
                          for d in record.get("detections", [])]
     return out
-
-
-def read_pgm(path):
-    """(width, height, pixels) of an 8-bit binary PGM without comments."""
-    with open(path, "rb") as f:
-        data = f.read()
-    fields = data.split(maxsplit=4)
-    assert fields[0] == b"P5" and fields[3] == b"255", path
-    width, height = int(fields[1]), int(fields[2])
-    return width, height, data[len(data) - width * height:]
 
 
 work = tempfile.mkdtemp(prefix="kg-live-")
@@ -235,6 +216,4 @@ try:
 finally:
     shutil.rmtree(work, ignore_errors=True)
 
-if failures:
-    sys.exit("cli_live: %d check(s) failed" % len(failures))
-print("cli_live: all checks passed")
+check.finish()

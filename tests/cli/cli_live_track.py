@@ -17,7 +17,6 @@ whose names sort differently from the order they were written in. Checked:
 
 usage: cli_live_track.py KEYGRAPH KG_TO_PGM OPENCV_DATA_DIR
 """
-import json
 import os
 import re
 import shutil
@@ -25,42 +24,17 @@ import subprocess
 import sys
 import tempfile
 
+from cli_support import Checks, json_lines, read_pgm, run_tool, write_pgm_crop
+
 KG, TO_PGM, DATA = (os.path.abspath(a) for a in sys.argv[1:4])
 FRAMES = 12
 STEP = (3, 2)  # pixels the camera pans per frame (the box moves by minus this)
 CROP = (440, 320)
-failures = []
-
-
-def check(ok, what):
-    if not ok:
-        failures.append(what)
-        print("FAIL: " + what, file=sys.stderr)
+check = Checks("cli_live_track")
 
 
 def run(*args, timeout=300):
-    return subprocess.run([KG, *args], capture_output=True, text=True, timeout=timeout)
-
-
-def json_lines(text):
-    return [json.loads(line) for line in text.splitlines()]
-
-
-def read_pgm(path):
-    """(width, height, pixels) of an 8-bit binary PGM without comments."""
-    with open(path, "rb") as f:
-        data = f.read()
-    fields = data.split(maxsplit=4)
-    assert fields[0] == b"P5" and fields[3] == b"255", path
-    width, height = int(fields[1]), int(fields[2])
-    return width, height, data[len(data) - width * height:]
-
-
-def write_crop(path, width, pixels, x, y):
-    w, h = CROP
-    rows = b"".join(pixels[(y + r) * width + x:(y + r) * width + x + w] for r in range(h))
-    with open(path, "wb") as f:
-        f.write(b"P5\n%d %d\n255\n" % (w, h) + rows)
+    return run_tool([KG], *args, timeout=timeout)
 
 
 def boxes(record):
@@ -82,8 +56,8 @@ try:
     os.mkdir(frames)
     # Written last frame first; "pan_09" sorts before "pan_10" by name only.
     for i in reversed(range(FRAMES)):
-        write_crop(os.path.join(frames, "pan_%02d.pgm" % i), width, pixels, 10 + STEP[0] * i,
-                   10 + STEP[1] * i)
+        write_pgm_crop(os.path.join(frames, "pan_%02d.pgm" % i), pixels, width, 10 + STEP[0] * i,
+                       10 + STEP[1] * i, *CROP)
     paths = [os.path.join(frames, "pan_%02d.pgm" % i) for i in range(FRAMES)]
     index = os.path.join(work, "box.kgi")
     build = run("build", "-q", "--no-look-alikes", os.path.join(DATA, "box.png"), "-o", index)
@@ -168,6 +142,4 @@ try:
 finally:
     shutil.rmtree(work, ignore_errors=True)
 
-if failures:
-    sys.exit("cli_live_track: %d check(s) failed" % len(failures))
-print("cli_live_track: all checks passed")
+check.finish()

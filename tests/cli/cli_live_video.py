@@ -18,46 +18,20 @@ usage: cli_live_video.py KEYGRAPH OPENCV_DATA_DIR [without-video | sanitized]
   sanitized: the --loop check (545 detections of Megamind.avi, over 300 s
   under AddressSanitizer) is left out, and says so
 """
-import json
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 
+from cli_support import Checks, json_lines, read_pgm, run_tool, write_pgm_crop
+
 KG, DATA = (os.path.abspath(a) for a in sys.argv[1:3])
 VIDEO = os.path.join(DATA, "vtest.avi")
-failures = []
-
-
-def check(ok, what):
-    if not ok:
-        failures.append(what)
-        print("FAIL: " + what, file=sys.stderr)
+check = Checks("cli_live_video")
 
 
 def run(*args, timeout=240):
-    return subprocess.run([KG, *args], capture_output=True, text=True, timeout=timeout)
-
-
-def json_lines(text):
-    return [json.loads(line) for line in text.splitlines()]
-
-
-def read_pgm(path):
-    """(width, height, pixels) of an 8-bit binary PGM (keygraph writes no comments)."""
-    with open(path, "rb") as f:
-        data = f.read()
-    fields = data.split(maxsplit=4)
-    assert fields[0] == b"P5" and fields[3] == b"255", path
-    width, height = int(fields[1]), int(fields[2])
-    return width, height, data[len(data) - width * height:]
-
-
-def write_crop(pixels, width, x0, y0, w, h, path):
-    rows = [pixels[(y0 + y) * width + x0:(y0 + y) * width + x0 + w] for y in range(h)]
-    with open(path, "wb") as f:
-        f.write(b"P5\n%d %d\n255\n" % (w, h) + b"".join(rows))
+    return run_tool([KG], *args, timeout=timeout)
 
 
 work = tempfile.mkdtemp(prefix="kg-live-video-")
@@ -72,7 +46,7 @@ try:
         err = res.stderr.splitlines()
         check(res.returncode != 0 and len(err) == 1 and "built without video support" in err[0],
               "--video without videoio: rc %d, stderr %s" % (res.returncode, err))
-        sys.exit(1 if failures else 0)
+        check.finish()
 
     # 1. 20 frames as JSON lines, in order, at the video's size.
     live = run("live", "--index", box, "--video", VIDEO, "--frames", "20", "--json")
@@ -104,7 +78,7 @@ try:
     # 3. A crop of frame 0 (the building's facade, top left) is found there.
     x0, y0, w, h = 40, 20, 260, 200
     crop = os.path.join(work, "facade.pgm")
-    write_crop(pixels, width, x0, y0, w, h, crop)
+    write_pgm_crop(crop, pixels, width, x0, y0, w, h)
     facade = os.path.join(work, "facade.kgi")
     build = run("build", crop, "-o", facade)
     check(build.returncode == 0, "build from the crop: " + build.stderr)
@@ -178,6 +152,4 @@ try:
 finally:
     shutil.rmtree(work, ignore_errors=True)
 
-if failures:
-    sys.exit("cli_live_video: %d check(s) failed" % len(failures))
-print("cli_live_video: all checks passed")
+check.finish()

@@ -9,13 +9,8 @@ set -u
 KG=${1:?usage: cli_quality.sh KEYGRAPH_BINARY OPENCV_DATA_DIR}
 DATA=${2:?usage: cli_quality.sh KEYGRAPH_BINARY OPENCV_DATA_DIR}
 command -v python3 >/dev/null 2>&1 || { echo "python3 is needed to make and read PNGs" >&2; exit 1; }
-WORK=$(mktemp -d "${TMPDIR:-/tmp}/kg_quality_cli.XXXXXX") || exit 1
-trap 'rm -rf "$WORK"' EXIT
-failures=0
-bad() {
-  echo "FAIL: $*" >&2
-  failures=$((failures + 1))
-}
+TEST_NAME=cli_quality
+. "$(dirname "$0")/test_support.sh"
 
 # A plain rectangle as a binary PGM (no image library needed): a dark
 # frame 6 px wide on white, 240 x 160.
@@ -98,8 +93,4 @@ cmp -s "$WORK/j1.out" "$WORK/j3.out" || bad "build -j 3 printed: $(diff "$WORK/j
 grep -q 'empty.png' "$WORK/bad.err" || bad "build -j 2, empty image: not named: $(cat "$WORK/bad.err")"
 [ -e "$WORK/bad.kgi" ] && bad "build -j 2 with an empty image left an index behind"
 
-if [ "$failures" -ne 0 ]; then
-  echo "$failures failure(s)" >&2
-  exit 1
-fi
-echo "cli_quality: all checks passed"
+finish
