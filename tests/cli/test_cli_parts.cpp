@@ -1,8 +1,8 @@
 // The CLI's shared parts (src/cli/device) on their own: the option parser's
 // rules (a value option once unless repeatable, `--` ends the options),
 // JSON strings of names that are not UTF-8, the scene error line, where a
-// detection's name goes in a picture, and the --draw plan checked before the
-// first scene.
+// detection's name goes in a picture and the font that draws it, and the
+// --draw plan checked before the first scene.
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "cli/device/bitmap_font.h"
 #include "cli/device/draw_targets.h"
 #include "cli/device/frame_output.h"
 #include "cli/device/json.h"
@@ -158,6 +159,86 @@ TEST(CliLabel, AtTheTopEdgeGoesBelowAndInside) {
 TEST(CliLabel, WildCornersStayInside) {
   const Detection d = detection_with_corners({1e30f, -1e30f}, {5, 5}, {6, 6}, {7, 7});
   expect_inside(label_position(d, 320, 240, 50, 10, 4), 320, 240, 50, 10, 4);
+}
+
+// A gray picture of `w` x `h` in `value`.
+platform::GrayImage gray_picture(int w, int h, std::uint8_t value) {
+  platform::GrayImage img;
+  img.width = w;
+  img.height = h;
+  img.pixels.assign(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), value);
+  return img;
+}
+
+std::uint8_t at(const platform::GrayImage& img, int x, int y) {
+  return img.pixels[static_cast<std::size_t>(y) * static_cast<std::size_t>(img.width) +
+                    static_cast<std::size_t>(x)];
+}
+
+TEST(CliFont, DrawsTheLetterItsRowsSay) {
+  // 'T' in the 5 x 7 font: the top row full, then the middle column.
+  platform::GrayImage img = gray_picture(20, 20, 128);
+  draw_text(img, "T", 5, 12, 1, 255, 0);  // rows 5..11, columns 5..9
+  for (int x = 5; x < 10; ++x) EXPECT_EQ(at(img, x, 5), 255) << x;
+  for (int y = 6; y < 12; ++y) {
+    EXPECT_EQ(at(img, 7, y), 255) << y;
+    EXPECT_EQ(at(img, 6, y), 0) << y;  // the edge beside the stem
+    if (y > 6) {                       // (row 6 is the bar's edge)
+      EXPECT_EQ(at(img, 5, y), 128) << y;
+    }
+  }
+  EXPECT_EQ(at(img, 7, 4), 0);     // the edge above the bar
+  EXPECT_EQ(at(img, 7, 12), 0);    // and below the stem
+  EXPECT_EQ(at(img, 0, 0), 128);   // nothing far from the text
+  EXPECT_EQ(at(img, 7, 14), 128);  // nothing below the baseline's edge
+}
+
+TEST(CliFont, ScalesByWholePixelsAndMeasuresItsWidth) {
+  EXPECT_EQ(text_width("", 2), 0);
+  EXPECT_EQ(text_width("box", 1), 17);  // 3 letters of 5, 2 columns between
+  EXPECT_EQ(text_width("box", 2), 34);
+  platform::GrayImage img = gray_picture(40, 30, 128);
+  draw_text(img, "I", 10, 24, 2, 255, 0);  // 'I': its top row spans columns 1..3
+  for (int y = 10; y < 12; ++y) {
+    for (int x = 12; x < 18; ++x) EXPECT_EQ(at(img, x, y), 255) << x << "," << y;
+  }
+  EXPECT_EQ(at(img, 10, 10), 128);  // column 0 of the glyph is empty, its edge 1 px wide
+}
+
+TEST(CliFont, TextPartlyOrWhollyOutsideIsClipped) {
+  platform::GrayImage img = gray_picture(16, 10, 128);
+  // AddressSanitizer and the pixel counts check that nothing lands outside.
+  draw_text(img, "EXIT", -7, 8, 1, 255, 0);
+  draw_text(img, "EXIT", 12, 3, 3, 255, 0);
+  draw_text(img, "far", -100000, -100000, 2, 255, 0);
+  draw_text(img, "far", 1 << 29, 1 << 29, 4, 255, 0);
+  draw_text(img, "\xc3\xa9\x01", 2, 9, 1, 255, 0);  // non-ASCII bytes: boxes
+  int white = 0;
+  for (const std::uint8_t v : img.pixels) white += v == 255;
+  EXPECT_GT(white, 10);
+  EXPECT_LT(white, 16 * 10);
+}
+
+TEST(CliFont, DrawnPicturesCarryTheModelName) {
+  const Detection box = [] {
+    Detection d = detection_with_corners({100, 100}, {300, 100}, {300, 250}, {100, 250});
+    d.model_name = "box";
+    return d;
+  }();
+  DetectionList found;
+  found.push_back(box);
+  const platform::GrayImage frame = gray_picture(640, 480, 128);
+  platform::GrayImage drawn;
+  draw_outlines(ImageView{frame.pixels.data(), frame.width, frame.height, frame.width}, found,
+                drawn);
+  // The name at twice the font's size above the top-left corner: "box" is
+  // 34 x 14 pixels with its baseline 4 pixels above the corner.
+  int white = 0;
+  for (int y = 100 - 4 - 14; y < 100 - 4; ++y) {
+    for (int x = 100; x < 134; ++x) white += at(drawn, x, y) == 255;
+  }
+  EXPECT_GT(white, 60);
+  EXPECT_EQ(at(drawn, 200, 180), 128);  // inside the outline: the frame untouched
 }
 
 class CliDrawPlan : public testing::Test {

@@ -1,8 +1,8 @@
 // keygraph detect: its options are the Options table below (keygraph detect --help).
 // The device build's detect: scenes read by platform/files (binary PGM;
 // more formats when that library was built with OpenCV), the core detector,
-// and the same output as the desktop detect. --draw writes PGM (outlines,
-// no names: there is no font without OpenCV).
+// and the same output as the desktop detect. --draw writes PGM (outlines
+// and names in the built-in font of bitmap_font.h).
 #include <chrono>
 #include <filesystem>
 

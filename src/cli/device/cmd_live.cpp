@@ -130,7 +130,7 @@ Options live_options(LiveOptions& o) {
             "--video only)")
       .flag("--json", o.json, "one JSON object per frame on stdout (as keygraph detect --json)")
       .text("--draw", "DIR", o.draw_dir,
-            "write each frame with the outlines found to DIR as PGM\n"
+            "write each frame with the outlines and names found to DIR as PGM\n"
             "(frame_NNNNNN.pgm, NNNNNN the frame's number from 0; <image name>.pgm\n"
             "with --images)")
       .value(

@@ -1,10 +1,13 @@
 #include "cli/device/frame_output.h"
 
+#include "cli/device/bitmap_font.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 
+#include "cli/device/bitmap_font.h"
 #include "cli/device/command_line.h"
 #include "cli/device/json.h"
 #include "platform/convert.h"
@@ -140,6 +143,15 @@ void draw_outlines(const ImageView& frame, const DetectionList& found,
   }
   for (const Detection& d : found) {
     for (int i = 0; i < 4; ++i) line(canvas, d.corners[i], d.corners[(i + 1) % 4], 1, 255);
+  }
+  // The names last, over every outline, as the desktop detect draws them:
+  // twice the font's size at 480 lines (readable at a glance), more above.
+  const int scale = std::max(1, std::min(frame.width, frame.height) / 240);
+  for (const Detection& d : found) {
+    const std::string_view name(d.model_name);
+    const LabelPosition at = label_position(d, canvas.width, canvas.height, text_width(name, scale),
+                                            kGlyphHeight * scale, 0);
+    draw_text(canvas, name, at.x, at.y, scale, 255, 0);
   }
 }
 

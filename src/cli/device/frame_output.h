@@ -43,8 +43,9 @@ LabelPosition label_position(const Detection& d, int width, int height, int text
                              int text_height, int baseline);
 
 // Copies `frame` into `canvas` (its capacity reused) and draws each
-// detection's outline: a white line with a black edge, 3 pixels wide, so it
-// shows on any background.
+// detection's outline (a white line with a black edge, 3 pixels wide, so it
+// shows on any background) and its model's name (bitmap_font.h), placed as
+// label_position() says.
 void draw_outlines(const ImageView& frame, const DetectionList& found, platform::GrayImage& canvas);
 
 }  // namespace kg::cli
