@@ -41,23 +41,29 @@ void build_index(const std::vector<std::pair<std::string, cv::Mat>>& images, con
   ASSERT_TRUE(s.is_ok()) << s.message();
 }
 
-class Detection2Models : public ::testing::Test {
+// The graf crop and box.png in one index, built once per test suite with
+// the parameters `make_params` returns.
+template <Params (*make_params)()>
+class TwoModelIndex : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     box_ = new cv::Mat(test::load_gray(test::opencv_data("box.png")));
     ASSERT_FALSE(box_->empty());
     index_ = new AlignedIndex;
-    build_index({{"graf-crop", graf_crop()}, {"box", *box_}}, Params{}, *index_);
+    build_index({{"graf-crop", graf_crop()}, {"box", *box_}}, make_params(), *index_);
   }
   static void TearDownTestSuite() {
     delete index_;
     delete box_;
   }
-  static AlignedIndex* index_;
-  static cv::Mat* box_;
+  static inline AlignedIndex* index_ = nullptr;
+  static inline cv::Mat* box_ = nullptr;
 };
-AlignedIndex* Detection2Models::index_ = nullptr;
-cv::Mat* Detection2Models::box_ = nullptr;
+
+Params default_params() {
+  return Params{};
+}
+using Detection2Models = TwoModelIndex<default_params>;
 
 TEST_F(Detection2Models, GrafCropFoundInGraf3WithinFivePixels) {
   const cv::Mat scene = test::load_gray(test::opencv_data("graf3.png"));
@@ -126,25 +132,12 @@ TEST_F(Detection2Models, NothingInUnrelatedPhotos) {
 
 // The paper's vertex descriptors (section 6: SIFT), off by default: an index
 // built with them still finds both models and nothing in unrelated photos.
-class DetectionSiftVertices : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    box_ = new cv::Mat(test::load_gray(test::opencv_data("box.png")));
-    ASSERT_FALSE(box_->empty());
-    index_ = new AlignedIndex;
-    Params params;
-    params.descriptor.vertex_descriptor = VertexDescriptor::kSift;
-    build_index({{"graf-crop", graf_crop()}, {"box", *box_}}, params, *index_);
-  }
-  static void TearDownTestSuite() {
-    delete index_;
-    delete box_;
-  }
-  static AlignedIndex* index_;
-  static cv::Mat* box_;
-};
-AlignedIndex* DetectionSiftVertices::index_ = nullptr;
-cv::Mat* DetectionSiftVertices::box_ = nullptr;
+Params sift_vertex_params() {
+  Params params;
+  params.descriptor.vertex_descriptor = VertexDescriptor::kSift;
+  return params;
+}
+using DetectionSiftVertices = TwoModelIndex<sift_vertex_params>;
 
 TEST_F(DetectionSiftVertices, IndexHasVertexDescriptors) {
   EXPECT_EQ(index_->index.params().descriptor.vertex_descriptor, VertexDescriptor::kSift);

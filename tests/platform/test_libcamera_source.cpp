@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "camera_checks.h"
 #include "platform/libcamera/libcamera_source.h"
 
 namespace kg::platform {
@@ -28,26 +29,11 @@ TEST(LibcameraSource, CapturesFramesFromARealCamera) {
   const Status s = src.start();
   ASSERT_TRUE(s) << s.message();
   std::printf("%s\n", src.description().c_str());
-  Frame f;
-  std::uint64_t last_seq = 0, last_ts = 0;
-  int got = 0;
-  for (int i = 0; i < 30 && got < 10; ++i) {
-    const Status n = src.next(f, 2000);
-    if (is_bad_frame(n)) continue;
-    ASSERT_TRUE(n) << n.message();
-    EXPECT_FALSE(f.image.empty());
-    if (got > 0) {
-      EXPECT_GT(f.sequence, last_seq);
-      EXPECT_GT(f.timestamp_ns, last_ts);
-    }
-    last_seq = f.sequence;
-    last_ts = f.timestamp_ns;
-    ++got;
-  }
-  EXPECT_EQ(got, 10);
+  test::expect_ordered_frames(src, 10);
   src.stop();
   // Buffers and requests are set up again from scratch.
   ASSERT_TRUE(src.start());
+  Frame f;
   ASSERT_TRUE(src.next(f, 2000));
 }
 

@@ -23,6 +23,7 @@
 
 #include <gtest/gtest.h>
 
+#include "camera_checks.h"
 #include "platform/v4l2/v4l2_source.h"
 
 namespace kg::platform {
@@ -54,25 +55,7 @@ TEST(V4l2Device, CapturesFramesFromARealCamera) {
       continue;  // e.g. a metadata node beside the capture node
     }
     std::printf("%s\n", src.description().c_str());
-    Frame f;
-    std::uint64_t last_seq = 0, last_ts = 0;
-    int got = 0;
-    for (int i = 0; i < 30 && got < 10; ++i) {
-      const Status n = src.next(f, 2000);
-      if (is_bad_frame(n)) continue;
-      ASSERT_TRUE(n) << n.message();
-      EXPECT_EQ(f.image.width, src.layout().width);
-      EXPECT_EQ(f.image.height, src.layout().height);
-      EXPECT_FALSE(f.image.empty());
-      if (got > 0) {
-        EXPECT_GT(f.sequence, last_seq);
-        EXPECT_GT(f.timestamp_ns, last_ts);
-      }
-      last_seq = f.sequence;
-      last_ts = f.timestamp_ns;
-      ++got;
-    }
-    EXPECT_EQ(got, 10);
+    test::expect_ordered_frames(src, 10, src.layout().width, src.layout().height);
     src.stop();
     return;
   }
