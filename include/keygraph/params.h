@@ -86,7 +86,11 @@ struct KeypointParams {
   // which the upsampled frame has more of. Keypoints passed in by the caller
   // (MSER, SIFT vertex descriptors: DesktopDetector) are only mapped, not
   // found anew on the upsampled frame, so for those indexes the option
-  // changes little but the pixel sizes. Not in the paper.
+  // changes little but the pixel sizes. 4: the frame as it is, then
+  // upsampled 2x only in one window of 112 frame pixels around the densest
+  // cluster of keygraph correspondences of models the first pass found no
+  // pose for (coarse to fine, issue 38; scene_upsample.cpp); not for
+  // keypoints passed in. Not in the paper.
   int scene_upsample = 1;
 };
 

@@ -251,8 +251,13 @@ int cmd_eval(const Args& args) {
     progress.finish();
     if (!s) return fail(s.message());
     const std::vector<SynthRow> rows = synth_tallies(cases, synth);
-    std::fputs(synth_text(rows, synth_by_scale(cases, synth), synth_by_confidence(cases)).c_str(),
-               stdout);
+    std::fputs(
+        (synth_text(rows, synth_by_scale(cases, synth), synth_by_confidence(cases)) +
+         synth_bins_text(synth_by_bins(cases, synth, SynthBinBy::kLongEdge),
+                         SynthBinBy::kLongEdge) +
+         synth_bins_text(synth_by_bins(cases, synth, SynthBinBy::kDistance), SynthBinBy::kDistance))
+            .c_str(),
+        stdout);
     if (!out_dir.empty()) {
       if (s = write_synth_report(outputs, out_dir, synth, cases); s) s = outputs.commit();
       if (!s) return fail("eval: " + s.message());

@@ -38,7 +38,7 @@ Status check_limits(const Limits& l, const Params& params) {
   if (f * l.max_width <= Limits::kMaxSide && f * l.max_height <= Limits::kMaxSide)
     return Status::ok();
   return {StatusCode::kInvalidArgument,
-          "detector limits out of range: with keypoints.scene_upsample 2 or 3 the frame is "
+          "detector limits out of range: with keypoints.scene_upsample 2 to 4 the frame is "
           "upsampled 2x, so at most " +
               std::to_string(Limits::kMaxSide / 2) + " px a side"};
 }

@@ -200,7 +200,8 @@ cv::Mat render_plot(const PlotSpec& spec) {
       if (static_cast<int>(i) == s.marker && a.contains(cv::Point(cvRound(p.x), cvRound(p.y))))
         cv::circle(img, cv::Point(cvRound(p.x), cvRound(p.y)), 5, s.colour, cv::FILLED,
                    cv::LINE_AA);
-      if (s.point_shape >= 0 && a.contains(cv::Point(cvRound(p.x), cvRound(p.y))))
+      const bool mark = s.marked.empty() || (i < s.marked.size() && s.marked[i] != 0);
+      if (s.point_shape >= 0 && mark && a.contains(cv::Point(cvRound(p.x), cvRound(p.y))))
         point_marker(img, cv::Point(cvRound(p.x), cvRound(p.y)), s.point_shape, s.colour);
       prev = p;
       have_prev = true;

@@ -26,6 +26,9 @@ struct PlotSeries {
   // 3 diamond, then again), also in the legend; -1: none. Series that
   // coincide stay told apart by their markers.
   int point_shape = -1;
+  // With point_shape: when not empty, only the points whose entry here is
+  // non-zero are marked (e.g. a bin's median on a step drawn across the bin).
+  std::vector<char> marked{};
 };
 
 // Where the legend goes: a corner inside the axes, or to their right

@@ -17,6 +17,7 @@
 #include "builder/model_builder.h"
 #include "eval/baselines.h"
 #include "eval/correspondence_pr.h"
+#include "eval/quad_geometry.h"
 #include "eval/report_io.h"
 #include "eval/synth/synth_set.h"
 
@@ -69,8 +70,9 @@ void score_synth_frame(const std::vector<SynthDetection>& detections, const Synt
                        cv::Size sign_size, int group_begin, SynthCase& c) {
   c.detections = static_cast<int>(detections.size());
   c.false_detections = c.detections;
-  c.found = false;
+  c.found = c.found_iou = false;
   c.corner_error = -1;
+  c.iou = 0;
   c.scored.clear();
   Point2f outline[4];
   if (truth.sign >= 0) sign_outline(sign_size, outline);
@@ -89,12 +91,16 @@ void score_synth_frame(const std::vector<SynthDetection>& detections, const Synt
       scored.corner_error = worst;
       scored.right = worst <= 10.0;
       if (best < 0 || worst < best) best = worst;
+      Point2f found[4];
+      for (int i = 0; i < 4; ++i) found[i] = kg::apply(d.homography, outline[i]);
+      c.iou = std::max(c.iou, quad_iou(found, truth.corners));
     }
     c.scored.push_back(scored);
   }
   if (truth.sign < 0) return;
   c.corner_error = best;
   c.found = best >= 0 && best <= 10.0;
+  c.found_iou = c.iou >= 0.5;
   if (c.found) --c.false_detections;
 }
 
@@ -202,6 +208,8 @@ Status evaluate_synth(const SynthEvalOptions& options, std::vector<SynthCase>& c
           c.frame = f;
           c.sign = entry.info.sign;
           c.scale = scale_of(entry.info, sign);
+          c.long_edge = sign != nullptr ? longest_side(entry.info.corners) : 0;
+          c.distance = entry.info.distance;
           c.occluded = entry.info.occluded;
           c.blur_sigma = entry.info.blur_sigma;
           c.motion_blur = entry.info.motion_blur;
@@ -297,16 +305,32 @@ const std::vector<double>& synth_scale_buckets() {
   return b;
 }
 
+const std::vector<double>& synth_bin_bounds(SynthBinBy by) {
+  static const double inf = std::numeric_limits<double>::infinity();
+  static const std::vector<double> long_edge = {20, 30, 40, 60, 100, 160, inf};
+  // A 30 cm sign at 640x480 (focal 600 px): 120, 72, 45, 30 and 20 px long.
+  static const std::vector<double> distance = {1.5, 2.5, 4, 6, 9, inf};
+  if (by == SynthBinBy::kLongEdge) return long_edge;
+  if (by == SynthBinBy::kDistance) return distance;
+  return synth_scale_buckets();
+}
+
 std::vector<SynthScaleRow> synth_by_scale(const std::vector<SynthCase>& cases,
                                           const SynthEvalOptions& options) {
+  return synth_by_bins(cases, options, SynthBinBy::kScale);
+}
+
+std::vector<SynthScaleRow> synth_by_bins(const std::vector<SynthCase>& cases,
+                                         const SynthEvalOptions& options, SynthBinBy by) {
   std::vector<SynthScaleRow> rows;
   if (cases.empty()) return rows;
   int smallest = cases[0].index_size;
   for (const SynthCase& c : cases) smallest = std::min(smallest, c.index_size);
-  const std::vector<double>& b = synth_scale_buckets();
+  const std::vector<double>& b = synth_bin_bounds(by);
   for (const std::string& method : options.methods) {
     SynthScaleRow r{method,
                     smallest,
+                    std::vector<int>(b.size(), 0),
                     std::vector<int>(b.size(), 0),
                     std::vector<int>(b.size(), 0),
                     std::vector<double>(b.size(), 0.0),
@@ -314,11 +338,15 @@ std::vector<SynthScaleRow> synth_by_scale(const std::vector<SynthCase>& cases,
     std::vector<int> measured(b.size(), 0);
     for (const SynthCase& c : cases) {
       if (c.method != method || c.index_size != smallest || c.sign < 0) continue;
-      const auto k =
-          static_cast<std::size_t>(std::lower_bound(b.begin(), b.end(), c.scale) - b.begin());
+      const double v = by == SynthBinBy::kScale      ? c.scale
+                       : by == SynthBinBy::kLongEdge ? c.long_edge
+                                                     : c.distance;
+      if (by == SynthBinBy::kDistance && !(v > 0)) continue;  // not recorded
+      const auto k = static_cast<std::size_t>(std::lower_bound(b.begin(), b.end(), v) - b.begin());
       const std::size_t bucket = std::min(k, b.size() - 1);
       ++r.frames[bucket];
       r.found[bucket] += c.found;
+      r.found_iou[bucket] += c.found_iou;
       if (c.sign_keypoints >= 0) {
         ++measured[bucket];
         r.keypoints[bucket] += c.sign_keypoints;
@@ -333,6 +361,49 @@ std::vector<SynthScaleRow> synth_by_scale(const std::vector<SynthCase>& cases,
     rows.push_back(r);
   }
   return rows;
+}
+
+std::string synth_bins_text(const std::vector<SynthScaleRow>& rows, SynthBinBy by) {
+  int any = 0;
+  for (const SynthScaleRow& r : rows)
+    for (const int n : r.frames) any += n;
+  if (any == 0) return "";
+  const std::vector<double>& b = synth_bin_bounds(by);
+  std::string out;
+  char line[256];
+  const bool metres = by == SynthBinBy::kDistance;
+  std::snprintf(line, sizeof(line),
+                "\nFound within 10 px, and by IoU >= 0.5, by the sign's %s (index of %d)\n%-13s",
+                metres ? "distance (m, a 30 cm sign)" : "long edge in the frame (px)",
+                rows[0].index_size, metres ? "distance" : "long edge");
+  out += line;
+  double lo = 0;
+  for (const double hi : b) {
+    char label[32];
+    if (std::isinf(hi)) {
+      std::snprintf(label, sizeof(label), metres ? "%.1f+" : "%.0f+", lo);
+    } else {
+      std::snprintf(label, sizeof(label), metres ? "%.1f-%.1f" : "%.0f-%.0f", lo, hi);
+    }
+    std::snprintf(line, sizeof(line), " %17s", label);
+    out += line;
+    lo = hi;
+  }
+  out += "\n";
+  for (const SynthScaleRow& r : rows) {
+    std::snprintf(line, sizeof(line), "%-13s", r.method.c_str());
+    out += line;
+    for (std::size_t k = 0; k < b.size(); ++k) {
+      char cell[48] = "-";  // a bin without frames has no rate
+      if (r.frames[k] > 0)
+        std::snprintf(cell, sizeof(cell), "%d/%d %d/%d", r.found[k], r.frames[k], r.found_iou[k],
+                      r.frames[k]);
+      std::snprintf(line, sizeof(line), " %17s", cell);
+      out += line;
+    }
+    out += "\n";
+  }
+  return out;
 }
 
 const std::vector<double>& synth_confidence_thresholds() {
@@ -472,13 +543,14 @@ Status write_synth_report(platform::OutputSet& out, const std::string& dir,
   std::ostringstream csv;
   csv << "method,index_size,group,frame,sign,found,corner_error,detections,false_detections,"
          "time_ms,scale,occluded,blur_sigma,motion_blur,noise_sigma,sign_keypoints,"
-         "repeated_keypoints\n";
+         "repeated_keypoints,long_edge,distance,iou\n";
   for (const SynthCase& c : cases) {
     csv << c.method << ',' << c.index_size << ',' << c.group << ',' << c.frame << ',' << c.sign
         << ',' << c.found << ',' << c.corner_error << ',' << c.detections << ','
         << c.false_detections << ',' << c.time_ms << ',' << c.scale << ',' << c.occluded << ','
         << c.blur_sigma << ',' << c.motion_blur << ',' << c.noise_sigma << ',' << c.sign_keypoints
-        << ',' << c.repeated_keypoints << '\n';
+        << ',' << c.repeated_keypoints << ',' << c.long_edge << ',' << c.distance << ',' << c.iou
+        << '\n';
   }
   if (s = out.add(dir + "/synth-cases.csv", csv.str()); !s) return s;
   // Every detection with its support, for precision-recall by confidence.
@@ -521,7 +593,27 @@ Status write_synth_report(platform::OutputSet& out, const std::string& dir,
       << ", \"false_detections\": " << r.false_detections << "}"
       << (i + 1 < confidence.size() ? ",\n" : "\n");
   }
-  j << "  ]\n}\n";
+  j << "  ]";
+  // Per bin of long edge and of distance, the smallest index (as printed).
+  for (const SynthBinBy by : {SynthBinBy::kLongEdge, SynthBinBy::kDistance}) {
+    j << ",\n  \"" << (by == SynthBinBy::kLongEdge ? "by_long_edge_px" : "by_distance_m")
+      << "\": [\n";
+    const std::vector<double>& b = synth_bin_bounds(by);
+    bool first = true;
+    for (const SynthScaleRow& r : synth_by_bins(cases, options, by)) {
+      for (std::size_t k = 0; k < b.size(); ++k) {
+        if (r.frames[k] == 0) continue;
+        j << (first ? "" : ",\n") << "    {\"method\": " << json_quote(r.method)
+          << ", \"index_size\": " << r.index_size
+          << ", \"from\": " << json_value(k == 0 ? 0.0 : b[k - 1])
+          << ", \"to\": " << json_value(b[k]) << ", \"frames\": " << r.frames[k]
+          << ", \"within_10px\": " << r.found[k] << ", \"iou_50\": " << r.found_iou[k] << "}";
+        first = false;
+      }
+    }
+    j << (first ? "" : "\n") << "  ]";
+  }
+  j << "\n}\n";
   return out.add(dir + "/synth-summary.json", j.str());
 }
 

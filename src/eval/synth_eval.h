@@ -58,6 +58,11 @@ struct SynthCase {
   // of its outline's area over the sign image's), hidden fraction, blur, noise.
   double scale = 0, occluded = 0, blur_sigma = 0, noise_sigma = 0;
   int motion_blur = 0;
+  // The sign's longest side in the frame (px), its distance (m, range sets;
+  // 0: not recorded), and the best IoU of a detection of its model with its
+  // outline (found_iou: >= 0.5, the criterion for signs under 40 px).
+  double long_edge = 0, distance = 0, iou = 0;
+  bool found_iou = false;
   // Keygraph methods, frames with a sign: the detector's sampled keypoints
   // inside the sign's outline, and of those the ones within 3 px of a
   // model keypoint of the sign under the ground truth (-1: not measured).
@@ -104,12 +109,23 @@ struct SynthScaleRow {
   std::string method;
   int index_size = 0;
   std::vector<int> frames, found;  // per bucket
+  std::vector<int> found_iou{};    // per bucket, IoU >= 0.5
   // Mean sign_keypoints and repeated_keypoints per bucket (NaN: none measured).
   std::vector<double> keypoints, repeated;
 };
 const std::vector<double>& synth_scale_buckets();  // upper bounds, last is infinity
 std::vector<SynthScaleRow> synth_by_scale(const std::vector<SynthCase>& cases,
                                           const SynthEvalOptions& options);
+
+// The same by the sign's long edge in the frame (px: 20-30, 30-40, 40-60,
+// 60-100, 100-160, 160+, and under 20) and by its distance (range sets).
+enum class SynthBinBy { kScale, kLongEdge, kDistance };
+const std::vector<double>& synth_bin_bounds(SynthBinBy by);  // upper bounds
+std::vector<SynthScaleRow> synth_by_bins(const std::vector<SynthCase>& cases,
+                                         const SynthEvalOptions& options, SynthBinBy by);
+// A table of found within 10 px and by IoU >= 0.5 per bin, every method;
+// empty when no case has the quantity (distance of a set without it).
+std::string synth_bins_text(const std::vector<SynthScaleRow>& rows, SynthBinBy by);
 
 // Keygraph methods: signs found and false detections per frame when only
 // the detections of confidence >= threshold are kept (Detection::confidence).

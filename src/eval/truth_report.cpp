@@ -18,8 +18,7 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 const std::vector<double>& size_edges() {
-  static const std::vector<double> e = {0, 24, 32, 48, 64, 96, 128, 192, 256, 384, 512, 768, kInf};
-  return e;
+  return truth_size_edges();
 }
 const std::vector<double>& scale_edges() {
   static const std::vector<double> e = {0, 0.1, 0.15, 0.2, 0.3, 0.5, 0.7, 1, 1.5, kInf};
@@ -48,6 +47,19 @@ std::vector<TruthBin> bin_cases(const std::vector<const TruthCase*>& cases,
       b.found += c->found;
       b.found_iou += c->found_iou;
       sizes.push_back(v);
+      if (c->truth_refound < 0) continue;  // not measured
+      ++b.measured;
+      b.confirmable += c->truth_verifiable;
+      b.some_matches += c->truth_matches > 0;
+      b.enough_matches += c->truth_enough_matches;
+      if (c->found_iou) continue;
+      if (!c->truth_verifiable) {
+        ++b.missed_keypoints;
+      } else if (!c->truth_enough_matches) {
+        ++b.missed_correspondences;
+      } else {
+        ++b.missed_pose;
+      }
     }
     b.median_size = percentile(sizes, 0.5);
     bins.push_back(b);
@@ -88,7 +100,16 @@ std::string bins_json(const std::vector<TruthBin>& bins) {
     if (b.instances == 0) continue;
     j << (first ? "" : ", ") << "{\"from\": " << json_value(b.lo)
       << ", \"to\": " << json_value(b.hi) << ", \"instances\": " << b.instances
-      << ", \"found\": " << b.found << ", \"found_iou\": " << b.found_iou << "}";
+      << ", \"found\": " << b.found << ", \"found_iou\": " << b.found_iou;
+    if (b.measured > 0) {
+      j << ", \"truth_measured\": " << b.measured << ", \"truth_confirmable\": " << b.confirmable
+        << ", \"truth_some_matches\": " << b.some_matches
+        << ", \"truth_enough_matches\": " << b.enough_matches
+        << ", \"missed_keypoints\": " << b.missed_keypoints
+        << ", \"missed_correspondences\": " << b.missed_correspondences
+        << ", \"missed_pose\": " << b.missed_pose;
+    }
+    j << "}";
     first = false;
   }
   j << "]";
@@ -96,6 +117,11 @@ std::string bins_json(const std::vector<TruthBin>& bins) {
 }
 
 }  // namespace
+
+const std::vector<double>& truth_size_edges() {
+  static const std::vector<double> e = {0, 20, 30, 40, 60, 100, 160, 256, 384, 512, 768, kInf};
+  return e;
+}
 
 cv::Mat truth_size_plot(const std::vector<TruthRow>& rows) {
   PlotSpec spec;
@@ -126,20 +152,37 @@ cv::Mat truth_size_plot(const std::vector<TruthRow>& rows) {
     iou.dashed = true;
     for (const TruthBin& b : rows[r].by_size) {
       if (b.instances == 0) continue;
+      // A step across the bin (half an octave past an open end), marked at
+      // the bin's median size, then a break before the next bin.
       const double x = std::log2(std::max(b.median_size, 1.0));
-      lo = std::min(lo, x);
-      hi = std::max(hi, x);
-      corners.x.push_back(x + shift(2 * r));
-      corners.y.push_back(static_cast<double>(b.found) / b.instances);
-      iou.x.push_back(x + shift(2 * r + 1));
-      iou.y.push_back(static_cast<double>(b.found_iou) / b.instances);
+      double left = x - 0.25, right = x + 0.25;  // a bin without bounds: around its median
+      if (b.hi > b.lo) {
+        left = b.lo > 0 ? std::log2(b.lo) : std::log2(std::min(b.hi, 1e9)) - 0.5;
+        right = std::isinf(b.hi) ? std::log2(std::max(b.lo, 1.0)) + 0.5 : std::log2(b.hi);
+      }
+      left = std::min(left, x);
+      right = std::max(right, x);
+      lo = std::min(lo, left);
+      hi = std::max(hi, right);
+      const double fractions[2] = {static_cast<double>(b.found) / b.instances,
+                                   static_cast<double>(b.found_iou) / b.instances};
+      PlotSeries* both[2] = {&corners, &iou};
+      for (std::size_t k = 0; k < 2; ++k) {
+        PlotSeries& s = *both[k];
+        const double d = shift(2 * r + k);
+        for (const double px : {left + d, x + d, right + d, std::nan("")}) {
+          s.x.push_back(px);
+          s.y.push_back(fractions[k]);
+          s.marked.push_back(px == x + d ? 1 : 0);
+        }
+      }
     }
     spec.series.push_back(corners);
     spec.series.push_back(iou);
   }
   if (!(lo <= hi)) lo = 4, hi = 8;
   spec.x_min = std::floor(lo - 0.1);
-  spec.x_max = std::max(std::ceil(hi + 0.1), spec.x_min + 1);
+  spec.x_max = std::max(std::ceil(hi + 0.1), spec.x_min + 2);
   // Room below 0 and above 1: lines there are not drawn on the axes' box.
   spec.y_min = -0.05;
   spec.y_max = 1.05;
@@ -292,6 +335,25 @@ std::string truth_text(const std::vector<TruthRow>& rows, const TruthEvalOptions
         out += line;
       }
       out += "\n";
+    }
+  }
+  for (const TruthRow& r : rows) {
+    if (r.truth_measured == 0) continue;
+    std::snprintf(line, sizeof(line),
+                  "\nAt the ground-truth pose by long edge (%s): instances measured, confirmable "
+                  "by the\nkeypoints, with >= 1 and with enough correct correspondences, found "
+                  "(IoU); each miss\nby its first cause: too few keypoints re-found, too few "
+                  "correct correspondences, pose\n%-10s %8s %11s %9s %7s %6s %10s %16s %5s\n",
+                  r.method.c_str(), "long edge", "measured", "confirmable", ">=1 corr", "enough",
+                  "found", "keypoints", "correspondences", "pose");
+    out += line;
+    for (const TruthBin& b : r.by_size) {
+      if (b.measured == 0) continue;
+      std::snprintf(line, sizeof(line), "%-10s %8d %11d %9d %7d %6d %10d %16d %5d\n",
+                    bin_label(b, true).c_str(), b.measured, b.confirmable, b.some_matches,
+                    b.enough_matches, b.found_iou, b.missed_keypoints, b.missed_correspondences,
+                    b.missed_pose);
+      out += line;
     }
   }
   return out;

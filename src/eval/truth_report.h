@@ -20,6 +20,15 @@ struct TruthBin {
   double lo = 0, hi = 0;  // [lo, hi)
   int instances = 0, found = 0, found_iou = 0;
   double median_size = 0;  // of the instances in it (long edge or scale)
+  // keygraph methods, at the ground-truth pose (TruthCase::truth_*):
+  // instances measured, confirmable by the frame's keypoints, with at least
+  // one and with enough correct correspondences; and why each measured
+  // instance not found (IoU) was missed, in the pipeline's order: too few
+  // model keypoints re-found to confirm the pose (keypoints), confirmable
+  // but too few correct correspondences (correspondences), or both there
+  // and the pose still not found (pose: RANSAC and its checks).
+  int measured = 0, confirmable = 0, some_matches = 0, enough_matches = 0;
+  int missed_keypoints = 0, missed_correspondences = 0, missed_pose = 0;
 };
 
 struct TruthRow {
@@ -45,10 +54,17 @@ struct TruthRow {
 
 std::vector<TruthRow> truth_tallies(const TruthResults& results);
 
+// The long-edge bins (px) of the tallies: 20-30, 30-40, 40-60, 60-100,
+// 100-160, 160+ (issue 38), under 20, and the large ones of whole photos.
+const std::vector<double>& truth_size_edges();
+
 // truth-by-size.png: the fraction found by the object's long edge, a solid
 // (corners) and a dashed (IoU) line per method, each method shifted a
 // little along x with its own point markers (methods that find the same
 // fraction stay visible), the legend beside the axes (never over the data).
+// Every bin with instances is drawn as a step across its width with its
+// marker at the bin's median size, so that a single bin is a visible
+// segment, not a lone point; the x axis spans every such bin.
 cv::Mat truth_size_plot(const std::vector<TruthRow>& rows);
 
 std::string truth_text(const std::vector<TruthRow>& rows, const TruthEvalOptions& options,

@@ -201,5 +201,41 @@ TEST(Plot, SizePlotShowsCoincidentMethodsAndKeepsItsLegendOffTheData) {
   EXPECT_GT(beside[1], 20) << "sift-magsac's legend entry is not beside the axes";
 }
 
+// eval --truth's by-size plot when every instance falls in one bin (issue
+// 38: a user's 26-frame set drew an empty-looking plot, two lone markers
+// and no line): each bin is a step across its width, so the one bin shows.
+TEST(Plot, SizePlotDrawsASingleBin) {
+  std::vector<TruthRow> rows(1);
+  rows[0].method = "keygraph";
+  TruthBin b;
+  b.lo = 40;
+  b.hi = 60;
+  b.instances = 26;
+  b.found = 13;
+  b.found_iou = 13;
+  b.median_size = 47;
+  rows[0].by_size.push_back(b);
+  const cv::Mat img = truth_size_plot(rows);
+  const cv::Scalar colour = plot_colour(0);
+  // The step's row: y = 0.5 of the axes; count the method's pixels there.
+  int drawn = 0, columns = 0;
+  for (int x = 0; x < img.cols; ++x) {
+    bool any = false;
+    for (int y = 0; y < img.rows; ++y) {
+      const cv::Vec3b p = img.at<cv::Vec3b>(y, x);
+      const double d =
+          std::abs(p[0] - colour[0]) + std::abs(p[1] - colour[1]) + std::abs(p[2] - colour[2]);
+      if (d < 30) {
+        ++drawn;
+        any = true;
+      }
+    }
+    columns += any;
+  }
+  EXPECT_GT(drawn, 300) << "the one bin is not drawn";
+  // Wider than the legend's line sample (30 px) and the markers: the step.
+  EXPECT_GT(columns, 120);
+}
+
 }  // namespace
 }  // namespace kg

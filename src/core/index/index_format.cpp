@@ -141,8 +141,10 @@ Status validate_params(const Params& p) {
       p.keypoints.mser_max_area < p.keypoints.mser_min_area)
     return bad("keypoints.mser_delta, keypoints.mser_min_area, keypoints.mser_max_area",
                "delta/areas out of range");
-  if (p.keypoints.scene_upsample < 1 || p.keypoints.scene_upsample > 3)
-    return bad("keypoints.scene_upsample", "must be 1 (the frame), 2 (upsampled 2x) or 3 (both)");
+  if (p.keypoints.scene_upsample < 1 || p.keypoints.scene_upsample > 4)
+    return bad("keypoints.scene_upsample",
+               "must be 1 (the frame), 2 (upsampled 2x), 3 (both) or 4 (the frame, then "
+               "upsampled where it pays)");
   if (p.keypoints.model_scales < 1 || p.keypoints.model_scales > 8)
     return bad("keypoints.model_scales", "must be in 1..8");
   if (!(std::isfinite(p.keypoints.model_merge_distance) && p.keypoints.model_merge_distance >= 0.f))

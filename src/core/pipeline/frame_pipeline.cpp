@@ -228,7 +228,9 @@ Status FramePipeline::detect(ImageView frame, DetectionList& out) {
   const int mode = upsample_mode();
   Status s = Status::ok();
   if (mode != 2) s = detect_keypoints_and_run(frame, out);
-  if (mode >= 2 && s && !out_of_time("keypoints")) {
+  if (mode == 4 && s && !out_of_time("keypoints")) {
+    s = upsample_where_it_pays(frame, out);
+  } else if (mode >= 2 && mode != 4 && s && !out_of_time("keypoints")) {
     DetectionList& up = mode == 3 ? upsampled_found_ : out;
     up.clear();
     s = detect_keypoints_and_run(work_frame(frame), up);
@@ -255,7 +257,7 @@ Status FramePipeline::detect(ImageView frame, const Keypoint* keypoints, int cou
   const int mode = upsample_mode();
   if (mode != 2) {
     Status s = run(frame, keypoints, count, vertex_descriptors, out, Clock::now());
-    if (mode == 1 || !s) {
+    if (mode == 1 || mode == 4 || !s) {  // 4: no second pass for keypoints passed in
       apply_confidence_floor(out);
       return s;
     }

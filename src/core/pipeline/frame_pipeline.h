@@ -89,6 +89,9 @@ class FramePipeline {
   void upsample_keypoints(const Keypoint*& keypoints, int& count, const std::uint8_t*& descriptors);
   void map_to_frame(DetectionList& out);
   void merge(const DetectionList& more, DetectionList& out);
+  // scene_upsample 4: after the frame's pass, the frame upsampled 2x around
+  // the densest cluster of correspondences of models left without a pose.
+  Status upsample_where_it_pays(ImageView frame, DetectionList& out);
 
   const ModelIndex* index_;
   Limits caller_limits_;  // the Detector's: the frames it accepts

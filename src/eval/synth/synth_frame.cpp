@@ -4,6 +4,7 @@
 #include <cmath>
 #include <vector>
 
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 namespace kg {
@@ -22,6 +23,8 @@ cv::Matx33d rotation(double yaw, double pitch, double roll) {
   const cv::Matx33d rz(cr, -sr, 0, sr, cr, 0, 0, 0, 1);
   return rz * rx * ry;
 }
+
+}  // namespace
 
 // Lighting that varies linearly across the sign (a lamp to one side).
 cv::Mat lit_sign(const cv::Mat& sign, Rng& rng, double& mean_light) {
@@ -42,9 +45,9 @@ cv::Mat lit_sign(const cv::Mat& sign, Rng& rng, double& mean_light) {
   return out;
 }
 
-// Hides part of the sign behind a shape textured from another photo.
 double occlude(cv::Mat& frame, const cv::Mat& alpha, const cv::Mat& occluder,
-               const SynthFrameOptions& options, const Point2f corners[4], Rng& rng) {
+               const SynthFrameOptions& options, const Point2f corners[4], Rng& rng,
+               OccluderTexture texture_of, const void* context) {
   const double sign_area = cv::sum(alpha)[0];
   if (sign_area < 1 || occluder.empty()) return 0;
   const double target = uniform(rng, 0.05, options.max_occlusion);
@@ -63,7 +66,8 @@ double occlude(cv::Mat& frame, const cv::Mat& alpha, const cv::Mat& occluder,
   cv::ellipse(mask, cv::Point(cvRound(centre.x), cvRound(centre.y)),
               cv::Size(std::max(1, cvRound(a)), std::max(1, cvRound(b))), uniform(rng, 0, 180), 0,
               360, cv::Scalar(255), cv::FILLED, cv::LINE_AA);
-  const cv::Mat texture = background_view(occluder, frame.size(), rng);
+  const cv::Mat texture = texture_of != nullptr ? texture_of(occluder, frame.size(), rng, context)
+                                                : background_view(occluder, frame.size(), rng);
   cv::Mat m;
   mask.convertTo(m, CV_32F, 1.0 / 255);
   double hidden = 0;
@@ -81,8 +85,6 @@ double occlude(cv::Mat& frame, const cv::Mat& alpha, const cv::Mat& occluder,
   }
   return hidden / sign_area;
 }
-
-}  // namespace
 
 void sign_outline(cv::Size sign, Point2f out[4]) {
   const auto w = static_cast<float>(sign.width - 1), h = static_cast<float>(sign.height - 1);
@@ -108,12 +110,17 @@ cv::Mat background_view(const cv::Mat& photo, cv::Size size, Rng& rng) {
   return out;
 }
 
-Homography random_sign_pose(cv::Size sign, const SynthFrameOptions& o, Rng& rng) {
+Homography random_sign_pose(cv::Size sign, const SynthFrameOptions& o, Rng& rng,
+                            double* drawn_size) {
   const double deg = CV_PI / 180;
   const cv::Matx33d r = rotation(uniform(rng, -o.max_yaw_deg, o.max_yaw_deg) * deg,
                                  uniform(rng, -o.max_pitch_deg, o.max_pitch_deg) * deg,
                                  uniform(rng, -o.max_roll_deg, o.max_roll_deg) * deg);
-  double size = uniform(rng, o.min_size, o.max_size);
+  double size = o.log_size ? o.min_size * std::pow(o.max_size / o.min_size, rng.uniform01())
+                           : uniform(rng, o.min_size, o.max_size);
+  // The rows the sign may take: the frame's, or its central band's.
+  const double band = o.band_height > 0 ? std::min<double>(o.band_height, o.height) : o.height;
+  const double top = (o.height - band) / 2;
   const double longer = std::max(sign.width, sign.height) - 1.0;
   Point2f outline[4];
   sign_outline(sign, outline);
@@ -133,14 +140,15 @@ Homography random_sign_pose(cv::Size sign, const SynthFrameOptions& o, Rng& rng)
       min_y = std::min(min_y, projected[i].y);
       max_y = std::max(max_y, projected[i].y);
     }
-    if (max_x - min_x <= o.width - 1 - 2 * o.margin && max_y - min_y <= o.height - 1 - 2 * o.margin)
+    if (max_x - min_x <= o.width - 1 - 2 * o.margin && max_y - min_y <= band - 1 - 2 * o.margin)
       break;
   }
+  if (drawn_size != nullptr) *drawn_size = size;
   // Anywhere in the frame with every corner inside.
   const double tx =
       uniform(rng, o.margin - min_x, std::max(o.margin - min_x, o.width - 1 - o.margin - max_x));
   const double ty =
-      uniform(rng, o.margin - min_y, std::max(o.margin - min_y, o.height - 1 - o.margin - max_y));
+      top + uniform(rng, o.margin - min_y, std::max(o.margin - min_y, band - 1 - o.margin - max_y));
   std::vector<cv::Point2f> src, dst;
   for (int i = 0; i < 4; ++i) {
     src.emplace_back(outline[i].x, outline[i].y);
@@ -189,6 +197,12 @@ cv::Mat render_frame(const cv::Mat& background, const cv::Mat& sign, int sign_id
     if (rng.uniform01() < options.occlusion_probability)
       info.occluded = occlude(frame, alpha, occluder, options, info.corners, rng);
   }
+  degrade_frame(frame, options, rng, info);
+  return frame;
+}
+
+void degrade_frame(cv::Mat& frame, const SynthFrameOptions& options, Rng& rng,
+                   SynthFrameInfo& info) {
   info.gain = uniform(rng, options.min_gain, options.max_gain);
   info.offset = uniform(rng, -20, 20);
   frame.convertTo(frame, -1, info.gain, info.offset);
@@ -199,8 +213,11 @@ cv::Mat render_frame(const cv::Mat& background, const cv::Mat& sign, int sign_id
   } else if (blur < 0.75) {
     info.motion_blur = 3 + static_cast<int>(rng.uniform(5));
     const double angle = uniform(rng, 0, 180);
-    cv::Mat kernel(info.motion_blur, info.motion_blur, CV_32F, cv::Scalar(0));
-    const double c = (info.motion_blur - 1) / 2.0, ca = std::cos(angle * CV_PI / 180),
+    // The recorded length is the reference camera's; the kernel's in frame pixels.
+    const int length =
+        std::max(3, static_cast<int>(std::lround(info.motion_blur * options.motion_scale)));
+    cv::Mat kernel(length, length, CV_32F, cv::Scalar(0));
+    const double c = (length - 1) / 2.0, ca = std::cos(angle * CV_PI / 180),
                  sa = std::sin(angle * CV_PI / 180);
     cv::line(kernel, cv::Point(cvRound(c - c * ca), cvRound(c - c * sa)),
              cv::Point(cvRound(c + c * ca), cvRound(c + c * sa)), cv::Scalar(1), 1);
@@ -214,7 +231,12 @@ cv::Mat render_frame(const cv::Mat& background, const cv::Mat& sign, int sign_id
   frame.convertTo(noisy, CV_32FC3);
   noisy += noise;
   noisy.convertTo(frame, CV_8UC3);
-  return frame;
+  if (options.jpeg_quality > 0) {
+    std::vector<std::uint8_t> bytes;
+    cv::imencode(".jpg", frame, bytes, {cv::IMWRITE_JPEG_QUALITY, options.jpeg_quality});
+    frame = cv::imdecode(bytes, cv::IMREAD_COLOR);
+    info.jpeg_quality = options.jpeg_quality;
+  }
 }
 
 }  // namespace kg

@@ -27,6 +27,16 @@ struct SynthFrameOptions {
   double max_blur_sigma = 1.6;
   double max_noise_sigma = 6;
   double min_gain = 0.6, max_gain = 1.25;  // global illumination
+  // The size drawn log-uniformly between min_size and max_size (as many
+  // signs per octave of size, or of distance), not uniformly.
+  bool log_size = false;
+  // > 0: the sign's corners stay inside the central band of this many rows
+  // (the part of a 640x480 view that a 16:9 frame of the same camera shows).
+  double band_height = 0;
+  // Motion blur's length is multiplied by this (an angular motion covers
+  // more pixels in a frame of a finer camera).
+  double motion_scale = 1;
+  int jpeg_quality = 0;  // > 0: the frame goes through JPEG at this quality
 };
 
 // What was drawn into a frame.
@@ -40,6 +50,8 @@ struct SynthFrameInfo {
   double noise_sigma = 0;   // gray levels
   double gain = 1, offset = 0;  // frame = frame * gain + offset
   double sign_light = 1;        // mean lighting factor across the sign
+  double distance = 0;          // metres to a 30 cm sign (0: not recorded)
+  int jpeg_quality = 0;         // the JPEG round trip's quality (0: none)
 };
 
 // The sign's outline: pixel centres of its corners, clockwise from top-left.
@@ -49,8 +61,28 @@ void sign_outline(cv::Size sign, Point2f out[4]);
 // more), cropped at random, mirrored half of the time.
 cv::Mat background_view(const cv::Mat& photo, cv::Size size, Rng& rng);
 
-// A random pose of a sign of `sign` size with every corner inside the frame.
-Homography random_sign_pose(cv::Size sign, const SynthFrameOptions& options, Rng& rng);
+// A random pose of a sign of `sign` size with every corner inside the frame
+// (and the band). `drawn_size`, when given, receives the longer side the
+// sign was given before foreshortening (after any shrinking to fit), px.
+Homography random_sign_pose(cv::Size sign, const SynthFrameOptions& options, Rng& rng,
+                            double* drawn_size = nullptr);
+
+// The sign lit unevenly (a lamp to one side); its mean lighting factor.
+cv::Mat lit_sign(const cv::Mat& sign, Rng& rng, double& mean_light);
+
+// Hides part of the sign (coverage `alpha`) behind an ellipse textured by
+// `texture` (called once, with the Rng, for a frame-sized image); returns
+// the hidden fraction of the sign.
+using OccluderTexture = cv::Mat (*)(const cv::Mat& photo, cv::Size size, Rng& rng,
+                                    const void* context);
+double occlude(cv::Mat& frame, const cv::Mat& alpha, const cv::Mat& occluder,
+               const SynthFrameOptions& options, const Point2f corners[4], Rng& rng,
+               OccluderTexture texture = nullptr, const void* context = nullptr);
+
+// Illumination change, blur or motion blur, sensor noise and the JPEG
+// round trip of a rendered frame (the last steps of render_frame()).
+void degrade_frame(cv::Mat& frame, const SynthFrameOptions& options, Rng& rng,
+                   SynthFrameInfo& info);
 
 // Warps `sign` (BGR) into `frame` (BGR) under h; `alpha` receives the
 // sign's coverage of each frame pixel (CV_32F, 0..1).

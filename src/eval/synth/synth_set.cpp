@@ -64,6 +64,13 @@ Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
     return {StatusCode::kInvalidArgument, "sign-free fraction must be in [0, 1]"};
   if (options.frame.width < 64 || options.frame.height < 64)
     return {StatusCode::kInvalidArgument, "frames must be at least 64x64"};
+  for (const int q : {options.frame.jpeg_quality, options.range_frame.frame.jpeg_quality}) {
+    if (q < 0 || q > 100) return {StatusCode::kInvalidArgument, "JPEG quality must be in 0..100"};
+  }
+  if (options.range &&
+      !valid_range_frame_size(options.range_frame.width, options.range_frame.height))
+    return {StatusCode::kInvalidArgument,
+            "a range frame must be 640x480's camera scaled, 4:3 to 16:9 (640x480, 1280x720, ...)"};
   std::vector<cv::Mat> photos;
   std::vector<std::string> photo_names;
   for (const std::string& name : synth_background_names()) {
@@ -81,8 +88,8 @@ Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
                                        "Debian's opencv-doc package)"};
   manifest = SynthManifest{};
   manifest.seed = options.seed;
-  manifest.width = options.frame.width;
-  manifest.height = options.frame.height;
+  manifest.width = options.range ? options.range_frame.width : options.frame.width;
+  manifest.height = options.range ? options.range_frame.height : options.frame.height;
   std::vector<cv::Mat> signs;  // kept: every frame may show any of them
   for (int i = 0; i < options.signs; ++i) {
     SignImage s = render_sign(i, options.seed);
@@ -111,15 +118,20 @@ Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
     const std::size_t b = rng.uniform(static_cast<std::uint32_t>(photos.size()));
     std::size_t o = rng.uniform(static_cast<std::uint32_t>(photos.size() - 1));
     if (o >= b) ++o;  // the occluder comes from another photo
-    const cv::Mat background = background_view(photos[b], size, rng);
     const int sign = content[static_cast<std::size_t>(i)];
     SynthFrameEntry entry;
     entry.file = "frames/" + four_digits(i) + ".png";
     entry.background = photo_names[b];
     const cv::Mat none;
-    const cv::Mat frame =
-        render_frame(background, sign >= 0 ? signs[static_cast<std::size_t>(sign)] : none, sign,
-                     photos[o], options.frame, rng, entry.info);
+    const cv::Mat& drawn = sign >= 0 ? signs[static_cast<std::size_t>(sign)] : none;
+    cv::Mat frame;
+    if (options.range) {
+      frame = render_range_frame(photos[b], drawn, sign, photos[o], options.range_frame, rng,
+                                 entry.info);
+    } else {
+      const cv::Mat background = background_view(photos[b], size, rng);
+      frame = render_frame(background, drawn, sign, photos[o], options.frame, rng, entry.info);
+    }
     if (Status st = sink(entry.file, frame); !st) return st;
     manifest.frames.push_back(entry);
     if (progress) progress(i + 1, options.frames, {});
@@ -185,7 +197,10 @@ std::string manifest_text(const SynthManifest& m) {
       for (const double v : i.homography) out << ' ' << v;
     }
     out << " occluded " << i.occluded << " blur " << i.blur_sigma << " motion " << i.motion_blur
-        << " noise " << i.noise_sigma << " gain " << i.gain << " offset " << i.offset << '\n';
+        << " noise " << i.noise_sigma << " gain " << i.gain << " offset " << i.offset;
+    if (i.distance > 0) out << " distance " << i.distance;
+    if (i.jpeg_quality > 0) out << " jpeg " << i.jpeg_quality;
+    out << '\n';
   }
   return out.str();
 }
@@ -250,6 +265,12 @@ Status parse_manifest(const std::string& text, SynthManifest& out) {
           ok = static_cast<bool>(words >> i.gain);
         } else if (field == "offset") {
           ok = static_cast<bool>(words >> i.offset);
+        } else if (field == "distance") {
+          ok =
+              static_cast<bool>(words >> i.distance) && std::isfinite(i.distance) && i.distance > 0;
+        } else if (field == "jpeg") {
+          ok = static_cast<bool>(words >> i.jpeg_quality) && i.jpeg_quality >= 1 &&
+               i.jpeg_quality <= 100;
         } else {
           return bad("unknown field '" + field + "'");
         }

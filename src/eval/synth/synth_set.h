@@ -3,7 +3,7 @@
 //
 //   DIR/manifest.txt
 //   DIR/signs/NN-name.png      the signs (models), BGR
-//   DIR/frames/NNNN.png        640x480 BGR frames
+//   DIR/frames/NNNN.png        640x480 BGR frames (--range: any size of the same camera)
 //
 // manifest.txt, whitespace-separated, one record per line ('#' starts a
 // comment line):
@@ -13,9 +13,12 @@
 //   sign ID NAME FILE WIDTH HEIGHT
 //   frame FILE background NAME sign ID corners X0 Y0 X1 Y1 X2 Y2 X3 Y3
 //         homography H0..H8 occluded F blur SIGMA motion N noise SIGMA gain G offset O
+//         [distance METRES] [jpeg QUALITY]
 // A sign-free frame has sign -1 and no corners or homography. Corners are
 // the sign's corner pixel centres (clockwise from top-left) in the frame;
-// the homography maps sign pixels to frame pixels (row-major).
+// the homography maps sign pixels to frame pixels (row-major). distance
+// (range sets, eval/synth/range_frame.h): metres to a 30 cm sign; jpeg: the
+// quality of the JPEG round trip the frame went through.
 #pragma once
 
 #include <cstddef>
@@ -25,6 +28,7 @@
 #include <vector>
 
 #include "builder/progress.h"
+#include "eval/synth/range_frame.h"
 #include "eval/synth/synth_frame.h"
 #include "keygraph/status.h"
 
@@ -38,6 +42,10 @@ struct SynthSetOptions {
   int frames = 300;
   double sign_free_fraction = 0.2;
   SynthFrameOptions frame;
+  // The small-sign benchmark (eval/synth/range_frame.h): when set, frames
+  // are rendered by render_range_frame() with these options instead.
+  bool range = false;
+  RangeFrameOptions range_frame;
 };
 
 // The opencv-doc photos used as backgrounds (those present are used).
