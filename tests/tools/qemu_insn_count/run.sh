@@ -15,6 +15,9 @@
 # load and the first frame's warm-up. With T > 1 the count is also kept per
 # thread, and the busiest thread's share is printed: total / busiest is the
 # most T threads could gain if instructions were time and no thread waited.
+# KG_BENCH_ARGS adds bench options: "--set time_budget_ms=0.001" stops each
+# frame after its keypoint stage (the budget is spent by then), so the count
+# is the keypoints' alone.
 #
 # The plugin needs qemu's qemu-plugin.h, which is not in this repository:
 # it is fetched once from Debian's source of the installed qemu-user (the
@@ -99,12 +102,12 @@ count() {  # level repeat frame -> "total thread0 thread1 ..." of the whole run
   local plugin_args=$plugin,outfile=$tmp/n
   ((threads > 1)) && plugin_args+=,threads=on
   KG_SIMD=$1 qemu-aarch64 -L "$root" -plugin "$plugin_args" "$keygraph" bench \
-    --index "$index" --repeat "$2" --threads "$threads" "$3" >"$tmp/out" 2>&1 ||
+    --index "$index" --repeat "$2" --threads "$threads" ${KG_BENCH_ARGS:-} "$3" >"$tmp/out" 2>&1 ||
     die "$keygraph bench failed: $(tail -n 3 "$tmp/out")"
   awk '/^instructions/ {total = $2} /^thread/ {t = t " " $3} END {print total t}' "$tmp/n"
 }
 echo "keygraph: $keygraph"
-echo "index: $index; qemu: $(qemu-aarch64 --version | head -n 1); --threads $threads"
+echo "index: $index; qemu: $(qemu-aarch64 --version | head -n 1); --threads $threads ${KG_BENCH_ARGS:-}"
 printf '%-24s %-7s %14s %s  %s\n' frame KG_SIMD "insns/frame" \
   "$( ((threads > 1)) && echo " busiest thread")" "bench's result"
 for frame in "$@"; do
