@@ -34,9 +34,10 @@ class HessianDetector {
                int max_candidates, int threads = 1);
 
   // Splits each scale level's work (blur, response, candidates, halving)
-  // into row bands on `workers` (threads() at most the reserve()d count;
-  // null: the calling thread only). The keypoints are the same, byte for
-  // byte, for any number of bands.
+  // into row bands on `workers` (null: the calling thread only): at most
+  // one band per thread and as many as reserve() made room for, fewer on
+  // small levels. The keypoints are the same, byte for byte, for any
+  // number of bands.
   void set_workers(WorkerPool* workers) { workers_ = workers; }
   static constexpr int kMaxBands = 8;
 
@@ -62,7 +63,7 @@ class HessianDetector {
     WorkVector<std::uint8_t> mask;
     Plane<float> halo;
     WorkVector<std::int32_t> candidates;
-    bool complete = true;
+    bool complete = true;  // no candidate dropped (the first band's: none in the joined list)
   };
   struct Level;
   // Runs one level's work on `bands` row bands (below).
