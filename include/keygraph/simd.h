@@ -4,9 +4,10 @@
 // vector versions; each computes exactly what the portable loop computes
 // (the tests compare them bit for bit), and simd_level() says which run.
 //
-// The level starts at the best this CPU and this build have. Lowering it
-// (keygraph's commands: --simd scalar) rules vector code out when
-// diagnosing a device: results do not change, only speed.
+// The level starts at the best this CPU and this build have, or at a lower
+// one named by the environment variable KG_SIMD (scalar, baseline, sse2,
+// neon, avx2). Lowering it rules vector code out when diagnosing a device
+// or counting its cost: results do not change, only speed.
 #pragma once
 
 #include <cstdint>

@@ -4,8 +4,13 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 
 #include "core/support/simd_dispatch.h"
+
+#if defined(KG_NEON_FLOAT)
+#include <arm_neon.h>
+#endif
 
 namespace kg {
 namespace {
@@ -114,6 +119,152 @@ KG_ALWAYS_INLINE void pad_row(float* row, int w, int radius) {
   std::fill(row + w, row + w + radius, row[w - 1]);
 }
 
+#if defined(KG_NEON_FLOAT)
+// The passes with NEON intrinsics, 4 pixels at a time: each pixel's sum in
+// a register over all taps (the portable loops add each group of taps into
+// memory), in the portable loops' order, so the same values bit for bit.
+// The radii of the frame's blurs (4 to 8) get their own copies, with the
+// taps unrolled and the rows and weights in registers.
+constexpr int kMaxFixedRadius = 10;
+
+inline float32x4_t load4(const float* p) {
+  return vld1q_f32(p);
+}
+inline float32x4_t load4(const std::uint8_t* p) {
+  std::uint32_t four;
+  std::memcpy(&four, p, sizeof four);
+  const uint16x8_t wide = vmovl_u8(vreinterpret_u8_u32(vdup_n_u32(four)));
+  return vcvtq_f32_u32(vmovl_u16(vget_low_u16(wide)));
+}
+// k * (a + b), one tap pair.
+inline float32x4_t tap(const float32x4_t& a, const float32x4_t& b, float k) {
+  return vmulq_n_f32(vaddq_f32(a, b), k);
+}
+
+// Sum over the taps of `radius` for 4 pixels: `at(offset)` loads the
+// pixels `offset` taps away on one side (-) or the other (+); w[i] is the
+// weight of taps +-i.
+template <class Load>
+KG_ALWAYS_INLINE float32x4_t taps4(Load at, const float* w, int radius) {
+  float32x4_t acc = vmulq_n_f32(at(0), w[0]);
+  int i = 1;
+  for (; i + 3 <= radius; i += 4) {
+    const float32x4_t s0 = tap(at(-i), at(i), w[i]);
+    const float32x4_t s1 = tap(at(-i - 1), at(i + 1), w[i + 1]);
+    const float32x4_t s2 = tap(at(-i - 2), at(i + 2), w[i + 2]);
+    const float32x4_t s3 = tap(at(-i - 3), at(i + 3), w[i + 3]);
+    acc = vaddq_f32(acc, vaddq_f32(vaddq_f32(s0, s1), vaddq_f32(s2, s3)));
+  }
+  for (; i + 1 <= radius; i += 2)
+    acc = vaddq_f32(acc, vaddq_f32(tap(at(-i), at(i), w[i]), tap(at(-i - 1), at(i + 1), w[i + 1])));
+  if (i <= radius) acc = vaddq_f32(acc, tap(at(-i), at(i), w[i]));
+  return acc;
+}
+
+// The same sum for one pixel, as the portable loops compute it.
+template <class Load>
+KG_ALWAYS_INLINE float taps1(Load at, const float* w, int radius) {
+  float v = w[0] * at(0);
+  const auto pair = [&](int i) { return w[i] * (at(-i) + at(i)); };
+  int i = 1;
+  for (; i + 3 <= radius; i += 4) v += (pair(i) + pair(i + 1)) + (pair(i + 2) + pair(i + 3));
+  for (; i + 1 <= radius; i += 2) v += pair(i) + pair(i + 1);
+  if (i <= radius) v += pair(i);
+  return v;
+}
+
+// Calls f(std::integral_constant<int, R>) for radius R when R is at most
+// kMaxFixedRadius, else f(std::integral_constant<int, 0>): any radius.
+template <int R = 1, class F>
+KG_ALWAYS_INLINE void with_radius(int radius, F f) {
+  if constexpr (R <= kMaxFixedRadius) {
+    if (radius == R) return f(std::integral_constant<int, R>{});
+    with_radius<R + 1>(radius, f);
+  } else {
+    f(std::integral_constant<int, 0>{});
+  }
+}
+
+// vertical_row's values. centre[i], i in [-radius, radius]: the clamped
+// source row of tap i.
+template <int R, class T>
+void vertical_taps(const T* const* centre, int w, const Kernel& k, float* out) {
+  const int radius = R > 0 ? R : k.radius;
+  // Local copies (registers when R is fixed): stores to `out` cannot
+  // change them.
+  const T* rows[2 * (R > 0 ? R : kMaxRadius) + 1];
+  float weights[(R > 0 ? R : kMaxRadius) + 1];
+  for (int i = -radius; i <= radius; ++i) rows[radius + i] = centre[i];
+  for (int i = 0; i <= radius; ++i) weights[i] = k.w[static_cast<std::size_t>(i)];
+  int x = 0;
+  for (; x + 4 <= w; x += 4)
+    vst1q_f32(out + x, taps4([&](int i) { return load4(rows[radius + i] + x); }, weights, radius));
+  for (; x < w; ++x)
+    out[x] = taps1([&](int i) { return static_cast<float>(rows[radius + i][x]); }, weights, radius);
+}
+
+template <class T, class RowFn>
+void vertical_row_neon(RowFn row, int y, int w, int h, const Kernel& k, float* out) {
+  const T* rows[2 * kMaxRadius + 1];
+  const T** centre = rows + k.radius;
+  for (int i = -k.radius; i <= k.radius; ++i) centre[i] = row(std::clamp(y + i, 0, h - 1));
+  with_radius(k.radius, [&](auto r) { vertical_taps<decltype(r)::value>(centre, w, k, out); });
+}
+
+// horizontal_row's values, the same way.
+template <int R>
+void horizontal_taps(const float* in, int w, const Kernel& k, float* out) {
+  const int radius = R > 0 ? R : k.radius;
+  float weights[(R > 0 ? R : kMaxRadius) + 1];
+  for (int i = 0; i <= radius; ++i) weights[i] = k.w[static_cast<std::size_t>(i)];
+  int x = 0;
+  for (; x + 4 <= w; x += 4)
+    vst1q_f32(out + x, taps4([&](int i) { return vld1q_f32(in + x + i); }, weights, radius));
+  for (; x < w; ++x) out[x] = taps1([&](int i) { return in[x + i]; }, weights, radius);
+}
+
+void horizontal_row_neon(const float* in, int w, const Kernel& k, float* out) {
+  with_radius(k.radius, [&](auto r) { horizontal_taps<decltype(r)::value>(in, w, k, out); });
+}
+
+void blur_u8_neon(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst, float* vert,
+                  float* horz) {
+  const int w = src.width;
+  const int h = src.height;
+  const auto row = [&src](int y) { return src.row(y); };
+  for (int y = 0; y < h; ++y) {
+    vertical_row_neon<std::uint8_t>(row, y, w, h, k, vert);
+    pad_row(vert, w, k.radius);
+    horizontal_row_neon(vert, w, k, horz);
+    std::uint8_t* d = dst.row(y);
+    int x = 0;
+    // Rounded as below; the saturating narrowings are the clamp.
+    for (; x + 8 <= w; x += 8) {
+      const float32x4_t half = vdupq_n_f32(0.5f);
+      const int32x4_t lo = vcvtq_s32_f32(vaddq_f32(vld1q_f32(horz + x), half));
+      const int32x4_t hi = vcvtq_s32_f32(vaddq_f32(vld1q_f32(horz + x + 4), half));
+      vst1_u8(d + x, vqmovn_u16(vcombine_u16(vqmovun_s32(lo), vqmovun_s32(hi))));
+    }
+    for (; x < w; ++x) {
+      const int v = static_cast<int>(horz[x] + 0.5f);
+      d[x] = static_cast<std::uint8_t>(std::clamp(v, 0, 255));
+    }
+  }
+}
+
+void blur_float_neon(const Plane<float>& src, const Kernel& k, Plane<float>& dst, int y0, int y1,
+                     float* vert) {
+  const int w = src.width();
+  const int h = src.height();
+  const auto row = [&src](int y) { return src.row(y); };
+  for (int y = y0; y < y1; ++y) {
+    vertical_row_neon<float>(row, y, w, h, k, vert);
+    pad_row(vert, w, k.radius);
+    horizontal_row_neon(vert, w, k, dst.row(y));
+  }
+}
+#endif
+
 // The two image loops, compiled below for each dispatch level.
 KG_ALWAYS_INLINE void blur_u8_rows(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst,
                                    float* vert, float* horz) {
@@ -136,11 +287,11 @@ KG_ALWAYS_INLINE void blur_u8_rows(ImageView src, const Kernel& k, Plane<std::ui
 // Row by row (vertical into a padded buffer row, then horizontal straight
 // into dst) so the source rows in use stay in cache.
 KG_ALWAYS_INLINE void blur_float_rows(const Plane<float>& src, const Kernel& k, Plane<float>& dst,
-                                      float* vert) {
+                                      int y0, int y1, float* vert) {
   const int w = src.width();
   const int h = src.height();
   const auto row = [&src](int y) { return src.row(y); };
-  for (int y = 0; y < h; ++y) {
+  for (int y = y0; y < y1; ++y) {
     vertical_row<float>(row, y, w, h, k, vert);
     pad_row(vert, w, k.radius);
     horizontal_row(vert, w, k, dst.row(y));
@@ -152,8 +303,9 @@ void blur_u8_baseline(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst, 
                       float* horz) {
   blur_u8_rows(src, k, dst, vert, horz);
 }
-void blur_float_baseline(const Plane<float>& src, const Kernel& k, Plane<float>& dst, float* vert) {
-  blur_float_rows(src, k, dst, vert);
+void blur_float_baseline(const Plane<float>& src, const Kernel& k, Plane<float>& dst, int y0,
+                         int y1, float* vert) {
+  blur_float_rows(src, k, dst, y0, y1, vert);
 }
 #if defined(KG_DISPATCH_AVX2)
 KG_TARGET_AVX2 void blur_u8_avx2(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst,
@@ -161,23 +313,28 @@ KG_TARGET_AVX2 void blur_u8_avx2(ImageView src, const Kernel& k, Plane<std::uint
   blur_u8_rows(src, k, dst, vert, horz);
 }
 KG_TARGET_AVX2 void blur_float_avx2(const Plane<float>& src, const Kernel& k, Plane<float>& dst,
-                                    float* vert) {
-  blur_float_rows(src, k, dst, vert);
+                                    int y0, int y1, float* vert) {
+  blur_float_rows(src, k, dst, y0, y1, vert);
 }
 #endif
 
 void blur_u8(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst, float* vert, float* horz) {
 #if defined(KG_DISPATCH_AVX2)
   if (simd_level() == SimdLevel::kAvx2) return blur_u8_avx2(src, k, dst, vert, horz);
+#elif defined(KG_NEON_FLOAT)
+  if (simd_level() != SimdLevel::kScalar) return blur_u8_neon(src, k, dst, vert, horz);
 #endif
   blur_u8_baseline(src, k, dst, vert, horz);
 }
 
-void blur_float(const Plane<float>& src, const Kernel& k, Plane<float>& dst, float* vert) {
+void blur_float(const Plane<float>& src, const Kernel& k, Plane<float>& dst, int y0, int y1,
+                float* vert) {
 #if defined(KG_DISPATCH_AVX2)
-  if (simd_level() == SimdLevel::kAvx2) return blur_float_avx2(src, k, dst, vert);
+  if (simd_level() == SimdLevel::kAvx2) return blur_float_avx2(src, k, dst, y0, y1, vert);
+#elif defined(KG_NEON_FLOAT)
+  if (simd_level() != SimdLevel::kScalar) return blur_float_neon(src, k, dst, y0, y1, vert);
 #endif
-  blur_float_baseline(src, k, dst, vert);
+  blur_float_baseline(src, k, dst, y0, y1, vert);
 }
 
 }  // namespace
@@ -218,8 +375,17 @@ void gaussian_blur(const Plane<float>& src, float sigma, Plane<float>& dst, Plan
     return;
   }
   dst.resize(w, h);
+  gaussian_blur_rows(src, sigma, dst, 0, h, scratch);
+}
+
+void gaussian_blur_rows(const Plane<float>& src, float sigma, Plane<float>& dst, int y0, int y1,
+                        Plane<float>& scratch) {
+  const int w = src.width();
+  y0 = std::max(y0, 0);
+  y1 = std::min(y1, src.height());
+  if (w <= 0 || y0 >= y1) return;
   if (!(sigma > 0.f)) {
-    for (int y = 0; y < h; ++y)
+    for (int y = y0; y < y1; ++y)
       std::memcpy(dst.row(y), src.row(y), static_cast<std::size_t>(w) * sizeof(float));
     return;
   }
@@ -227,7 +393,7 @@ void gaussian_blur(const Plane<float>& src, float sigma, Plane<float>& dst, Plan
   make_kernel(sigma, k);
   scratch.resize(w + 2 * k.radius, 1);
   float* vert = scratch.row(0) + k.radius;
-  blur_float(src, k, dst, vert);
+  blur_float(src, k, dst, y0, y1, vert);
 }
 
 }  // namespace kg

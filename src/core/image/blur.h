@@ -19,4 +19,10 @@ void gaussian_blur(ImageView src, float sigma, Plane<std::uint8_t>& dst, Plane<f
 // Float in, float out. `dst` may not alias `src`.
 void gaussian_blur(const Plane<float>& src, float sigma, Plane<float>& dst, Plane<float>& scratch);
 
+// Rows [y0, y1) of the float blur, the same values as gaussian_blur()'s:
+// threads split one blur into row bands, each with its own `scratch` (one
+// row of width + 2 * radius floats). `dst` must already have src's size.
+void gaussian_blur_rows(const Plane<float>& src, float sigma, Plane<float>& dst, int y0, int y1,
+                        Plane<float>& scratch);
+
 }  // namespace kg

@@ -10,6 +10,10 @@
 #include "core/support/simd_dispatch.h"
 #include "core/support/strongest.h"
 
+#if defined(KG_NEON_FLOAT)
+#include <arm_neon.h>
+#endif
+
 namespace kg {
 namespace {
 
@@ -27,13 +31,31 @@ bool stronger(const Keypoint& a, const Keypoint& b) {
   return a.scale < b.scale;
 }
 
-void to_unit_float(ImageView image, Plane<float>& dst) {
-  dst.resize(image.width, image.height);
+// With kNeon the loops below have NEON versions (AArch64): the same
+// operations in the same order on 4 pixels at a time, so the same values.
+#if defined(KG_NEON_FLOAT)
+constexpr bool kHaveNeon = true;
+#else
+constexpr bool kHaveNeon = false;
+#endif
+
+template <bool kNeon>
+void to_unit_float(ImageView image, Plane<float>& dst, int y0, int y1) {
   constexpr float kScale = 1.f / 255.f;
-  for (int y = 0; y < image.height; ++y) {
+  for (int y = y0; y < y1; ++y) {
     const std::uint8_t* s = image.row(y);
     float* d = dst.row(y);
-    for (int x = 0; x < image.width; ++x) d[x] = kScale * static_cast<float>(s[x]);
+    int x = 0;
+#if defined(KG_NEON_FLOAT)
+    if constexpr (kNeon) {
+      for (; x + 8 <= image.width; x += 8) {
+        const uint16x8_t wide = vmovl_u8(vld1_u8(s + x));
+        vst1q_f32(d + x, vmulq_n_f32(vcvtq_f32_u32(vmovl_u16(vget_low_u16(wide))), kScale));
+        vst1q_f32(d + x + 4, vmulq_n_f32(vcvtq_f32_u32(vmovl_u16(vget_high_u16(wide))), kScale));
+      }
+    }
+#endif
+    for (; x < image.width; ++x) d[x] = kScale * static_cast<float>(s[x]);
   }
 }
 
@@ -47,18 +69,48 @@ void to_unit_float(ImageView image, Plane<float>& dst) {
 // branch-free so the compiler vectorises it; the few pixels that pass it
 // take the level-below test one by one. Candidates beyond `limit` ints are
 // dropped; returns false then.
+template <bool kNeon>
 KG_ALWAYS_INLINE bool collect_candidates(const float* m0, const float* m1, const float* m2,
                                          const float* l0, const float* l1, const float* l2, int y,
                                          int w, float thr, std::uint8_t* mask,
                                          WorkVector<std::int32_t>& cand, std::size_t limit) {
-  for (int x = kBorder; x < w - kBorder; ++x) {
+  int x = kBorder;
+#if defined(KG_NEON_FLOAT)
+  if constexpr (kNeon) {
+    const float32x4_t t = vdupq_n_f32(thr);
+    const auto level4 = [&](int at) {
+      const float32x4_t v = vld1q_f32(m1 + at);
+      uint32x4_t m = vandq_u32(vcgtq_f32(v, t), vcgtq_f32(v, vld1q_f32(m1 + at - 1)));
+      m = vandq_u32(m, vcgeq_f32(v, vld1q_f32(m1 + at + 1)));
+      m = vandq_u32(
+          m, vandq_u32(vcgtq_f32(v, vld1q_f32(m0 + at - 1)), vcgtq_f32(v, vld1q_f32(m0 + at))));
+      m = vandq_u32(
+          m, vandq_u32(vcgtq_f32(v, vld1q_f32(m0 + at + 1)), vcgeq_f32(v, vld1q_f32(m2 + at - 1))));
+      m = vandq_u32(
+          m, vandq_u32(vcgeq_f32(v, vld1q_f32(m2 + at)), vcgeq_f32(v, vld1q_f32(m2 + at + 1))));
+      return vmovn_u32(m);
+    };
+    for (; x + 8 <= w - kBorder; x += 8) {
+      // Most pixels are under the threshold: 8 of them clear at once.
+      const uint32x4_t over =
+          vorrq_u32(vcgtq_f32(vld1q_f32(m1 + x), t), vcgtq_f32(vld1q_f32(m1 + x + 4), t));
+      if (vmaxvq_u32(over) == 0) {
+        vst1_u8(mask + x, vdup_n_u8(0));
+        continue;
+      }
+      const uint8x8_t flags = vmovn_u16(vcombine_u16(level4(x), level4(x + 4)));
+      vst1_u8(mask + x, vand_u8(flags, vdup_n_u8(1)));
+    }
+  }
+#endif
+  for (; x < w - kBorder; ++x) {
     const float v = m1[x];
     mask[x] = static_cast<std::uint8_t>((v > thr) & (v > m1[x - 1]) & (v >= m1[x + 1]) &
                                         (v > m0[x - 1]) & (v > m0[x]) & (v > m0[x + 1]) &
                                         (v >= m2[x - 1]) & (v >= m2[x]) & (v >= m2[x + 1]));
   }
   std::fill(mask + std::max(w - kBorder, 0), mask + w + 8, std::uint8_t{0});
-  for (int x = kBorder; x < w - kBorder; ++x) {
+  for (x = kBorder; x < w - kBorder; ++x) {
     if ((x & 7) == 0) {  // skip 8 empty bytes at once
       std::uint64_t eight;
       std::memcpy(&eight, mask + x, sizeof eight);
@@ -81,67 +133,117 @@ KG_ALWAYS_INLINE bool collect_candidates(const float* m0, const float* m1, const
   return true;
 }
 
-// Scale-normalised sigma^4 (Lxx Lyy - Lxy^2) by central differences, for
-// every pixel with all 8 neighbours; the 1-px frame is never read. With
-// `cand`, also collects the level's extremum candidates while the rows are
-// still in cache; `below` is then the response of the level below.
-KG_ALWAYS_INLINE bool hessian_response_rows(const Plane<float>& L, float sigma, float threshold,
-                                            Plane<float>& R, const Plane<float>* below,
-                                            WorkVector<std::uint8_t>& mask,
-                                            WorkVector<std::int32_t>* cand, std::size_t limit) {
+// Scale-normalised sigma^4 (Lxx Lyy - Lxy^2) of row y by central
+// differences, for every pixel with both horizontal neighbours.
+template <bool kNeon>
+KG_ALWAYS_INLINE void response_row(const Plane<float>& L, int y, float norm, float* r) {
+  const int w = L.width();
+  const float* a = L.row(y - 1);
+  const float* b = L.row(y);
+  const float* c = L.row(y + 1);
+  int x = 1;
+#if defined(KG_NEON_FLOAT)
+  if constexpr (kNeon) {
+    for (; x + 4 <= w - 1; x += 4) {
+      const float32x4_t bc = vld1q_f32(b + x);
+      const float32x4_t twice = vmulq_n_f32(bc, 2.f);
+      const float32x4_t dxx =
+          vsubq_f32(vaddq_f32(vld1q_f32(b + x - 1), vld1q_f32(b + x + 1)), twice);
+      const float32x4_t dyy = vsubq_f32(vaddq_f32(vld1q_f32(a + x), vld1q_f32(c + x)), twice);
+      const float32x4_t dxy =
+          vmulq_n_f32(vsubq_f32(vsubq_f32(vld1q_f32(c + x + 1), vld1q_f32(c + x - 1)),
+                                vsubq_f32(vld1q_f32(a + x + 1), vld1q_f32(a + x - 1))),
+                      0.25f);
+      vst1q_f32(r + x, vmulq_n_f32(vsubq_f32(vmulq_f32(dxx, dyy), vmulq_f32(dxy, dxy)), norm));
+    }
+  }
+#endif
+  for (; x < w - 1; ++x) {
+    const float dxx = (b[x - 1] + b[x + 1]) - 2.f * b[x];
+    const float dyy = (a[x] + c[x]) - 2.f * b[x];
+    const float dxy = 0.25f * ((c[x + 1] - c[x - 1]) - (a[x + 1] - a[x - 1]));
+    r[x] = norm * (dxx * dyy - dxy * dxy);
+  }
+}
+
+// The response rows of [y0, y1) that have all 8 neighbours (the 1-px frame
+// is never written). With `cand`, also the extremum candidates of those
+// rows, collected while the rows are still in cache; `below` is then the
+// response of the level below, and `halo` two rows for the responses of
+// rows y0 - 1 and y1, which the test reads and the neighbouring bands write.
+template <bool kNeon>
+KG_ALWAYS_INLINE bool hessian_band_rows(const Plane<float>& L, float norm, float threshold,
+                                        Plane<float>& R, int y0, int y1, const Plane<float>* below,
+                                        std::uint8_t* mask, float* halo,
+                                        WorkVector<std::int32_t>* cand, std::size_t limit) {
   const int w = L.width();
   const int h = L.height();
-  R.resize(w, h);
-  if (cand) {
-    cand->clear();
-    mask.resize(static_cast<std::size_t>(w) + 8);  // +8: the skip reads 8 bytes at a time
-  }
-  const float norm = sigma * sigma * sigma * sigma;
+  const int r0 = std::max(y0, 1);
+  const int r1 = std::min(y1, h - 1);
+  // Candidate rows.
+  const int c0 = std::max(y0, kBorder);
+  const int c1 = std::min(y1, h - kBorder);
+  const bool collect = cand != nullptr && c0 < c1;
+  float* above = halo;
+  float* after = halo != nullptr ? halo + w : nullptr;
+  const auto response = [&](int y) -> const float* {
+    return y < y0 ? above : y >= y1 ? after : R.row(y);
+  };
+  if (collect && c0 - 1 < y0) response_row<kNeon>(L, c0 - 1, norm, above);
   bool complete = true;
-  for (int y = 1; y < h - 1; ++y) {
-    const float* a = L.row(y - 1);
-    const float* b = L.row(y);
-    const float* c = L.row(y + 1);
-    float* r = R.row(y);
-    for (int x = 1; x < w - 1; ++x) {
-      const float dxx = (b[x - 1] + b[x + 1]) - 2.f * b[x];
-      const float dyy = (a[x] + c[x]) - 2.f * b[x];
-      const float dxy = 0.25f * ((c[x + 1] - c[x - 1]) - (a[x + 1] - a[x - 1]));
-      r[x] = norm * (dxx * dyy - dxy * dxy);
-    }
+  for (int y = r0; y < r1; ++y) {
+    response_row<kNeon>(L, y, norm, R.row(y));
     // Row y - 1 has both response neighbours now.
-    if (cand && complete && y - 1 >= kBorder && y - 1 < h - kBorder)
-      complete =
-          collect_candidates(R.row(y - 2), R.row(y - 1), r, below->row(y - 2), below->row(y - 1),
-                             below->row(y), y - 1, w, threshold, mask.data(), *cand, limit);
+    const int c = y - 1;
+    if (collect && complete && c >= c0 && c < c1)
+      complete = collect_candidates<kNeon>(response(c - 1), R.row(c), R.row(y), below->row(c - 1),
+                                           below->row(c), below->row(c + 1), c, w, threshold, mask,
+                                           *cand, limit);
+  }
+  // The band's last candidate row, when its row below is the next band's.
+  if (collect && complete && c1 >= r1) {
+    response_row<kNeon>(L, c1, norm, after);
+    complete = collect_candidates<kNeon>(response(c1 - 2), response(c1 - 1), after,
+                                         below->row(c1 - 2), below->row(c1 - 1), below->row(c1),
+                                         c1 - 1, w, threshold, mask, *cand, limit);
   }
   return complete;
 }
 
-// hessian_response_rows for the baseline and (x86-64) AVX2; see
+// hessian_band_rows for the baseline and (x86-64) AVX2; see
 // core/support/simd_dispatch.h.
-bool hessian_response_baseline(const Plane<float>& L, float sigma, float threshold, Plane<float>& R,
-                               const Plane<float>* below, WorkVector<std::uint8_t>& mask,
-                               WorkVector<std::int32_t>* cand, std::size_t limit) {
-  return hessian_response_rows(L, sigma, threshold, R, below, mask, cand, limit);
+bool hessian_band_baseline(const Plane<float>& L, float norm, float threshold, Plane<float>& R,
+                           int y0, int y1, const Plane<float>* below, std::uint8_t* mask,
+                           float* halo, WorkVector<std::int32_t>* cand, std::size_t limit) {
+  return hessian_band_rows<false>(L, norm, threshold, R, y0, y1, below, mask, halo, cand, limit);
 }
 #if defined(KG_DISPATCH_AVX2)
-KG_TARGET_AVX2 bool hessian_response_avx2(const Plane<float>& L, float sigma, float threshold,
-                                          Plane<float>& R, const Plane<float>* below,
-                                          WorkVector<std::uint8_t>& mask,
-                                          WorkVector<std::int32_t>* cand, std::size_t limit) {
-  return hessian_response_rows(L, sigma, threshold, R, below, mask, cand, limit);
+KG_TARGET_AVX2 bool hessian_band_avx2(const Plane<float>& L, float norm, float threshold,
+                                      Plane<float>& R, int y0, int y1, const Plane<float>* below,
+                                      std::uint8_t* mask, float* halo,
+                                      WorkVector<std::int32_t>* cand, std::size_t limit) {
+  return hessian_band_rows<false>(L, norm, threshold, R, y0, y1, below, mask, halo, cand, limit);
+}
+#endif
+#if defined(KG_NEON_FLOAT)
+bool hessian_band_neon(const Plane<float>& L, float norm, float threshold, Plane<float>& R, int y0,
+                       int y1, const Plane<float>* below, std::uint8_t* mask, float* halo,
+                       WorkVector<std::int32_t>* cand, std::size_t limit) {
+  return hessian_band_rows<true>(L, norm, threshold, R, y0, y1, below, mask, halo, cand, limit);
 }
 #endif
 
-bool hessian_response(const Plane<float>& L, float sigma, float threshold, Plane<float>& R,
-                      const Plane<float>* below, WorkVector<std::uint8_t>& mask,
-                      WorkVector<std::int32_t>* cand, std::size_t limit) {
+bool hessian_band(const Plane<float>& L, float norm, float threshold, Plane<float>& R, int y0,
+                  int y1, const Plane<float>* below, std::uint8_t* mask, float* halo,
+                  WorkVector<std::int32_t>* cand, std::size_t limit) {
 #if defined(KG_DISPATCH_AVX2)
   if (simd_level() == SimdLevel::kAvx2)
-    return hessian_response_avx2(L, sigma, threshold, R, below, mask, cand, limit);
+    return hessian_band_avx2(L, norm, threshold, R, y0, y1, below, mask, halo, cand, limit);
+#elif defined(KG_NEON_FLOAT)
+  if (simd_level() != SimdLevel::kScalar)
+    return hessian_band_neon(L, norm, threshold, R, y0, y1, below, mask, halo, cand, limit);
 #endif
-  return hessian_response_baseline(L, sigma, threshold, R, below, mask, cand, limit);
+  return hessian_band_baseline(L, norm, threshold, R, y0, y1, below, mask, halo, cand, limit);
 }
 
 // Halves the image by averaging 2x2 blocks (a trailing odd row or column is
@@ -151,18 +253,42 @@ bool hessian_response(const Plane<float>& L, float sigma, float threshold, Plane
 // rotations of even-sized images, and adds a variance of 1/16 in output
 // pixels, which the caller accounts for. The source level has twice the
 // octave's first sigma, so this does not alias.
-void halve(const Plane<float>& src, Plane<float>& dst) {
-  const int w = src.width() / 2;
-  const int h = src.height() / 2;
-  dst.resize(w, h);
-  for (int y = 0; y < h; ++y) {
+template <bool kNeon>
+void halve_rows(const Plane<float>& src, Plane<float>& dst, int y0, int y1) {
+  const int w = dst.width();
+  for (int y = y0; y < y1; ++y) {
     const float* a = src.row(2 * y);
     const float* b = src.row(2 * y + 1);
     float* d = dst.row(y);
-    for (int x = 0; x < w; ++x)
-      d[x] = 0.25f * ((a[2 * x] + a[2 * x + 1]) + (b[2 * x] + b[2 * x + 1]));
+    int x = 0;
+#if defined(KG_NEON_FLOAT)
+    if constexpr (kNeon) {
+      for (; x + 4 <= w; x += 4) {
+        const float32x4x2_t p = vld2q_f32(a + 2 * x);  // even and odd pixels
+        const float32x4x2_t q = vld2q_f32(b + 2 * x);
+        vst1q_f32(d + x, vmulq_n_f32(vaddq_f32(vaddq_f32(p.val[0], p.val[1]),
+                                               vaddq_f32(q.val[0], q.val[1])),
+                                     0.25f));
+      }
+    }
+#endif
+    for (; x < w; ++x) d[x] = 0.25f * ((a[2 * x] + a[2 * x + 1]) + (b[2 * x] + b[2 * x + 1]));
   }
 }
+
+// Band `band` of `bands` over `rows` rows: [begin, end).
+struct Rows {
+  int begin;
+  int end;
+};
+Rows band_rows(int rows, int band, int bands) {
+  return {static_cast<int>(static_cast<long long>(rows) * band / bands),
+          static_cast<int>(static_cast<long long>(rows) * (band + 1) / bands)};
+}
+
+// Levels smaller than this many pixels per band run on fewer bands: waking
+// the workers would cost more than the work.
+constexpr long long kMinBandPixels = 16384;
 
 // Solves H o = -g (H symmetric 3x3) by Cramer's rule; false when singular.
 bool solve_offset(const double H[3][3], const double g[3], double o[3]) {
@@ -249,17 +375,35 @@ void scan_level(const WorkVector<std::int32_t>& cand, const Plane<float>& lo,
 
 }  // namespace
 
+// One scale level's work, done band by band: the response of `L` into `R`
+// (with the level below `below` and the candidates into `candidates`, when
+// set), the blur of `L` into `blurred`, the halving of `L` into `halved`
+// and, for the input, its conversion to float in `unit`.
+struct HessianDetector::Level {
+  ImageView image;
+  Plane<float>* unit = nullptr;
+  const Plane<float>* L = nullptr;
+  float norm = 0.f;
+  float threshold = 0.f;
+  Plane<float>* R = nullptr;
+  const Plane<float>* below = nullptr;
+  WorkVector<std::int32_t>* candidates = nullptr;
+  float blur_sigma = 0.f;
+  Plane<float>* blurred = nullptr;
+  Plane<float>* halved = nullptr;
+};
+
 HessianDetector::HessianDetector(std::pmr::memory_resource* memory)
     : levels_{Plane<float>(memory), Plane<float>(memory)},
       responses_{Plane<float>(memory), Plane<float>(memory), Plane<float>(memory)},
-      scratch_(memory),
       next_octave_(memory),
-      mask_(memory),
+      bands_{Band(memory), Band(memory), Band(memory), Band(memory),
+             Band(memory), Band(memory), Band(memory), Band(memory)},
       candidates_{WorkVector<std::int32_t>(memory), WorkVector<std::int32_t>(memory)},
       copy_(memory) {}
 
 void HessianDetector::reserve(int max_width, int max_height, const KeypointParams& params,
-                              int max_keypoints, int max_candidates) {
+                              int max_keypoints, int max_candidates, int threads) {
   for (Plane<float>& p : levels_) p.reserve(max_width, max_height);
   for (Plane<float>& p : responses_) p.reserve(max_width, max_height);
   next_octave_.reserve(max_width / 2, max_height / 2);
@@ -267,10 +411,17 @@ void HessianDetector::reserve(int max_width, int max_height, const KeypointParam
   const int levels = std::max(1, params.hessian_levels);
   const int radius = blur_radius(
       static_cast<float>(kSigma0 * std::pow(2.0, static_cast<double>(levels + 1) / levels)));
-  scratch_.reserve(max_width + 2 * radius, 1);
-  mask_.reserve(static_cast<std::size_t>(max_width) + 8);
   max_candidate_ints_ = 2 * static_cast<std::size_t>(std::max(0, max_candidates));
   for (auto& c : candidates_) c.reserve(max_candidate_ints_);
+  reserved_bands_ = std::clamp(threads, 1, kMaxBands);
+  for (int b = 0; b < reserved_bands_; ++b) {
+    Band& band = bands_[static_cast<std::size_t>(b)];
+    band.scratch.reserve(max_width + 2 * radius, 1);
+    band.mask.reserve(static_cast<std::size_t>(max_width) + 8);
+    if (reserved_bands_ > 1) band.halo.reserve(max_width, 2);
+    // The first band collects straight into candidates_.
+    if (b > 0) band.candidates.reserve(max_candidate_ints_);
+  }
   copy_.reserve(static_cast<std::size_t>(std::max(0, max_keypoints)));
 }
 
@@ -278,6 +429,79 @@ void HessianDetector::detect(ImageView image, const KeypointParams& params, int 
                              std::vector<Keypoint>& out) {
   detect(image, params, max_keypoints, copy_);
   out.assign(copy_.begin(), copy_.end());
+}
+
+int HessianDetector::bands_for(int w, int h) const {
+  if (workers_ == nullptr) return 1;
+  const long long most = std::min(workers_->threads(), reserved_bands_);
+  return static_cast<int>(std::clamp(static_cast<long long>(w) * h / kMinBandPixels, 1LL,
+                                     std::min<long long>(most, h)));
+}
+
+void HessianDetector::run_level(const Level& level, int bands) {
+  const Plane<float>& L = level.L ? *level.L : *level.unit;
+  const int w = L.width();
+  const int h = L.height();
+  if (level.R) level.R->resize(w, h);
+  if (level.blurred) level.blurred->resize(w, h);
+  if (level.halved) level.halved->resize(w / 2, h / 2);
+  if (level.candidates) level.candidates->clear();
+  const bool neon = kHaveNeon && simd_level() != SimdLevel::kScalar;
+  auto task = [&](int b, int /*worker*/) {
+    Band& band = bands_[static_cast<std::size_t>(b)];
+    const Rows rows = band_rows(h, b, bands);
+    if (level.L == nullptr) {
+      if (neon) {
+        to_unit_float<kHaveNeon>(level.image, *level.unit, rows.begin, rows.end);
+      } else {
+        to_unit_float<false>(level.image, *level.unit, rows.begin, rows.end);
+      }
+      return;
+    }
+    if (level.R) {
+      WorkVector<std::int32_t>* cand = nullptr;
+      if (level.candidates) {
+        cand = b == 0 ? level.candidates : &band.candidates;
+        cand->clear();
+        band.mask.resize(static_cast<std::size_t>(w) + 8);  // +8: the skip reads 8 bytes at a time
+      }
+      // One band reads no rows of another: no halo (none reserved with one thread).
+      float* halo = nullptr;
+      if (bands > 1) {
+        band.halo.resize(w, 2);
+        halo = band.halo.data();
+      }
+      band.complete = hessian_band(L, level.norm, level.threshold, *level.R, rows.begin, rows.end,
+                                   level.below, band.mask.data(), halo, cand, max_candidate_ints_);
+    }
+    if (level.blurred)
+      gaussian_blur_rows(L, level.blur_sigma, *level.blurred, rows.begin, rows.end, band.scratch);
+    if (level.halved) {
+      const Rows half = band_rows(h / 2, b, bands);
+      if (neon) {
+        halve_rows<kHaveNeon>(L, *level.halved, half.begin, half.end);
+      } else {
+        halve_rows<false>(L, *level.halved, half.begin, half.end);
+      }
+    }
+  };
+  if (bands > 1) {
+    workers_->run(bands, task);
+  } else {
+    task(0, 0);
+  }
+  if (!level.candidates) return;
+  // The bands' candidates in scan order, cut where one list would have been.
+  WorkVector<std::int32_t>& all = *level.candidates;
+  bool complete = bands_[0].complete;
+  for (int b = 1; b < bands && complete; ++b) {
+    const Band& band = bands_[static_cast<std::size_t>(b)];
+    const std::size_t room = max_candidate_ints_ - all.size();
+    const std::size_t n = std::min(band.candidates.size(), room);
+    all.insert(all.end(), band.candidates.begin(), band.candidates.begin() + n);
+    complete = band.complete && n == band.candidates.size();
+  }
+  bands_[0].complete = complete;
 }
 
 bool HessianDetector::detect(ImageView image, const KeypointParams& params, int max_keypoints,
@@ -291,46 +515,61 @@ bool HessianDetector::detect(ImageView image, const KeypointParams& params, int 
   info.threshold = std::max(params.hessian_threshold, 0.f);  // maxima are always positive
   info.sigma0 = kSigma0;
   info.log_k = static_cast<float>(std::log(k));
+  const int input_bands = bands_for(image.width, image.height);
 
   // Octave 0 starts at sigma0 from the input's assumed blur.
-  to_unit_float(image, levels_[1]);
-  gaussian_blur(levels_[1], std::sqrt(kSigma0 * kSigma0 - kInputSigma * kInputSigma), levels_[0],
-                scratch_);
+  Level convert;
+  convert.image = image;
+  convert.unit = &levels_[1];
+  levels_[1].resize(image.width, image.height);
+  run_level(convert, input_bands);
+  Level input;
+  input.L = &levels_[1];
+  input.blur_sigma = std::sqrt(kSigma0 * kSigma0 - kInputSigma * kInputSigma);
+  input.blurred = &levels_[0];
+  run_level(input, input_bands);
   const Plane<float>* first = &levels_[0];
 
   for (int octave = 0; octave < params.hessian_octaves; ++octave) {
     if (std::min(first->width(), first->height()) < 2 * kBorder + 3) break;
     info.octave_scale = std::ldexp(1.f, octave);
     const bool more = octave + 1 < params.hessian_octaves;
+    const int bands = bands_for(first->width(), first->height());
     // Level j has sigma0 k^j (octave pixels); levels 0 and levels + 1 exist
     // only as scale neighbours of levels 1..levels.
     // After octave 0 the first level also carries halve()'s box blur.
     const double first_sigma =
         octave == 0 ? kSigma0 : std::sqrt(kSigma0 * kSigma0 + kHalvingVariance);
-    hessian_response(*first, static_cast<float>(first_sigma), info.threshold, responses_[0],
-                     nullptr, mask_, nullptr, max_candidate_ints_);
-    const Plane<float>* prev = first;
-    for (int j = 1; j <= levels + 1; ++j) {
-      const double s_prev = j == 1 ? first_sigma : kSigma0 * std::pow(k, j - 1);
-      const double s_cur = kSigma0 * std::pow(k, j);
-      Plane<float>& cur = levels_[j % 2];
-      // Gaussians compose by adding variances: blur the previous level by the difference.
-      gaussian_blur(*prev, static_cast<float>(std::sqrt(s_cur * s_cur - s_prev * s_prev)), cur,
-                    scratch_);
+    const Plane<float>* cur = first;
+    for (int j = 0; j <= levels + 1; ++j) {
+      const double s_cur = j == 0 ? first_sigma : kSigma0 * std::pow(k, j);
+      const auto sigma = static_cast<float>(s_cur);
+      Level level;
+      level.L = cur;
+      level.norm = sigma * sigma * sigma * sigma;
+      level.threshold = info.threshold;
+      level.R = &responses_[j % 3];
+      if (j >= 1) level.below = &responses_[(j - 1) % 3];
       // Candidates only where maxima are taken: levels 1..levels.
-      complete &=
-          hessian_response(cur, static_cast<float>(s_cur), info.threshold, responses_[j % 3],
-                           &responses_[(j - 1) % 3], mask_,
-                           j <= levels ? &candidates_[j % 2] : nullptr, max_candidate_ints_);
-      // Octave 0's first level lives in levels_[0], which level 2 overwrites,
-      // so the next octave's first level goes to its own plane.
-      if (j == levels && more) halve(cur, next_octave_);
+      if (j >= 1 && j <= levels) level.candidates = &candidates_[j % 2];
+      // The next level, blurred from this one: Gaussians compose by adding
+      // variances, so blur by the difference. Levels ping-pong between two
+      // planes; octave 0's first level lives in levels_[0], which level 2
+      // overwrites, so the next octave's first level gets its own plane.
+      if (j <= levels) {
+        const double s_next = kSigma0 * std::pow(k, j + 1);
+        level.blur_sigma = static_cast<float>(std::sqrt(s_next * s_next - s_cur * s_cur));
+        level.blurred = &levels_[(j + 1) % 2];
+      }
+      if (j == levels && more) level.halved = &next_octave_;
+      run_level(level, bands);
+      if (level.candidates) complete &= bands_[0].complete;
       if (j >= 2) {
         info.level = j - 1;
         scan_level(candidates_[(j - 1) % 2], responses_[(j - 2) % 3], responses_[(j - 1) % 3],
                    responses_[j % 3], info, max_keypoints, out);
       }
-      prev = &cur;
+      cur = level.blurred;
     }
     first = &next_octave_;
   }

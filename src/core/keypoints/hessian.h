@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/image/plane.h"
+#include "core/support/worker_pool.h"
 #include "core/support/workspace.h"
 #include "keygraph/image.h"
 #include "keygraph/params.h"
@@ -27,8 +28,18 @@ class HessianDetector {
   // per scale level; after this, detect() within those bounds allocates
   // nothing, and candidates beyond max_candidates are dropped (the weakest
   // rows last: scan order) instead of stored.
+  // With threads > 1, buffers for that many row bands (at most kMaxBands)
+  // are reserved too, for set_workers().
   void reserve(int max_width, int max_height, const KeypointParams& params, int max_keypoints,
-               int max_candidates);
+               int max_candidates, int threads = 1);
+
+  // Splits each scale level's work (blur, response, candidates, halving)
+  // into row bands on `workers` (null: the calling thread only): at most
+  // one band per thread and as many as reserve() made room for, fewer on
+  // small levels. The keypoints are the same, byte for byte, for any
+  // number of bands.
+  void set_workers(WorkerPool* workers) { workers_ = workers; }
+  static constexpr int kMaxBands = 8;
 
   // Clears `out` and fills it with at most `max_keypoints` keypoints, the
   // strongest first (ties broken by position so the result is
@@ -42,14 +53,33 @@ class HessianDetector {
               std::vector<Keypoint>& out);
 
  private:
+  // What one row band works with: its blur row, candidate flags, the two
+  // response rows above and below it that the 3x3x3 test reads, and (bands
+  // after the first) its candidates before they are joined in scan order.
+  struct Band {
+    explicit Band(std::pmr::memory_resource* memory)
+        : scratch(memory), mask(memory), halo(memory), candidates(memory) {}
+    Plane<float> scratch;
+    WorkVector<std::uint8_t> mask;
+    Plane<float> halo;
+    WorkVector<std::int32_t> candidates;
+    bool complete = true;  // no candidate dropped (the first band's: none in the joined list)
+  };
+  struct Level;
+  // Runs one level's work on `bands` row bands (below).
+  void run_level(const Level& level, int bands);
+  // Bands for a w x h level: one per thread, fewer on small levels.
+  int bands_for(int w, int h) const;
+
   // Only the planes in use at once are kept: two Gaussian levels (blurring
   // ping-pongs between them), the next octave's first level, and the three
   // response levels the 3x3x3 test reads (a ring).
   std::array<Plane<float>, 2> levels_;
   std::array<Plane<float>, 3> responses_;
-  Plane<float> scratch_;           // blur row buffers
-  Plane<float> next_octave_;       // halved level: first level of the next octave
-  WorkVector<std::uint8_t> mask_;  // candidate flags of one row
+  Plane<float> next_octave_;  // halved level: first level of the next octave
+  std::array<Band, kMaxBands> bands_;
+  int reserved_bands_ = 1;
+  WorkerPool* workers_ = nullptr;
   // Extremum candidates, (x, y) pairs, of the two levels last computed.
   std::array<WorkVector<std::int32_t>, 2> candidates_;
   std::size_t max_candidate_ints_ = static_cast<std::size_t>(-1);  // 2 per candidate

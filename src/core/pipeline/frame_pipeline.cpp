@@ -129,7 +129,8 @@ FramePipeline::FramePipeline(const ModelIndex& index, const Limits& limits,
   if (fill) set_options(options);
   if (upsampling()) upsampled_.reserve(l.max_width, l.max_height);
   hessian_.reserve(l.max_width, l.max_height, params.keypoints, l.max_keypoints,
-                   kCandidatesPerKeypoint * l.max_keypoints);
+                   kCandidatesPerKeypoint * l.max_keypoints, l.threads);
+  if (workers_.threads() > 1) hessian_.set_workers(&workers_);
   detected_.reserve(frame_keypoints);
   sampler_.reserve(l.max_keypoints, l.max_width, l.max_height, params.graph.scene_sample_distance);
   selected_.reserve(frame_keypoints);  // the sampler's output, cut afterwards

@@ -8,6 +8,8 @@
 
 #if defined(KG_DISPATCH_AVX2)
 #include <immintrin.h>
+#elif defined(KG_NEON_FLOAT)
+#include <arm_neon.h>
 #endif
 
 namespace kg {
@@ -251,6 +253,113 @@ KG_TARGET_AVX2 int sample_lattice_avx2(const SampledImage& look, const Point2f* 
 }
 #endif
 
+#if defined(KG_NEON_FLOAT)
+// The same on 4 lattice points at a time with NEON (AArch64), which has no
+// gathers: coordinates, weights and blends in vectors, each point's four
+// pixels read lane by lane; per point the same float operations in the
+// same order as sample() and averaged(), so the same values bit for bit
+// (tested). Points outside read pixel (0, 0) and its neighbours instead
+// (then dropped), so the image needs 2 x 2 pixels.
+bool neon_samplable(const SampledImage& im) {
+  return im.width >= 2 && im.height >= 2 && im.stride >= im.width;
+}
+
+struct Samples4 {
+  float32x4_t value;
+  uint32x4_t inside;  // all ones where every sample was inside
+};
+
+void sample4(const SampledImage& im, const float32x4_t& x_in, const float32x4_t& y_in,
+             Samples4& out) {
+  const float32x4_t zero = vdupq_n_f32(0.f);
+  const uint32x4_t inside =
+      vandq_u32(vandq_u32(vcgeq_f32(x_in, zero), vcgeq_f32(y_in, zero)),
+                vandq_u32(vcltq_f32(x_in, vdupq_n_f32(static_cast<float>(im.width - 1))),
+                          vcltq_f32(y_in, vdupq_n_f32(static_cast<float>(im.height - 1)))));
+  const float32x4_t x = vreinterpretq_f32_u32(vandq_u32(vreinterpretq_u32_f32(x_in), inside));
+  const float32x4_t y = vreinterpretq_f32_u32(vandq_u32(vreinterpretq_u32_f32(y_in), inside));
+  const int32x4_t x0 = vcvtq_s32_f32(x), y0 = vcvtq_s32_f32(y);
+  const float32x4_t fx = vsubq_f32(x, vcvtq_f32_s32(x0));
+  const float32x4_t fy = vsubq_f32(y, vcvtq_f32_s32(y0));
+  alignas(16) std::int32_t xs[4], ys[4], p00[4], p01[4], p10[4], p11[4];
+  vst1q_s32(xs, x0);
+  vst1q_s32(ys, y0);
+  for (int lane = 0; lane < 4; ++lane) {
+    const std::uint8_t* r0 =
+        im.pixels + static_cast<std::ptrdiff_t>(ys[lane]) * im.stride + xs[lane];
+    const std::uint8_t* r1 = r0 + im.stride;
+    p00[lane] = r0[0];
+    p01[lane] = r0[1];
+    p10[lane] = r1[0];
+    p11[lane] = r1[1];
+  }
+  const int32x4_t q00 = vld1q_s32(p00), q01 = vld1q_s32(p01);
+  const int32x4_t q10 = vld1q_s32(p10), q11 = vld1q_s32(p11);
+  // top = r0[0] + fx (r0[1] - r0[0]), as sample() computes it.
+  const float32x4_t top =
+      vaddq_f32(vcvtq_f32_s32(q00), vmulq_f32(fx, vcvtq_f32_s32(vsubq_s32(q01, q00))));
+  const float32x4_t bottom =
+      vaddq_f32(vcvtq_f32_s32(q10), vmulq_f32(fx, vcvtq_f32_s32(vsubq_s32(q11, q10))));
+  out.value = vaddq_f32(top, vmulq_f32(fy, vsubq_f32(bottom, top)));
+  out.inside = inside;
+}
+
+void averaged4(const SampledImage& im, const float32x4_t& x, const float32x4_t& y, Samples4& out) {
+  if (im.sub == 1) return sample4(im, x, y, out);
+  const float first = -0.5f * im.step * static_cast<float>(im.sub - 1);
+  const float32x4_t x_first = vaddq_f32(x, vdupq_n_f32(first));
+  const float32x4_t y_first = vaddq_f32(y, vdupq_n_f32(first));
+  out.value = vdupq_n_f32(0.f);
+  out.inside = vdupq_n_u32(0xffffffffu);
+  Samples4 s;
+  for (int j = 0; j < im.sub; ++j) {
+    const float32x4_t yj = vaddq_f32(y_first, vdupq_n_f32(im.step * static_cast<float>(j)));
+    for (int i = 0; i < im.sub; ++i) {
+      const float32x4_t xi = vaddq_f32(x_first, vdupq_n_f32(im.step * static_cast<float>(i)));
+      sample4(im, xi, yj, s);
+      out.value = vaddq_f32(out.value, s.value);
+      out.inside = vandq_u32(out.inside, s.inside);
+    }
+  }
+  out.value = vdivq_f32(out.value, vdupq_n_f32(static_cast<float>(im.sub * im.sub)));
+}
+
+// c0 + kEnlarge (l0 t0 + l1 t1 + l2 t2) for lattice points k..k+3.
+float32x4_t along4(int k, float c0, float t0, float t1, float t2) {
+  const float32x4_t sum = vaddq_f32(vaddq_f32(vmulq_n_f32(vld1q_f32(kLattice.l0 + k), t0),
+                                              vmulq_n_f32(vld1q_f32(kLattice.l1 + k), t1)),
+                                    vmulq_n_f32(vld1q_f32(kLattice.l2 + k), t2));
+  return vaddq_f32(vdupq_n_f32(c0), vmulq_n_f32(sum, kEnlarge));
+}
+
+int sample_lattice_neon(const SampledImage& look, const Point2f* a, const SampledImage& seen,
+                        const Point2f* scene, float* ta, float* tf, float* lu, float* lv) {
+  const Point2f ca = centroid(a), cf = centroid(scene);
+  int n = 0;
+  for (int k = 0; k < kTriangleSamples; k += 4) {
+    Samples4 va, vf;
+    averaged4(look, along4(k, ca.x, a[0].x, a[1].x, a[2].x),
+              along4(k, ca.y, a[0].y, a[1].y, a[2].y), va);
+    averaged4(seen, along4(k, cf.x, scene[0].x, scene[1].x, scene[2].x),
+              along4(k, cf.y, scene[0].y, scene[1].y, scene[2].y), vf);
+    alignas(16) std::uint32_t kept[4];
+    alignas(16) float values_a[4], values_f[4];
+    vst1q_u32(kept, vandq_u32(va.inside, vf.inside));
+    vst1q_f32(values_a, va.value);
+    vst1q_f32(values_f, vf.value);
+    for (int lane = 0; lane < 4 && k + lane < kTriangleSamples; ++lane) {
+      if (kept[lane] == 0) continue;
+      lu[n] = kLattice.l0[k + lane];
+      lv[n] = kLattice.l1[k + lane];
+      ta[n] = values_a[lane];
+      tf[n] = values_f[lane];
+      ++n;
+    }
+  }
+  return n;
+}
+#endif
+
 // Solves the symmetric 3x3 system m x = r by Cramer's rule.
 bool solve3(const double m[3][3], const double r[3], double x[3]) {
   const double c00 = m[1][1] * m[2][2] - m[1][2] * m[2][1];
@@ -309,6 +418,10 @@ TrianglePatch triangle_patch_correlation(const ModelAppearance& appearance, Imag
 #if defined(KG_DISPATCH_AVX2)
   if (simd_level() == SimdLevel::kAvx2 && gatherable(look) && gatherable(seen))
     n = sample_lattice_avx2(look, a, seen, scene, ta, tf, lu, lv);
+  else
+#elif defined(KG_NEON_FLOAT)
+  if (simd_level() != SimdLevel::kScalar && neon_samplable(look) && neon_samplable(seen))
+    n = sample_lattice_neon(look, a, seen, scene, ta, tf, lu, lv);
   else
 #endif
     n = sample_lattice_baseline(look, a, seen, scene, ta, tf, lu, lv);

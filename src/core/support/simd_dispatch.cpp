@@ -1,5 +1,8 @@
 #include "core/support/simd_dispatch.h"
 
+#include <cstdlib>
+#include <cstring>
+
 namespace kg {
 namespace {
 
@@ -14,8 +17,25 @@ SimdLevel cpu_level() {
 #endif
 }
 
+// The starting level: the CPU's, or lower when the environment variable
+// KG_SIMD names a lower one (scalar, baseline, sse2, neon, avx2), so that any
+// program, with no option of its own, can run the portable loops.
+SimdLevel start_level() {
+  const SimdLevel best = cpu_level();
+  const char* asked = std::getenv("KG_SIMD");
+  if (asked == nullptr) return best;
+  SimdLevel level = best;
+  if (std::strcmp(asked, "scalar") == 0) {
+    level = SimdLevel::kScalar;
+  } else if (std::strcmp(asked, "baseline") == 0 || std::strcmp(asked, "sse2") == 0 ||
+             std::strcmp(asked, "neon") == 0) {
+    level = SimdLevel::kBaseline;
+  }
+  return static_cast<int>(level) < static_cast<int>(best) ? level : best;
+}
+
 SimdLevel& current() {
-  static SimdLevel level = cpu_level();
+  static SimdLevel level = start_level();
   return level;
 }
 
