@@ -32,24 +32,18 @@ command -v python3 >/dev/null 2>&1 || die "python3 is needed to make test files"
 KG=$(cd "$(dirname "$KG")" && pwd)/$(basename "$KG")
 if [ -d "$DATA" ]; then DATA=$(cd "$DATA" && pwd); else [ "$MODE" = device ] || die "no $DATA"; fi
 
-WORK=$(mktemp -d "${TMPDIR:-/tmp}/kg_hostile.XXXXXX") || die "mktemp failed"
+TEST_NAME=cli_hostile
+. "$(dirname "$0")/test_support.sh"
 PIDS=
 cleanup() {
   for p in $PIDS; do kill "$p" 2>/dev/null; done
   rm -rf "$WORK"
 }
-trap cleanup EXIT
-trap 'exit 1' HUP INT TERM
+trap cleanup EXIT  # also the processes it started in the background
 LOG=$WORK/log
 mkdir "$LOG"
 
-failures=0
-checks=0
 skipped=0
-bad() {
-  echo "FAIL: $*" >&2
-  failures=$((failures + 1))
-}
 skip() {
   echo "SKIPPED: $*" >&2
   skipped=$((skipped + 1))
