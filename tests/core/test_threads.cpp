@@ -40,7 +40,9 @@ struct Outcome {
   std::vector<KeygraphMatch> matches;
   int correspondences = 0;
   long long arc_matches = 0;
+  int ransac_iterations = 0;
   bool truncated_arc_matches = false, truncated_correspondences = false;
+  bool truncated_detections = false;
 };
 
 Outcome detect(Detector& detector, const cv::Mat& scene) {
@@ -54,6 +56,8 @@ Outcome detect(Detector& detector, const cv::Mat& scene) {
   o.arc_matches = s.arc_matches;
   o.truncated_arc_matches = s.truncated_arc_matches;
   o.truncated_correspondences = s.truncated_correspondences;
+  o.ransac_iterations = s.ransac_iterations;
+  o.truncated_detections = s.truncated_detections;
   return o;
 }
 
@@ -73,11 +77,12 @@ void expect_same(const Outcome& a, const Outcome& b, int threads) {
   EXPECT_EQ(a.arc_matches, b.arc_matches);
   EXPECT_EQ(a.truncated_arc_matches, b.truncated_arc_matches);
   EXPECT_EQ(a.truncated_correspondences, b.truncated_correspondences);
+  EXPECT_EQ(a.ransac_iterations, b.ransac_iterations) << threads << " threads";
+  EXPECT_EQ(a.truncated_detections, b.truncated_detections) << threads << " threads";
 }
 
 // Each scene with 1 thread and with 2, 3 and 4 under `limits`.
-void expect_same_for_any_thread_count(Limits limits) {
-  const Fixture& f = fixture();
+void expect_same_for_any_thread_count(Limits limits, const Fixture& f = fixture()) {
   limits = limits.for_frame(800, 640);
   limits.threads = 1;
   Detector one(f.built.index, limits);
@@ -130,6 +135,55 @@ TEST(Threads, SameWhenTheArcPoolOverflows) {
   DetectionList found;
   ASSERT_TRUE(detector.detect(test::view(f.scenes[0]), found));
   EXPECT_TRUE(detector.stats().truncated_arc_matches);
+}
+
+// The box twice and the graf1 crop: two models with an instance in
+// box_in_scene, so the poses of several models run on the workers.
+const Fixture& two_boxes() {
+  static Fixture f = [] {
+    Fixture x;
+    const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+    EXPECT_TRUE(test::build_in_memory(
+        {{"box", box}, {"graf", test::graf_crop()}, {"box again", box}}, Params{}, x.built));
+    x.scenes = fixture().scenes;
+    return x;
+  }();
+  return f;
+}
+
+TEST(Threads, SamePosesWhenSeveralModelsHaveInstances) {
+  const Fixture& f = two_boxes();
+  Limits limits = Limits{}.for_frame(800, 640);
+  Detector one(f.built.index, limits);
+  DetectionList found;
+  ASSERT_TRUE(one.detect(test::view(f.scenes[0]), found));
+  ASSERT_GE(found.size(), 1u);
+  // Both boxes were estimated (their instances overlap: one is kept).
+  int models = 0;
+  for (int m : {0, 2}) {
+    for (const KeygraphMatch& c : one.last_matches())
+      if (c.model_id == m) {
+        ++models;
+        break;
+      }
+  }
+  ASSERT_EQ(models, 2);
+  EXPECT_FALSE(one.stats().truncated_detections);
+  expect_same_for_any_thread_count(Limits{}, f);
+}
+
+TEST(Threads, SamePosesWhenTheDetectionsReachTheirCap) {
+  // One detection: the second box's instance is one too many for one
+  // thread, which then stops that model's attempts.
+  Limits limits;
+  limits.max_detections = 1;
+  const Fixture& f = two_boxes();
+  Detector one(f.built.index, limits.for_frame(800, 640));
+  DetectionList found;
+  ASSERT_TRUE(one.detect(test::view(f.scenes[0]), found));
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_TRUE(one.stats().truncated_detections);
+  expect_same_for_any_thread_count(limits, f);
 }
 
 TEST(Threads, NothingAllocatedPerFrame) {

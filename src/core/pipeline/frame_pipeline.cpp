@@ -116,9 +116,7 @@ FramePipeline::FramePipeline(const ModelIndex& index, const Limits& limits,
       selector_(memory),
       adjacency_(memory),
       matches_(memory),
-      grouped_(memory),
-      model_begin_(memory),
-      pose_(memory),
+      poses_(memory),
       grid_(memory) {
   const Params& params = params_;
   const Limits& l = limits_;
@@ -145,10 +143,8 @@ FramePipeline::FramePipeline(const ModelIndex& index, const Limits& limits,
   selector_.reserve(l, index.keypoint_count(), completes_circuits(params), fill);
   if (completes_circuits(params)) adjacency_.build(index, fill);
   matches_.reserve(correspondences);
-  grouped_.reserve(correspondences);
-  model_begin_.reserve(static_cast<std::size_t>(index.model_count()) + 1);
-  pose_.reserve(l.max_correspondences, vertex_count(params.graph.structure), largest_model(index),
-                index.max_appearance_pixels());
+  poses_.reserve(l.threads, l.max_correspondences, vertex_count(params.graph.structure),
+                 largest_model(index), index.max_appearance_pixels(), index.model_count(), fill);
   grid_.reserve(l.max_keypoints, l.max_width, l.max_height,
                 std::max(4.f, static_cast<float>(params.ransac.inlier_threshold)));
   if (const std::uint8_t* v = index.vertex_descriptors()) {
@@ -434,31 +430,14 @@ void FramePipeline::estimate_poses(ImageView frame, const Keypoint* keypoints, i
   const float cell = std::max(4.f, static_cast<float>(params_.ransac.inlier_threshold));
   if (!matches_.empty()) grid_.build(keypoints, count, frame.width, frame.height, cell);
   frame_keypoints.grid = &grid_;
-  // Group the correspondences by model, keeping their order (a counting
-  // sort: no temporary buffer beyond the reserved ones).
-  const auto models = static_cast<std::size_t>(index_->model_count());
-  model_begin_.assign(models + 1, 0);
-  for (const KeygraphMatch& m : matches_) ++model_begin_[static_cast<std::size_t>(m.model_id) + 1];
-  for (std::size_t i = 0; i < models; ++i) model_begin_[i + 1] += model_begin_[i];
-  grouped_.resize(matches_.size());
-  for (const KeygraphMatch& m : matches_)
-    grouped_[model_begin_[static_cast<std::size_t>(m.model_id)]++] = m;
-  std::size_t begin = 0;
-  while (begin < grouped_.size()) {
-    if (out_of_time("pose")) break;
-    std::size_t end = begin;
-    const int model = grouped_[begin].model_id;
-    while (end < grouped_.size() && grouped_[end].model_id == model) ++end;
-    // Each model's own random stream: its poses do not depend on which
-    // other models had correspondences.
-    Rng model_rng(params_.ransac.seed ^
-                  (0x9e3779b97f4a7c15ULL * static_cast<std::uint64_t>(model + 1)));
-    stats_.ransac_iterations +=
-        pose_.estimate(*index_, params_, model, grouped_.data() + begin,
-                       static_cast<int>(end - begin), scene_points_.data(), frame_keypoints,
-                       model_rng, limits_.max_detections, out, stats_.truncated_detections);
-    begin = end;
-  }
+  // Each model's RANSAC, on the workers when there are several.
+  const PoseStage::Result r = poses_.estimate(
+      *index_, params_, matches_.data(), matches_.size(), scene_points_.data(), frame_keypoints,
+      limits_.max_detections, workers_.threads() > 1 ? &workers_ : nullptr,
+      budgeted_ ? &deadline_ : nullptr, out);
+  stats_.ransac_iterations += r.ransac_iterations;
+  stats_.truncated_detections = stats_.truncated_detections || r.truncated;
+  if (r.out_of_time) out_of_time("pose");
   keep_best_of_overlapping(out);
   stats_.ms_pose = ms_since(start);
 }

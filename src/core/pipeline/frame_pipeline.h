@@ -24,7 +24,7 @@
 #include "core/keygraphs/keygraph.h"
 #include "core/keypoints/hessian.h"
 #include "core/pose/point_grid.h"
-#include "core/pose/pose.h"
+#include "core/pose/pose_stage.h"
 #include "core/sampling/sampling.h"
 #include "core/selection/arc_adjacency.h"
 #include "core/selection/selection.h"
@@ -129,9 +129,7 @@ class FramePipeline {
   Selector selector_;
   ArcAdjacency adjacency_;             // filled with graph.complete_circuits only
   WorkVector<KeygraphMatch> matches_;  // in selection order
-  WorkVector<KeygraphMatch> grouped_;  // the same grouped by model (stable)
-  WorkVector<std::uint32_t> model_begin_;
-  PoseEstimator pose_;
+  PoseStage poses_;
   PointGrid grid_;
 };
 

@@ -54,12 +54,25 @@ bool plausible_local_map(const Point2f* m, const Point2f* s, int k, const Params
 
 }  // namespace
 
+std::uint8_t Selector::next_mark(JoinScratch& js) {
+  if (++js.mark == 0) {
+    // Wrapped (every 255 stamps, a few dozen keygraphs): no mark may
+    // still hold a stamp about to be reused. Bytes keep the marks as small
+    // in the cache as the flags were; 16-bit stamps saved the wraps but
+    // missed the cache a third more often (docs/RESULTS.md, "Frame cost cut").
+    std::fill(js.marks.begin(), js.marks.end(), std::uint8_t{0});
+    js.mark = 1;
+  }
+  return js.mark;
+}
+
 Selector::JoinScratch::JoinScratch(std::pmr::memory_resource* memory)
     : found(memory),
       sort_scratch(memory),
       kept{WorkVector<std::uint64_t>(memory), WorkVector<std::uint64_t>(memory),
            WorkVector<std::uint64_t>(memory), WorkVector<std::uint64_t>(memory)},
       flags(memory),
+      marks(memory),
       triples(memory),
       chain_head(memory),
       chain_next(memory),
@@ -114,7 +127,11 @@ void Selector::reserve(const Limits& limits, std::uint32_t model_keypoints, bool
     s.found.reserve(per_query);
     s.sort_scratch.reserve(per_query);
     for (WorkVector<std::uint64_t>& kept : s.kept) kept.reserve(per_query);
-    s.flags.reserve(model_keypoints);
+    // The flags serve the join without completion, the marks the join with.
+    if (completion)
+      s.marks.reserve(model_keypoints);
+    else
+      s.flags.reserve(model_keypoints);
     if (completion) {
       s.triples.reserve(3 * per_query);  // a circuit is found by up to 3 passes before dedupe
       s.chain_head.reserve(2 * static_cast<std::size_t>(model_keypoints));
@@ -136,8 +153,16 @@ void Selector::prepare(JoinScratch& s, const SelectionInput& in, const Limits& l
   if (s.sort_scratch.size() < per_query) s.sort_scratch.resize(per_query);
   for (WorkVector<std::uint64_t>& kept : s.kept)
     if (kept.size() < per_query) kept.resize(per_query);
-  // All clear between keygraphs (candidate_lists() clears what it flags).
-  s.flags.assign(in.index->keypoint_count(), 0);
+  if (completion) {
+    // Stamps carry over from frame to frame; set once per index size.
+    if (s.marks.size() != in.index->keypoint_count()) {
+      s.marks.assign(in.index->keypoint_count(), 0);
+      s.mark = 0;
+    }
+  } else {
+    // All clear between keygraphs (candidate_lists() clears what it flags).
+    s.flags.assign(in.index->keypoint_count(), 0);
+  }
   if (completion) {
     if (s.triples.size() < 3 * per_query) s.triples.resize(3 * per_query);
     if (s.chain_next.size() < 2 * per_query) s.chain_next.resize(2 * per_query);
@@ -393,18 +418,22 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
                                 const ArcList* lists, std::uint32_t capacity, JoinScratch& js,
                                 Plausible&& plausible) {
   // Each pair of consecutive lists (a -> b, b -> c) is joined on b by a
-  // semi-join (flag bit 0: sources of the second list, bit 1: targets kept
-  // of the first), as candidate_lists() does for all three; the closing arc
-  // c -> a is then looked up in the model and compared with the scene arc.
-  std::uint8_t* const flags = js.flags.data();
+  // semi-join, as candidate_lists() does for all three, with a stamp per
+  // model keypoint instead of flags: a keypoint is in a set when its mark
+  // is the set's stamp, so no pass clears what it marked (clearing was a
+  // third of the semi-joins' loops). The closing arc c -> a is then looked
+  // up in the model and compared with the scene arc.
+  std::uint8_t* const marks = js.marks.data();
   const Point2f* model_points = in.index->keypoints();
   const int* opposite = in.triangulation->halfedges().data();
   auto arc = [](std::uint64_t key, int s) { return (key >> s) | (key << ((64 - s) & 63)); };
   js.triple_count = 0;
   bool room = true;
   for (int p = 0; p < 3 && room; ++p) {
-    const ArcList& first = lists[p];
-    const ArcList& second = lists[(p + 1) % 3];
+    // Copies: the flag stores (bytes) may alias anything, so through a
+    // reference the counts would be reloaded on every iteration.
+    const ArcList first = lists[p];
+    const ArcList second = lists[(p + 1) % 3];
     if (first.count == 0 || second.count == 0) continue;
     // The closing scene arc's query: its own, or its opposite's, which
     // matches the model arcs of the other direction.
@@ -419,25 +448,27 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
     const std::uint64_t* a_keys = pool_.data() + first.begin;
     const std::uint64_t* b_keys = pool_.data() + second.begin;
     const int sa = first.reversed ? 32 : 0, sb = second.reversed ? 32 : 0;
-    for (std::uint32_t x = 0; x < second.count; ++x) flags[key_from(arc(b_keys[x], sb))] |= 1;
+    // The sources of the second list; the first list's arcs into them.
+    const std::uint8_t sources = next_mark(js);
+    for (std::uint32_t x = 0; x < second.count; ++x) marks[key_from(arc(b_keys[x], sb))] = sources;
     std::uint64_t* const ka = js.kept[0].data();
     std::uint32_t na = 0;
     for (std::uint32_t x = 0; x < first.count; ++x) {
       const std::uint64_t a = arc(a_keys[x], sa);
       ka[na] = a;
-      na += static_cast<std::uint32_t>((flags[key_to(a)] & 1) != 0);
+      na += static_cast<std::uint32_t>(marks[key_to(a)] == sources);
     }
-    for (std::uint32_t x = 0; x < second.count; ++x) flags[key_from(arc(b_keys[x], sb))] = 0;
     if (na == 0) continue;
-    for (std::uint32_t x = 0; x < na; ++x) flags[key_to(ka[x])] |= 2;
+    // The targets kept; the second list's arcs out of them.
+    const std::uint8_t targets = next_mark(js);
+    for (std::uint32_t x = 0; x < na; ++x) marks[key_to(ka[x])] = targets;
     std::uint64_t* const kb = js.kept[1].data();
     std::uint32_t nb = 0;
     for (std::uint32_t x = 0; x < second.count; ++x) {
       const std::uint64_t b = arc(b_keys[x], sb);
       kb[nb] = b;
-      nb += static_cast<std::uint32_t>((flags[key_from(b)] & 2) != 0);
+      nb += static_cast<std::uint32_t>(marks[key_from(b)] == targets);
     }
-    for (std::uint32_t x = 0; x < na; ++x) flags[key_to(ka[x])] = 0;
     // The kept arcs chained by their shared vertex w, each keypoint pair
     // once (views store a pair once per view that describes it
     // differently): linear in the kept arcs, where sorting both lists

@@ -120,7 +120,11 @@ class Selector {
     WorkVector<std::uint64_t> sort_scratch;  // one kept list (core/selection/arc_keys.h)
     WorkVector<std::uint64_t> kept[kMaxVertices];
     std::uint32_t kept_count[kMaxVertices] = {0, 0, 0, 0};
-    WorkVector<std::uint8_t> flags;
+    WorkVector<std::uint8_t> flags;  // without completion
+    // With completion: per model keypoint the stamp of the last set it was
+    // put in (complete_circuit), and the last stamp handed out.
+    WorkVector<std::uint8_t> marks;
+    std::uint8_t mark = 0;
     WorkVector<std::array<std::uint32_t, 3>> triples;
     std::uint32_t triple_count = 0;
     // The completion's join on the shared vertex w: per model keypoint the
@@ -184,6 +188,9 @@ class Selector {
   // Fills s.kept[0..k) with the arcs of lists[0..k) (a k-circuit's, in
   // order) that can close a circuit, each sorted; false when one is empty.
   bool candidate_lists(const ArcList* lists, int k, JoinScratch& js);
+
+  // A stamp no model keypoint's mark holds yet.
+  static std::uint8_t next_mark(JoinScratch& js);
 
   // Per-thread scratch sized for the frame (within reserve()'s capacity).
   void prepare(JoinScratch& s, const SelectionInput& in, const Limits& limits, bool completion);
