@@ -34,13 +34,15 @@ void WorkerPool::run(int tasks, Task task, void* context) {
     context_ = context;
     tasks_ = tasks;
     next_.store(0, std::memory_order_relaxed);
-    busy_ = static_cast<int>(workers_.size());
     ++generation_;
   }
   start_.notify_all();
   take_tasks(0);
+  // Every task is claimed now; wait only for the workers still running one.
+  // A worker that wakes later finds nothing left and does not join this run
+  // (work()), so a busy machine's slow wake-ups do not hold the frame up.
   std::unique_lock<std::mutex> lock(mutex_);
-  done_.wait(lock, [this] { return busy_ == 0; });
+  done_.wait(lock, [this] { return active_ == 0; });
 }
 
 void WorkerPool::work(int worker) {
@@ -51,10 +53,14 @@ void WorkerPool::work(int worker) {
       start_.wait(lock, [&] { return stopping_ || generation_ != seen; });
       if (stopping_) return;
       seen = generation_;
+      // Joining under the lock: run() cannot return (nor the next run
+      // change task_, context_ and tasks_) while this worker is active.
+      if (next_.load(std::memory_order_relaxed) >= tasks_) continue;
+      ++active_;
     }
     take_tasks(worker);
     std::lock_guard<std::mutex> lock(mutex_);
-    if (--busy_ == 0) done_.notify_one();
+    if (--active_ == 0) done_.notify_one();
   }
 }
 

@@ -51,7 +51,7 @@ class WorkerPool {
   std::condition_variable start_;
   std::condition_variable done_;
   std::uint64_t generation_ = 0;  // one per run(), under mutex_
-  int busy_ = 0;                  // workers still in this run, under mutex_
+  int active_ = 0;                // workers running tasks of this run, under mutex_
   bool stopping_ = false;         // under mutex_
   // The run in progress.
   Task task_ = nullptr;
