@@ -4,6 +4,7 @@
 #include "keygraph/tracker.h"
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <string>
 
@@ -55,9 +56,20 @@ struct Tracker::State {
     bool seen = false;  // confirmed or detected this frame
   };
 
+  // The blurred part of the frame the alignments see: `view` is frame
+  // pixels [x, x + width) x [y, y + height).
+  struct Region {
+    ImageView view;
+    int x = 0, y = 0;
+  };
+  // Track t's corners in this frame at constant velocity.
+  static void predict(const Track& t, Point2f (&predicted)[4]);
+  // Blurs the part of `frame` around every track's prediction (the
+  // alignments never look further; the rest of the frame is not blurred).
+  Region blur_around_tracks(ImageView frame);
   // Predicts track t's pose in this frame and aligns its model's appearance
   // from there; false when the object is lost.
-  bool confirm(Track& t, ImageView blurred_frame);
+  bool confirm(Track& t, const Region& region);
   // The reported corners of `t` after `measured` was measured.
   void report(Track& t, const Point2f* measured, bool smooth);
 
@@ -76,23 +88,37 @@ struct Tracker::State {
   int next_id = 0;
 };
 
-bool Tracker::State::confirm(Track& t, ImageView blurred_frame) {
-  const ModelIndex& index = detector->index();
-  const ModelInfo info = index.model(t.detection.model_id);
-  const ModelAppearance stored = index.appearance(t.detection.model_id);
-  if (stored.empty()) return false;
-  // Constant velocity of the corners, then the homography through them.
-  Point2f predicted[4];
+void Tracker::State::predict(const Track& t, Point2f (&predicted)[4]) {
+  // Constant velocity of the corners.
   for (int c = 0; c < 4; ++c) {
     const Point2f now = t.corners[c];
     const Point2f step = t.has_previous ? Point2f{now.x - t.previous[c].x, now.y - t.previous[c].y}
                                         : Point2f{0.f, 0.f};
     predicted[c] = {now.x + step.x, now.y + step.y};
   }
+}
+
+bool Tracker::State::confirm(Track& t, const Region& region) {
+  const ModelIndex& index = detector->index();
+  const ModelInfo info = index.model(t.detection.model_id);
+  const ModelAppearance stored = index.appearance(t.detection.model_id);
+  if (stored.empty()) return false;
+  Point2f predicted[4];
+  predict(t, predicted);
+  // The homography through the predicted corners, in the blurred region's
+  // pixels for the alignment, then back in the frame's.
   Homography h;
   if (!fit_homography(info.outline, predicted, 4, h)) return false;
+  const auto shift = [&h](double dx, double dy) {
+    for (int i = 0; i < 3; ++i) {
+      h[static_cast<std::size_t>(i)] += dx * h[static_cast<std::size_t>(6 + i)];
+      h[static_cast<std::size_t>(3 + i)] += dy * h[static_cast<std::size_t>(6 + i)];
+    }
+  };
+  shift(-region.x, -region.y);
   const AppearanceFit fit = aligner.align(
-      {stored.pixels, stored.width, stored.height, stored.scale, stored.scale}, blurred_frame, h);
+      {stored.pixels, stored.width, stored.height, stored.scale, stored.scale}, region.view, h);
+  shift(region.x, region.y);
   if (!fit.measured) return false;
   const double ncc = fit.aligned ? fit.ncc : fit.ncc_before;
   const RansacParams& rp = detector->options().ransac;
@@ -110,6 +136,47 @@ bool Tracker::State::confirm(Track& t, ImageView blurred_frame) {
   t.detection.tracked = true;
   report(t, measured, true);
   return true;
+}
+
+Tracker::State::Region Tracker::State::blur_around_tracks(ImageView frame) {
+  // The predicted outlines' bounding box with a margin for the alignment's
+  // steps (it starts from the prediction and moves a few pixels; a
+  // prediction further off than the margin is lost anyway).
+  float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
+  for (int i = 0; i < track_count; ++i) {
+    Point2f predicted[4];
+    predict(tracks[i], predicted);
+    for (const Point2f& p : predicted) {
+      x0 = std::min(x0, p.x);
+      y0 = std::min(y0, p.y);
+      x1 = std::max(x1, p.x);
+      y1 = std::max(y1, p.y);
+    }
+  }
+  constexpr float kMargin = 48.f;
+  const auto clamp_to = [](float v, int hi) {
+    return static_cast<int>(std::clamp(v, 0.f, static_cast<float>(hi)));
+  };
+  Region r;
+  r.x = clamp_to(std::floor(x0 - kMargin), frame.width);
+  r.y = clamp_to(std::floor(y0 - kMargin), frame.height);
+  const int right = clamp_to(std::ceil(x1 + kMargin) + 1.f, frame.width);
+  const int bottom = clamp_to(std::ceil(y1 + kMargin) + 1.f, frame.height);
+  if (right - r.x < 2 || bottom - r.y < 2) {  // nothing predicted inside the frame
+    r.view = ImageView{};
+    return r;
+  }
+  // Blurred with the kernel's radius around it, so that the region's pixels
+  // are those of the whole frame blurred.
+  const float sigma = detector->index().params().descriptor.blur_sigma;
+  const int pad = sigma > 0.f ? blur_radius(sigma) : 0;
+  const int bx = std::max(r.x - pad, 0), by = std::max(r.y - pad, 0);
+  const int bw = std::min(right + pad, frame.width) - bx;
+  const int bh = std::min(bottom + pad, frame.height) - by;
+  gaussian_blur(ImageView(frame.row(by) + bx, bw, bh, frame.stride), sigma, blurred, blur_scratch);
+  const ImageView all = view_of(blurred);
+  r.view = ImageView(all.row(r.y - by) + (r.x - bx), right - r.x, bottom - r.y, all.stride);
+  return r;
 }
 
 void Tracker::State::report(Track& t, const Point2f* measured, bool smooth) {
@@ -181,12 +248,11 @@ Status Tracker::process(ImageView frame, DetectionList& out) {
   // Confirm each track around its prediction; drop the lost ones in place.
   if (s.can_track && s.track_count > 0 && !frame.empty()) {
     const auto start = Clock::now();
-    gaussian_blur(frame, s.detector->index().params().descriptor.blur_sigma, s.blurred,
-                  s.blur_scratch);
+    const State::Region region = s.blur_around_tracks(frame);
     int kept = 0;
     for (int i = 0; i < s.track_count; ++i) {
       State::Track& t = s.tracks[i];
-      if (s.confirm(t, view_of(s.blurred))) {
+      if (s.confirm(t, region)) {
         t.seen = true;
         ++st.confirmed;
         s.tracks[kept++] = t;
