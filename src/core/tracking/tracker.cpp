@@ -4,9 +4,10 @@
 #include "keygraph/tracker.h"
 
 #include <algorithm>
-#include <cmath>
 #include <chrono>
+#include <cmath>
 #include <string>
+#include <vector>
 
 #include "core/image/blur.h"
 #include "core/image/plane.h"
@@ -14,6 +15,7 @@
 #include "core/pose/homography.h"
 #include "core/pose/overlap.h"
 #include "core/support/workspace.h"
+#include "core/tracking/motion_blur.h"
 
 namespace kg {
 
@@ -62,8 +64,18 @@ struct Tracker::State {
     ImageView view;
     int x = 0, y = 0;
   };
-  // Track t's corners in this frame at constant velocity.
-  static void predict(const Track& t, Point2f (&predicted)[4]);
+  // Track t's corners in this frame moving at `velocity` times the corners'
+  // last step (1: constant velocity; 0: where they were).
+  static void predict(const Track& t, float velocity, Point2f (&predicted)[4]);
+  // Aligns track t's appearance from `predicted` (frame pixels) into `h`;
+  // its correlation when measured and plausible, else -1.
+  // `pixels`: the appearance to align (nullptr: the stored one).
+  double align_from(const Track& t, const Point2f (&predicted)[4], const Region& region,
+                    const std::uint8_t* pixels, Homography& h);
+  // Smears t's stored appearance into `smeared` along `step` (the mean
+  // corner step in frame pixels over one frame) over the exposure; false
+  // when the step is too small to blur.
+  bool smear(const Track& t, Point2f step);
   // Blurs the part of `frame` around every track's prediction (the
   // alignments never look further; the rest of the frame is not blurred).
   Region blur_around_tracks(ImageView frame);
@@ -82,33 +94,90 @@ struct Tracker::State {
   Plane<std::uint8_t> blurred;
   Plane<float> blur_scratch;
   AppearanceAligner aligner;
+  std::vector<std::uint8_t> smeared;  // an appearance smeared by motion (reserved)
+  // Exposure as a share of the frame interval, for the smear; steps (px
+  // per frame) below kMinSmearStep are not smeared.
+  static constexpr float kExposure = 0.5f;
+  static constexpr float kMinSmearStep = 6.f;
+  // A measured step this far from the one smeared for is smeared again.
+  static constexpr float kResmearDifference = 3.f;
   DetectionList found;
   Track tracks[kMaxDetections];
   int track_count = 0;
   int next_id = 0;
+  // Tracks lost lately, remembered (never reported) so that the object
+  // keeps its id when detection finds it again near where it was lost: a
+  // tracker that loses an object for a few frames of fast motion has not
+  // met a new one.
+  struct Lost {
+    int id = -1;
+    int model_id = -1;
+    Point2f corners[4];
+    long long frame = 0;  // stats.frames when it was lost
+  };
+  static constexpr long long kRecallFrames = 30;
+  Lost lost[kMaxDetections];
+  int lost_count = 0;
+  void remember(const Track& t);
+  // The id of a lost track of d's model near d (and forgets it), or -1.
+  int recall(const Detection& d);
 };
 
-void Tracker::State::predict(const Track& t, Point2f (&predicted)[4]) {
-  // Constant velocity of the corners.
+void Tracker::State::remember(const Track& t) {
+  int at = lost_count < kMaxDetections ? lost_count++ : 0;
+  if (at == 0 && lost_count == kMaxDetections) {  // full: replace the oldest
+    for (int i = 1; i < lost_count; ++i)
+      if (lost[i].frame < lost[at].frame) at = i;
+  }
+  lost[at].id = t.id;
+  lost[at].model_id = t.detection.model_id;
+  std::copy_n(t.corners, 4, lost[at].corners);
+  lost[at].frame = stats.frames;
+}
+
+int Tracker::State::recall(const Detection& d) {
+  Point2f centre{0.f, 0.f};
+  for (const Point2f& p : d.corners) centre = {centre.x + p.x / 4, centre.y + p.y / 4};
+  for (int i = 0; i < lost_count; ++i) {
+    const Lost& l = lost[i];
+    if (l.model_id != d.model_id || stats.frames - l.frame > kRecallFrames) continue;
+    // Near: the centre within the lost outline's box grown by its size.
+    float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
+    for (const Point2f& p : l.corners) {
+      x0 = std::min(x0, p.x);
+      y0 = std::min(y0, p.y);
+      x1 = std::max(x1, p.x);
+      y1 = std::max(y1, p.y);
+    }
+    const float grow = std::max(x1 - x0, y1 - y0);
+    if (centre.x < x0 - grow || centre.x > x1 + grow || centre.y < y0 - grow ||
+        centre.y > y1 + grow)
+      continue;
+    const int id = l.id;
+    lost[i] = lost[--lost_count];
+    return id;
+  }
+  return -1;
+}
+
+void Tracker::State::predict(const Track& t, float velocity, Point2f (&predicted)[4]) {
   for (int c = 0; c < 4; ++c) {
     const Point2f now = t.corners[c];
     const Point2f step = t.has_previous ? Point2f{now.x - t.previous[c].x, now.y - t.previous[c].y}
                                         : Point2f{0.f, 0.f};
-    predicted[c] = {now.x + step.x, now.y + step.y};
+    predicted[c] = {now.x + velocity * step.x, now.y + velocity * step.y};
   }
 }
 
-bool Tracker::State::confirm(Track& t, const Region& region) {
+double Tracker::State::align_from(const Track& t, const Point2f (&predicted)[4],
+                                  const Region& region, const std::uint8_t* pixels, Homography& h) {
   const ModelIndex& index = detector->index();
   const ModelInfo info = index.model(t.detection.model_id);
   const ModelAppearance stored = index.appearance(t.detection.model_id);
-  if (stored.empty()) return false;
-  Point2f predicted[4];
-  predict(t, predicted);
+  if (stored.empty()) return -1.0;
   // The homography through the predicted corners, in the blurred region's
   // pixels for the alignment, then back in the frame's.
-  Homography h;
-  if (!fit_homography(info.outline, predicted, 4, h)) return false;
+  if (!fit_homography(info.outline, predicted, 4, h)) return -1.0;
   const auto shift = [&h](double dx, double dy) {
     for (int i = 0; i < 3; ++i) {
       h[static_cast<std::size_t>(i)] += dx * h[static_cast<std::size_t>(6 + i)];
@@ -116,16 +185,88 @@ bool Tracker::State::confirm(Track& t, const Region& region) {
     }
   };
   shift(-region.x, -region.y);
-  const AppearanceFit fit = aligner.align(
-      {stored.pixels, stored.width, stored.height, stored.scale, stored.scale}, region.view, h);
+  const AppearanceFit fit = aligner.align({pixels != nullptr ? pixels : stored.pixels, stored.width,
+                                           stored.height, stored.scale, stored.scale},
+                                          region.view, h);
   shift(region.x, region.y);
-  if (!fit.measured) return false;
+  if (!fit.measured) return -1.0;
   const double ncc = fit.aligned ? fit.ncc : fit.ncc_before;
   const RansacParams& rp = detector->options().ransac;
-  if (!(ncc >= options.min_correlation) ||
-      !is_plausible_pose(h, info.width, info.height, rp,
+  if (!is_plausible_pose(h, info.width, info.height, rp,
                          smallest_area_scale(index.params(), info.width, info.height)))
-    return false;
+    return -1.0;
+  return ncc;
+}
+
+bool Tracker::State::smear(const Track& t, Point2f step) {
+  if (std::hypot(step.x, step.y) < kMinSmearStep) return false;
+  const ModelIndex& index = detector->index();
+  const ModelInfo info = index.model(t.detection.model_id);
+  const ModelAppearance stored = index.appearance(t.detection.model_id);
+  if (stored.empty()) return false;
+  Point2f centre{0.f, 0.f};
+  for (const Point2f& c : t.corners) centre = {centre.x + c.x / 4, centre.y + c.y / 4};
+  // The streak over the exposure, from frame pixels into appearance pixels
+  // through the object's last pose.
+  Homography to_model;
+  if (!fit_homography(t.corners, info.outline, 4, to_model)) return false;
+  const float e = 0.5f * kExposure;
+  const Point2f a = kg::apply(to_model, {centre.x - e * step.x, centre.y - e * step.y});
+  const Point2f b = kg::apply(to_model, {centre.x + e * step.x, centre.y + e * step.y});
+  const float dx = (b.x - a.x) * stored.scale, dy = (b.y - a.y) * stored.scale;
+  if (!(std::hypot(dx, dy) >= 1.f) || !std::isfinite(dx) || !std::isfinite(dy)) return false;
+  const std::size_t n = static_cast<std::size_t>(stored.width) * stored.height;
+  if (n > smeared.capacity()) return false;
+  smeared.resize(n);
+  blur_along(stored.pixels, stored.width, stored.height, dx, dy, smeared.data());
+  return true;
+}
+
+namespace {
+
+// The mean step from `from` to `to`, corner by corner.
+Point2f mean_step(const Point2f* from, const Point2f* to) {
+  Point2f step{0.f, 0.f};
+  for (int c = 0; c < 4; ++c)
+    step = {step.x + (to[c].x - from[c].x) / 4, step.y + (to[c].y - from[c].y) / 4};
+  return step;
+}
+
+}  // namespace
+
+bool Tracker::State::confirm(Track& t, const Region& region) {
+  const ModelInfo info = detector->index().model(t.detection.model_id);
+  // From the constant-velocity prediction, with the appearance smeared as
+  // that motion blurs the object when it is fast; where the motion turned
+  // or stopped (a hand's pan ends), from where the object was.
+  Point2f predicted[4];
+  predict(t, 1.f, predicted);
+  const Point2f predicted_step = mean_step(t.corners, predicted);
+  Homography h;
+  const bool smeared_first = smear(t, predicted_step);
+  double ncc = align_from(t, predicted, region, smeared_first ? smeared.data() : nullptr, h);
+  if (!(ncc >= options.min_correlation) && smeared_first)
+    ncc = align_from(t, predicted, region, nullptr, h);
+  if (!(ncc >= options.min_correlation) && t.has_previous) {
+    predict(t, 0.f, predicted);
+    ncc = align_from(t, predicted, region, nullptr, h);
+  }
+  if (!(ncc >= options.min_correlation)) return false;
+  // The motion this frame as measured, when fast and not what the smear
+  // assumed (a pan starting or turning): smeared by it, aligned again from
+  // there, kept when it correlates better.
+  Point2f aligned[4];
+  for (int c = 0; c < 4; ++c) aligned[c] = kg::apply(h, info.outline[c]);
+  const Point2f step = mean_step(t.corners, aligned);
+  const Point2f assumed = smeared_first ? predicted_step : Point2f{0.f, 0.f};
+  if (std::hypot(step.x - assumed.x, step.y - assumed.y) >= kResmearDifference && smear(t, step)) {
+    Homography again;
+    const double ncc_again = align_from(t, aligned, region, smeared.data(), again);
+    if (ncc_again > ncc) {
+      h = again;
+      ncc = ncc_again;
+    }
+  }
   Point2f measured[4];
   for (int c = 0; c < 4; ++c) measured[c] = kg::apply(h, info.outline[c]);
   std::copy_n(t.corners, 4, t.previous);
@@ -144,13 +285,15 @@ Tracker::State::Region Tracker::State::blur_around_tracks(ImageView frame) {
   // prediction further off than the margin is lost anyway).
   float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
   for (int i = 0; i < track_count; ++i) {
-    Point2f predicted[4];
-    predict(tracks[i], predicted);
-    for (const Point2f& p : predicted) {
-      x0 = std::min(x0, p.x);
-      y0 = std::min(y0, p.y);
-      x1 = std::max(x1, p.x);
-      y1 = std::max(y1, p.y);
+    for (const float velocity : {1.f, 0.f}) {  // both starts of confirm()
+      Point2f predicted[4];
+      predict(tracks[i], velocity, predicted);
+      for (const Point2f& p : predicted) {
+        x0 = std::min(x0, p.x);
+        y0 = std::min(y0, p.y);
+        x1 = std::max(x1, p.x);
+        y1 = std::max(y1, p.y);
+      }
     }
   }
   constexpr float kMargin = 48.f;
@@ -207,6 +350,7 @@ Tracker::Tracker(Detector& detector, const TrackerOptions& options)
   s.blurred.reserve(s.max_width, s.max_height);
   s.blur_scratch.reserve(s.max_width + 2 * blur_radius(sigma), 2);
   s.aligner.reserve(index.max_appearance_pixels());
+  s.smeared.reserve(static_cast<std::size_t>(index.max_appearance_pixels()));
 }
 
 Tracker::~Tracker() {
@@ -225,6 +369,7 @@ const TrackerOptions& Tracker::options() const {
 
 void Tracker::reset() {
   state_->track_count = 0;
+  state_->lost_count = 0;
   state_->stats = TrackerStats{};
 }
 
@@ -258,6 +403,7 @@ Status Tracker::process(ImageView frame, DetectionList& out) {
         s.tracks[kept++] = t;
       } else {
         ++st.lost;
+        s.remember(t);
       }
     }
     s.track_count = kept;
@@ -290,8 +436,11 @@ Status Tracker::process(ImageView frame, DetectionList& out) {
       if (match < 0 && s.can_track && s.track_count < s.options.max_tracks) {
         State::Track& t = s.tracks[s.track_count++];
         t = State::Track{};
-        t.id = s.next_id++;
-        if (s.next_id < 0) s.next_id = 0;
+        t.id = s.recall(d);
+        if (t.id < 0) {
+          t.id = s.next_id++;
+          if (s.next_id < 0) s.next_id = 0;
+        }
         match = s.track_count - 1;
         t.detection = d;
         std::copy_n(d.corners, 4, t.corners);
