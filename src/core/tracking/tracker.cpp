@@ -136,28 +136,33 @@ void Tracker::State::remember(const Track& t) {
 }
 
 int Tracker::State::recall(const Detection& d) {
-  Point2f centre{0.f, 0.f};
-  for (const Point2f& p : d.corners) centre = {centre.x + p.x / 4, centre.y + p.y / 4};
+  // The nearest lost track of d's model, its centre within 4 times its
+  // size of d's (a fast pan may lose an object and find it again far from
+  // there; two lost objects of one model keep theirs by distance).
+  const auto centre_of = [](const Point2f* c) {
+    return Point2f{(c[0].x + c[1].x + c[2].x + c[3].x) / 4,
+                   (c[0].y + c[1].y + c[2].y + c[3].y) / 4};
+  };
+  const Point2f centre = centre_of(d.corners);
+  int best = -1;
+  float best_distance = 0.f;
   for (int i = 0; i < lost_count; ++i) {
     const Lost& l = lost[i];
     if (l.model_id != d.model_id || stats.frames - l.frame > kRecallFrames) continue;
-    // Near: the centre within the lost outline's box grown by its size.
-    float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
-    for (const Point2f& p : l.corners) {
-      x0 = std::min(x0, p.x);
-      y0 = std::min(y0, p.y);
-      x1 = std::max(x1, p.x);
-      y1 = std::max(y1, p.y);
-    }
-    const float grow = std::max(x1 - x0, y1 - y0);
-    if (centre.x < x0 - grow || centre.x > x1 + grow || centre.y < y0 - grow ||
-        centre.y > y1 + grow)
-      continue;
-    const int id = l.id;
-    lost[i] = lost[--lost_count];
-    return id;
+    float size = 0.f;
+    for (int c = 0; c < 4; ++c)
+      size = std::max(size, std::hypot(l.corners[c].x - l.corners[(c + 2) % 4].x,
+                                       l.corners[c].y - l.corners[(c + 2) % 4].y));
+    const Point2f at = centre_of(l.corners);
+    const float distance = std::hypot(at.x - centre.x, at.y - centre.y);
+    if (distance > 4.f * size || (best >= 0 && distance >= best_distance)) continue;
+    best = i;
+    best_distance = distance;
   }
-  return -1;
+  if (best < 0) return -1;
+  const int id = lost[best].id;
+  lost[best] = lost[--lost_count];
+  return id;
 }
 
 void Tracker::State::predict(const Track& t, float velocity, Point2f (&predicted)[4]) {
