@@ -6,9 +6,16 @@
 // appearance (the index carries it, format 6.2) onto the frame from there,
 // and keeps the object while the aligned appearance still correlates with
 // the frame; a tracked frame costs an alignment per object instead of a
-// detection. Full detection runs when nothing is tracked, when a track was
+// detection. When the object moves fast (6 px a frame or more) the
+// appearance is first smeared along that motion over half the frame
+// interval, as the camera's motion blur smears the object, and again by
+// the motion the alignment measured; when the prediction fails the
+// alignment is tried again from where the object was (a pan that stopped
+// or turned). Full detection runs when nothing is tracked, when a track was
 // lost, and every `detect_interval` frames to pick up new objects; what it
-// finds is matched to the tracks by outline, so an object keeps its id.
+// finds is matched to the tracks by outline, so an object keeps its id,
+// also when it was lost at most 30 frames before and is found again within
+// 4 times its size of where it was lost.
 //
 //   kg::Detector detector(index, kg::Limits{}.for_frame(1280, 720));
 //   kg::Tracker tracker(detector);                 // allocates here, once
@@ -67,7 +74,7 @@ struct TrackerStats {
 class Tracker {
  public:
   // Reserves everything the tracker uses per frame for the detector's
-  // limits and index (one allocation of its own).
+  // limits and index.
   explicit Tracker(Detector& detector, const TrackerOptions& options = TrackerOptions{});
   ~Tracker();
   Tracker(const Tracker&) = delete;

@@ -21,6 +21,7 @@
 #include "eval/oxford_report.h"
 #include "eval/report_io.h"
 #include "eval/synth_eval.h"
+#include "eval/video_eval.h"
 #include "keygraph/detector.h"
 #include "keygraph/param_text.h"
 
@@ -200,10 +201,14 @@ int cmd_eval(const Args& args) {
     std::fputs(oxford_options(oxford, out_dir, csv, quiet).help().c_str(), stdout);
     std::fputs(("\n" + synth_options(synth, out_dir, quiet).help()).c_str(), stdout);
     std::fputs(("\n" + truth_options(truth, out_dir, quiet).help()).c_str(), stdout);
+    VideoEvalOptions video;
+    bool json = false;
+    std::fputs(("\n" + video_options(video, json, quiet).help()).c_str(), stdout);
     return 0;
   }
   for (const std::string& a : args) {
     if (a == "--truth") return cmd_eval_truth(args);  // cmd_eval_truth.cpp
+    if (a == "--video") return cmd_eval_video(args);  // cmd_eval_video.cpp
   }
   OxfordEvalOptions options;
   SynthEvalOptions synth;

@@ -12,6 +12,7 @@
 #include "cli/device/command_line.h"
 #include "cli/device/options.h"
 #include "eval/truth_eval.h"
+#include "eval/video_eval.h"
 #include "keygraph/detector.h"
 #include "keygraph/status.h"
 
@@ -22,8 +23,11 @@ int cmd_detect(const Args& args);
 int cmd_demo(const Args& args);
 int cmd_eval(const Args& args);
 int cmd_eval_truth(const Args& args);  // eval --truth (cmd_eval passes it on)
+int cmd_eval_video(const Args& args);  // eval --video (cmd_eval passes it on)
 // The options of eval --truth, bound to `options` and `out_dir`.
 Options truth_options(TruthEvalOptions& options, std::string& out_dir, bool& quiet);
+// The options of eval --video (cmd_eval_video.cpp).
+Options video_options(VideoEvalOptions& options, bool& json, bool& quiet);
 int cmd_manifest(const Args& args);
 // The --methods option of eval: every name checked (a usage error names
 // the unknown one); `given` (may be null) is set when the option is used.

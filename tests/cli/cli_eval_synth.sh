@@ -31,9 +31,9 @@ expect_failure "synth without -o" "$KG" synth
 expect_failure "synth bad number" "$KG" synth -o out --frames many
 expect_failure "synth too many signs" "$KG" synth -o out --signs 1000
 expect_failure "synth no backgrounds" "$KG" synth -o out --backgrounds "$WORK/none"
-expect_failure "synth frame size without --range" "$KG" synth -o out --frame-size 1280x720
-expect_failure "synth frame size of another camera" "$KG" synth -o out --range --frame-size 640x640
-expect_failure "synth bad frame size" "$KG" synth -o out --range --frame-size 1280
+expect_failure "synth frame size without --range" "$KG" synth -o out --size 1280x720
+expect_failure "synth frame size of another camera" "$KG" synth -o out --range --size 640x640
+expect_failure "synth bad frame size" "$KG" synth -o out --range --size 1280
 expect_failure "synth bad JPEG quality" "$KG" synth -o out --jpeg 101
 expect_failure "eval without input" "$KG" eval
 expect_failure "eval both inputs" "$KG" eval --dataset a --synth b
@@ -70,7 +70,7 @@ awk -F, 'NR==1 {n=NF} NF!=n {exit 1}' "$WORK/out/synth-cases.csv" ||
   bad "synth-cases.csv: rows and header disagree"
 
 # The small-sign benchmark (issue 38): 1280x720 frames, distances, bins.
-"$KG" synth -o "$WORK/range" --range --frame-size 1280x720 --signs 2 --frames 3 --seed 3 \
+"$KG" synth -o "$WORK/range" --range --size 1280x720 --signs 2 --frames 3 --seed 3 \
   --jpeg 85 -q >/dev/null 2>"$WORK/stderr" || bad "synth --range failed: $(cat "$WORK/stderr")"
 grep -q '^frame-size 1280 720$' "$WORK/range/manifest.txt" || bad "range set: not 1280x720"
 grep -q ' distance [0-9.]* jpeg 85$' "$WORK/range/manifest.txt" ||

@@ -44,9 +44,10 @@ known_options() {
     demo) echo "-o --out --output --data" ;;
     eval) echo "--dataset --subsets --crops --size --centre --seed --set --methods --negatives
                 --curves -o --out --output --csv --synth --sizes --frames --truth --models --index
-                --tolerance --gallery -q --quiet" ;;
+                --tolerance --gallery --video --detect-interval --json -q --quiet" ;;
     manifest) echo "-o --out --output --split" ;;
-    synth) echo "-o --out --output --seed --signs --frames --sign-free --backgrounds -q --quiet" ;;
+    synth) echo "-o --out --output --seed --signs --frames --sign-free --range --jpeg --backgrounds --video --size
+                 --exposure -q --quiet" ;;
     repeatability) echo "--dataset --subsets --detectors --set --max-keypoints --tolerance --csv
                          -q --quiet" ;;
     live) echo "--index --v4l2 --libcamera --images --size --loop --json --draw --frames -q --quiet" ;;
@@ -109,7 +110,7 @@ for c in $commands; do
   mode=
   grep -E '^(usage: keygraph|  -)' "$WORK/help" | while read -r first second rest; do
     if [ "$first" = "usage:" ]; then
-      mode=$(echo "$rest" | awk '$2 ~ /^--(synth|truth|dataset)$/ {print $2}')
+      mode=$(echo "$rest" | awk '$2 ~ /^--(synth|truth|dataset|video)$/ {print $2}')
       continue
     fi
     # The row's names: "-o, --out, --output DIR" gives -o --out --output.

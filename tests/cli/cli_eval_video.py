@@ -1,0 +1,183 @@
+#!/usr/bin/env python3
+"""keygraph synth --video and keygraph eval --video end to end (issue 36).
+
+- A generated sequence (seed 2, 300 frames, 3 signs as models):
+  written with its manifest (every frame in order; frames with the sign,
+  without it, and not scored), then evaluated with tracking and detection
+  alone in one run, the scores asserted: tracking finds the sign in most
+  frames and at least as often as detection alone, within 5 px in most,
+  tracks most frames, one track id without a switch, lets go of the sign
+  within 2 frames when it leaves or is covered, and makes no more wrong
+  detections than detection alone.
+- The real sequence ($KG_DATA_DIR/real/video/poster-rotation, when given):
+  its manifest made by pot_video_manifest.py, the model photographed in
+  another video: every annotated frame found within 15 px with one id.
+- Bad input to the new options: one clear line, a non-zero exit, nothing
+  written.
+
+usage: cli_eval_video.py KEYGRAPH OPENCV_DATA_DIR [KG_DATA_DIR]
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+KG, OPENCV = (os.path.abspath(a) for a in sys.argv[1:3])
+DATA = os.environ.get("KG_DATA_DIR") or (sys.argv[3] if len(sys.argv) > 3 else "")
+HERE = os.path.dirname(os.path.abspath(__file__))
+failures = []
+
+
+def check(ok, what):
+    if not ok:
+        failures.append(what)
+        print("FAIL: " + what, file=sys.stderr)
+
+
+def run(*args):
+    return subprocess.run([KG, *args], capture_output=True, text=True)
+
+
+def refused(args, needle, what):
+    r = run(*args)
+    lines = r.stderr.strip().splitlines()
+    check(r.returncode != 0, what + ": exit code " + str(r.returncode))
+    check(len(lines) == 1 and lines[0].startswith("keygraph: ") and needle in lines[0],
+          what + ": stderr " + repr(r.stderr))
+
+
+def modes(scores):
+    return {m["mode"]: m for m in scores["modes"]}
+
+
+with tempfile.TemporaryDirectory(prefix="kg_eval_video.") as work:
+    seq = os.path.join(work, "seq")
+    r = run("synth", "--video", "-o", seq, "--seed", "2", "--frames", "300", "--signs", "3",
+            "--backgrounds", OPENCV, "-q")
+    check(r.returncode == 0, "synth --video: " + r.stderr)
+    lines = [l for l in open(os.path.join(seq, "video.jsonl")) if not l.startswith("#")]
+    check(len(lines) == 300, "one manifest line per frame: %d" % len(lines))
+    frames = [json.loads(l) for l in lines]
+    check([f["scene"] for f in frames] == ["frames/%04d.jpg" % i for i in range(300)],
+          "frames in order")
+    with_sign = sum(1 for f in frames if f.get("instances"))
+    without = sum(1 for f in frames if "instances" in f and not f["instances"])
+    check(with_sign >= 200, "frames with the sign: %d" % with_sign)
+    check(without >= 5, "frames without it (left the frame, covered): %d" % without)
+    check(len(os.listdir(os.path.join(seq, "signs"))) == 3, "3 models")
+
+    r = run("eval", "--video", os.path.join(seq, "video.jsonl"), "--models",
+            os.path.join(seq, "signs"), "--json", "-q")
+    check(r.returncode == 0, "eval --video: " + r.stderr)
+    if r.returncode == 0:
+        s = json.loads(r.stdout)
+        m = modes(s)
+        t, d = m["tracking"], m["detection alone"]
+        print("tracking:", t, "\ndetection alone:", d)
+        check(s["frames"] == 300 and s["with_object"] == with_sign, "counts " + r.stdout)
+        check(t["instances"] == with_sign and d["instances"] == with_sign, "instances scored")
+        # (measured when written: 228 and 195 of 257, 228 within 5 px, 198
+        # frames tracked and 102 detected, the pans 53 and 34 of 60)
+        check(t["found"] >= 0.82 * with_sign, "tracking finds the sign: %d" % t["found"])
+        check(t["found"] >= d["found"] + 0.06 * with_sign,
+              "tracking finds it clearly more often than detection alone: %d, %d"
+              % (t["found"], d["found"]))
+        check(t["found_fine"] >= 0.8 * with_sign, "within 5 px: %d" % t["found_fine"])
+        check(t["frames_tracked"] >= 1.5 * t["frames_detected"], "mostly tracked frames")
+        tp = {p["part"]: p for p in t["parts"]}
+        dp = {p["part"]: p for p in d["parts"]}
+        check(sorted(tp) == ["approach", "leave", "occlusion", "pans", "turns"], "the parts")
+        if "pans" in tp and "pans" in dp:
+            check(tp["pans"]["found"] >= dp["pans"]["found"] + 10,
+                  "the blurred pans: %d, %d" % (tp["pans"]["found"], dp["pans"]["found"]))
+        check(d["frames_tracked"] == 0 and d["frames_detected"] == 300, "detection alone")
+        check(t["id_switches"] == 0, "no id switch")
+        check(t["drop_events"] >= 1 and t["drop_frames_max"] <= 2,
+              "lets go within 2 frames: %d" % t["drop_frames_max"])
+        check(t["wrong"] <= d["wrong"], "no more wrong detections than detection alone")
+        check(0 <= t["jitter_rms"] < 1.0, "jitter: %s" % t["jitter_rms"])
+    r = run("eval", "--video", os.path.join(seq, "video.jsonl"), "--models",
+            os.path.join(seq, "signs"), "-q")
+    check(r.returncode == 0 and "tracking" in r.stdout and "id switches" in r.stdout,
+          "the table: " + r.stdout)
+
+    # The real sequence.
+    poster = os.path.join(DATA, "real", "video", "poster-rotation") if DATA else ""
+    if not poster:
+        print("the real poster video not run: no KG_DATA_DIR (tests/CMakeLists.txt passes it "
+              "when $KG_DATA_DIR/real exists)")
+    if poster:
+        check(os.path.isdir(poster), "no directory " + poster)
+    if poster and os.path.isdir(poster):
+        idx = os.path.join(work, "poster.kgi")
+        r = run("build", "-q", "--name", "poster", os.path.join(poster, "model-other-video.png"),
+                "-o", idx)
+        check(r.returncode == 0, "build poster: " + r.stderr)
+        manifest = os.path.join(work, "poster.jsonl")
+        subprocess.run([sys.executable, os.path.join(HERE, "pot_video_manifest.py"), poster,
+                        os.path.join(poster, "corners_other_model.txt"), "poster", manifest],
+                       check=True)
+        r = run("eval", "--video", manifest, "--index", idx, "--json", "-q")
+        check(r.returncode == 0, "eval --video poster: " + r.stderr)
+        if r.returncode == 0:
+            s = json.loads(r.stdout)
+            t, d = modes(s)["tracking"], modes(s)["detection alone"]
+            print("poster tracking:", t, "\nposter detection alone:", d)
+            check(s["frames"] == 50 and s["with_object"] == 26 and s["tolerance"] == 15,
+                  "poster counts")
+            check(t["found"] == 26, "poster: every annotated frame within 15 px: %d" % t["found"])
+            check(t["found_fine"] >= 20, "poster: within 5 px: %d" % t["found_fine"])
+            check(t["track_ids"] == 1 and t["id_switches"] == 0, "poster: one id")
+            check(t["frames_tracked"] >= 30, "poster: tracked frames %d" % t["frames_tracked"])
+
+    # Bad input.
+    refused(["synth", "--video", "-o", os.path.join(work, "a"), "--frames", "10"], "30",
+            "too few frames")
+    refused(["synth", "--video", "-o", os.path.join(work, "b"), "--size", "100x100"], "--size",
+            "a small size")
+    refused(["synth", "--video", "-o", os.path.join(work, "c"), "--size", "640"], "--size",
+            "a size without x")
+    refused(["synth", "--video", "-o", os.path.join(work, "d"), "--sign-free", "0.5"],
+            "--sign-free", "--sign-free with --video")
+    refused(["synth", "-o", os.path.join(work, "e"), "--size", "1280x720"], "--size",
+            "--size on stills without --range")
+    for name in "abcde":
+        check(not os.path.exists(os.path.join(work, name)), "nothing written for " + name)
+    refused(["synth", "--video", "-o", seq], "not empty", "an existing directory")
+    refused(["eval", "--video"], "--video", "no manifest")
+    refused(["eval", "--video", os.path.join(work, "none.jsonl"), "--models",
+             os.path.join(seq, "signs"), "-q"], "none.jsonl", "a missing manifest")
+    refused(["eval", "--video", os.path.join(seq, "video.jsonl")], "--models", "no models")
+    refused(["eval", "--video", os.path.join(seq, "video.jsonl"), "--models",
+             os.path.join(seq, "signs"), "--index", os.path.join(work, "x.kgi")], "one of",
+            "--models and --index")
+    refused(["eval", "--video", os.path.join(seq, "video.jsonl"), "--models",
+             os.path.join(seq, "signs"), "--detect-interval", "0"], "--detect-interval",
+            "--detect-interval 0")
+    bad = os.path.join(work, "bad.jsonl")
+    for text, needle, what in [
+        ('{"scene": "seq/frames/0000.jpg", "extra": 1}\n', ":1:", "a frame line with another key"),
+        ('{"scene": "seq/frames/0000.jpg"}\n{"scene": "seq/frames/9999.jpg"}\n', ":2:",
+         "a missing frame"),
+        ('{"scene": "seq/frames/0000.jpg", "instances": [{"model": "nobody", '
+         '"corners": [[0,0],[9,0],[9,9],[0,9]]}]}\n', "nobody", "an unknown model"),
+        ('{"scene": "seq/signs"}\n', "directory", "a directory as a frame"),
+        ("# nothing\n", "no scenes", "no frames"),
+    ]:
+        with open(bad, "w") as f:
+            f.write(text)
+        refused(["eval", "--video", bad, "--models", os.path.join(seq, "signs"), "-q"], needle,
+                what)
+    # Frames of two sizes.
+    sign = sorted(os.listdir(os.path.join(seq, "signs")))[0]
+    with open(bad, "w") as f:
+        f.write('{"scene": "seq/frames/0000.jpg"}\n{"scene": "seq/signs/%s"}\n' % sign)
+    refused(["eval", "--video", bad, "--models", os.path.join(seq, "signs"), "-q"],
+            "one frame size",
+            "frames of two sizes")
+
+if failures:
+    print("%d check(s) failed" % len(failures), file=sys.stderr)
+    sys.exit(1)
+print("ok")
