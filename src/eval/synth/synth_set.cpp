@@ -151,19 +151,22 @@ Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
       progress);
 }
 
-Status write_synth_set(const SynthSetOptions& options, const ProgressFn& progress) {
-  if (options.directory.empty()) return {StatusCode::kInvalidArgument, "no output directory"};
-  // A new directory, or an empty one (never a link, a file or a FIFO).
+Status check_new_synth_directory(const std::string& directory) {
+  if (directory.empty()) return {StatusCode::kInvalidArgument, "no output directory"};
   std::error_code ec;
-  const fs::file_status status = fs::symlink_status(options.directory, ec);
+  const fs::file_status status = fs::symlink_status(directory, ec);
   if (fs::exists(status)) {
     if (!fs::is_directory(status))
       return {StatusCode::kInvalidArgument,
-              options.directory + ": exists and is not a directory (synth makes a new one)"};
-    if (!fs::is_empty(options.directory, ec))
-      return {StatusCode::kInvalidArgument, options.directory + " exists and is not empty"};
+              directory + ": exists and is not a directory (synth makes a new one)"};
+    if (!fs::is_empty(directory, ec))
+      return {StatusCode::kInvalidArgument, directory + " exists and is not empty"};
   }
-  if (Status s = platform::check_output_directory(options.directory); !s) return s;
+  return platform::check_output_directory(directory);
+}
+
+Status write_synth_set(const SynthSetOptions& options, const ProgressFn& progress) {
+  if (Status s = check_new_synth_directory(options.directory); !s) return s;
   // Each image is staged as soon as it is rendered (memory does not grow
   // with the frames), and the whole set appears at the end, or nothing.
   platform::OutputSet out(options.directory, {});

@@ -82,6 +82,11 @@ struct SynthSetImages {
 Status render_synth_set(const SynthSetOptions& options, SynthManifest& manifest,
                         SynthSetImages& images, const ProgressFn& progress = {});
 
+// Whether `directory` can take a new set or video: it does not exist, or is
+// an empty directory (never a link, a file or a FIFO), and its parent takes
+// files. The error names it.
+Status check_new_synth_directory(const std::string& directory);
+
 // Renders and writes the set into options.directory (new, or an empty
 // directory), all or nothing (platform/files/output_set.h: the images are
 // staged as they are rendered and appear together at the end).

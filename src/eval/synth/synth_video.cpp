@@ -391,17 +391,7 @@ std::string synth_video_manifest(const SynthVideoOptions& options, const SynthVi
 }
 
 Status write_synth_video(const SynthVideoOptions& options, const ProgressFn& progress) {
-  if (options.directory.empty()) return {StatusCode::kInvalidArgument, "no output directory"};
-  std::error_code ec;
-  const fs::file_status status = fs::symlink_status(options.directory, ec);
-  if (fs::exists(status)) {
-    if (!fs::is_directory(status))
-      return {StatusCode::kInvalidArgument,
-              options.directory + ": exists and is not a directory (synth makes a new one)"};
-    if (!fs::is_empty(options.directory, ec))
-      return {StatusCode::kInvalidArgument, options.directory + " exists and is not empty"};
-  }
-  if (Status s = platform::check_output_directory(options.directory); !s) return s;
+  if (Status s = check_new_synth_directory(options.directory); !s) return s;
   platform::OutputSet out(options.directory, {});
   const auto stage = [&](const std::string& file, const cv::Mat& image) {
     const std::string path = (fs::path(options.directory) / file).string();
