@@ -34,11 +34,13 @@ Status check_limits(const Limits& l) {
 // larger one would ask for a workspace of gigabytes).
 Status check_limits(const Limits& l, const Params& params) {
   if (Status s = check_limits(l); !s) return s;
-  const int f = params.keypoints.scene_upsample >= 2 ? 2 : 1;
+  // 4 upsamples only a window of the frame.
+  const int mode = params.keypoints.scene_upsample;
+  const int f = mode == 2 || mode == 3 ? 2 : 1;
   if (f * l.max_width <= Limits::kMaxSide && f * l.max_height <= Limits::kMaxSide)
     return Status::ok();
   return {StatusCode::kInvalidArgument,
-          "detector limits out of range: with keypoints.scene_upsample 2 to 4 the frame is "
+          "detector limits out of range: with keypoints.scene_upsample 2 or 3 the frame is "
           "upsampled 2x, so at most " +
               std::to_string(Limits::kMaxSide / 2) + " px a side"};
 }

@@ -14,6 +14,7 @@
 #include "builder/desktop_detect.h"
 #include "core/image/upsample.h"
 #include "core/index/index_format.h"
+#include "core/pipeline/frame_pipeline.h"
 #include "core/pose/confidence.h"
 #include "support/opencv_scenes.h"
 #include "support/test_data.h"
@@ -249,6 +250,22 @@ TEST_F(SceneUpsample, LimitsBeyondHalfTheLargestSideAreRefused) {
   EXPECT_NE(detector.status().message().find("upsampled 2x"), std::string::npos)
       << detector.status().message();
   EXPECT_GT(Detector::workspace_bytes(off_->index, wide), 0u) << "refused without upsampling";
+}
+
+// scene_upsample 4 upsamples a window, not the frame: its workspace is near
+// the plain frame's (the window's pixels and no more), not the 4x frame of 2
+// and 3, and the frame may be as large as without upsampling.
+TEST_F(SceneUpsample, WindowModeReservesTheWindowNotTheFrame) {
+  const Limits vga = Limits{}.for_frame(640, 480);
+  const std::size_t plain = Detector::workspace_bytes(off_->index, vga);
+  const std::size_t window = Detector::workspace_bytes(window_->index, vga);
+  const std::size_t frame = Detector::workspace_bytes(on_->index, vga);
+  ASSERT_GT(plain, 0u);
+  EXPECT_GE(window, plain);
+  EXPECT_LT(window - plain, 2u * kUpsampleWindow * 2u * kUpsampleWindow + (1u << 20));
+  EXPECT_LT(window, frame);
+  const Limits wide = Limits{}.for_frame(Limits::kMaxSide / 2 + 1, 64);
+  EXPECT_GT(Detector::workspace_bytes(window_->index, wide), 0u);
 }
 
 // scene_upsample 4 (issue 38): the small box of SmallBoxFoundOnlyUpsampled

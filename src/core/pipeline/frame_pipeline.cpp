@@ -34,9 +34,15 @@ Params with_options(const Params& index_params, const DetectOptions& options) {
 }
 
 // The limits the scene side works within: the caller's, for frames upsampled
-// 2x when KeypointParams::scene_upsample asks for it (2 or 3).
+// 2x when KeypointParams::scene_upsample asks for it (2 or 3), and for the
+// frame or its upsampled window, whichever is larger, with 4.
 Limits work_limits(const Limits& l, const Params& params) {
-  const int f = params.keypoints.scene_upsample >= 2 ? 2 : 1;
+  const int mode = params.keypoints.scene_upsample;
+  if (mode == 4) {
+    const int window = 2 * kUpsampleWindow;
+    return l.for_frame(std::max(l.max_width, window), std::max(l.max_height, window));
+  }
+  const int f = mode >= 2 ? 2 : 1;
   return l.for_frame(f * l.max_width, f * l.max_height);
 }
 
@@ -125,7 +131,11 @@ FramePipeline::FramePipeline(const ModelIndex& index, const Limits& limits,
   const auto correspondences = static_cast<std::size_t>(l.max_correspondences);
   model_searched_.reserve(static_cast<std::size_t>(index.model_count()));
   if (fill) set_options(options);
-  if (upsampling()) upsampled_.reserve(l.max_width, l.max_height);
+  if (upsample_mode() == 4) {
+    upsampled_.reserve(2 * kUpsampleWindow, 2 * kUpsampleWindow);
+  } else if (upsampling()) {
+    upsampled_.reserve(l.max_width, l.max_height);
+  }
   hessian_.reserve(l.max_width, l.max_height, params.keypoints, l.max_keypoints,
                    kCandidatesPerKeypoint * l.max_keypoints, l.threads);
   if (workers_.threads() > 1) hessian_.set_workers(&workers_);

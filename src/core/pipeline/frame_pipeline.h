@@ -34,6 +34,10 @@
 
 namespace kg {
 
+// keypoints.scene_upsample 4 upsamples a window of this many frame pixels a
+// side (scene_upsample.cpp), never the whole frame.
+inline constexpr int kUpsampleWindow = 112;
+
 class FramePipeline {
  public:
   using Clock = std::chrono::steady_clock;

@@ -82,7 +82,7 @@ namespace {
 // as its centre (the vote costs this many times the correspondences; no
 // allocation). Tuned on the small-sign benchmark (docs/RESULTS.md, "Small
 // signs (issue 38)"): windows of 96 to 224 px, one to three of them.
-constexpr int kRegion = 112;
+constexpr int kRegion = kUpsampleWindow;
 constexpr int kMaxCentres = 256;
 
 bool has_detection(const DetectionList& out, int model) {

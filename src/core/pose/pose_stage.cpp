@@ -145,16 +145,19 @@ PoseStage::Result PoseStage::estimate(const ModelIndex& index, const Params& par
   // Back in model order.
   std::sort(tasks_.begin(), tasks_.end(),
             [](const Task& a, const Task& b) { return a.model < b.model; });
+  // What one thread would output: the models up to the first one skipped.
   std::size_t total = 0;
   bool overflow = false;
   for (const Task& t : tasks_) {
-    total += t.skipped ? 0 : t.last - t.first;
+    if (t.skipped) break;
+    total += t.last - t.first;
     overflow = overflow || t.truncated;
   }
   const std::size_t most = static_cast<std::size_t>(std::max(0, max_out));
-  if (overflow || base + total > most) {
+  if ((overflow || base + total > most) && !passed(deadline)) {
     // One thread would have reached max_out (and cut a model's attempts
-    // short): its answer, from the start.
+    // short): its answer, from the start. (With the budget spent a rerun
+    // would find nothing: the instances found are cut at max_out instead.)
     return estimate_in_order(index, params, scene_points, frame, max_out, deadline, out);
   }
   Result r;
@@ -164,7 +167,14 @@ PoseStage::Result PoseStage::estimate(const ModelIndex& index, const Params& par
       break;
     }
     const DetectionList& list = found_[static_cast<std::size_t>(t.worker)];
-    for (std::uint32_t i = t.first; i < t.last; ++i) out.push_back(list[i]);
+    for (std::uint32_t i = t.first; i < t.last && !r.truncated; ++i) {
+      if (out.size() >= most) {
+        r.truncated = true;
+      } else {
+        out.push_back(list[i]);
+      }
+    }
+    r.truncated = r.truncated || t.truncated;
     r.ransac_iterations += t.iterations;
   }
   return r;
