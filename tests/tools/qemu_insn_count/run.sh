@@ -37,6 +37,14 @@ die() {
   exit "${2:-1}"
 }
 [[ $# -ge 3 ]] || die "usage: run.sh KEYGRAPH INDEX.kgi FRAME.pgm..." 2
+# The names KG_SIMD knows (src/core/support/simd_dispatch.cpp), which
+# ignores any other: a typo would count the NEON build twice, silently.
+for level in $levels; do
+  case $level in
+    neon | baseline | scalar) ;;
+    *) die "KG_SIMD_LEVELS: unknown level '$level' (neon, baseline or scalar on AArch64)" 2 ;;
+  esac
+done
 keygraph=$1 index=$2
 shift 2
 [[ -x $keygraph ]] || die "$keygraph: not an executable"
