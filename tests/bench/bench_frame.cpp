@@ -432,7 +432,7 @@ void selection_stage(benchmark::State& state, const Frame* f) {
   const ArcSearch search(data().index.index());
   const Params& params = data().index.index().params();
   Selector selector;
-  selector.reserve(data().limits, data().index.index().keypoint_count());
+  selector.reserve(data().limits, data().index.index());
   SceneArcs arcs;
   arcs.reserve(f->gray.cols, f->gray.rows, static_cast<int>(f->points.size()),
                params.descriptor.blur_sigma);

@@ -187,7 +187,7 @@ std::set<Match> select_all(const Case& c, const Limits& limits, DetectStats& sta
   const ArcSearch search =
       leaves < 0 ? ArcSearch(c.built.index()) : ArcSearch(c.built.index(), leaves);
   Selector selector;
-  selector.reserve(limits, c.built.index().keypoint_count(), adjacency != nullptr);
+  selector.reserve(limits, c.built.index(), adjacency != nullptr);
   // The description stage, as the detector runs it before the selection.
   const cv::Mat& gray = c.scene.gray;
   SceneArcs arcs;

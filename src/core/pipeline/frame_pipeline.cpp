@@ -150,7 +150,7 @@ FramePipeline::FramePipeline(const ModelIndex& index, const Limits& limits,
   arcs_.reserve(l.max_width, l.max_height, l.max_scene_keypoints, params.descriptor.blur_sigma,
                 l.threads, fill);
   if (workers_.threads() > 1) arcs_.set_workers(&workers_);
-  selector_.reserve(l, index.keypoint_count(), completes_circuits(params), fill);
+  selector_.reserve(l, index, completes_circuits(params), fill);
   if (completes_circuits(params)) adjacency_.build(index, fill);
   matches_.reserve(correspondences);
   poses_.reserve(l.threads, l.max_correspondences, vertex_count(params.graph.structure),

@@ -52,6 +52,50 @@ bool plausible_local_map(const Point2f* m, const Point2f* s, int k, const Params
   return s2 > 0.f && s1 <= max_aniso * max_aniso * s2;
 }
 
+// Sets marks[end_of(keys[x])] = mark for x < n. Four keys a round: the
+// loop's own counting was half of these loops' instructions.
+template <class End>
+inline void mark_ends(const std::uint64_t* keys, std::uint32_t n, End end_of, std::uint8_t* marks,
+                      std::uint8_t mark) {
+  std::uint32_t x = 0;
+  for (; x + 4 <= n; x += 4) {
+    marks[end_of(keys[x])] = mark;
+    marks[end_of(keys[x + 1])] = mark;
+    marks[end_of(keys[x + 2])] = mark;
+    marks[end_of(keys[x + 3])] = mark;
+  }
+  for (; x < n; ++x) marks[end_of(keys[x])] = mark;
+}
+
+// Copies to `out` the keys of keys[0..n) whose end_of() carries `mark`, in
+// order; returns how many. Branch-free (few are kept), four keys a round,
+// each round's marks read before its stores (a byte store may alias them).
+template <class End>
+inline std::uint32_t keep_marked(const std::uint64_t* keys, std::uint32_t n, End end_of,
+                                 const std::uint8_t* marks, std::uint8_t mark, std::uint64_t* out) {
+  std::uint32_t kept = 0, x = 0;
+  for (; x + 4 <= n; x += 4) {
+    const std::uint64_t k0 = keys[x], k1 = keys[x + 1], k2 = keys[x + 2], k3 = keys[x + 3];
+    const auto t0 = static_cast<std::uint32_t>(marks[end_of(k0)] == mark);
+    const auto t1 = static_cast<std::uint32_t>(marks[end_of(k1)] == mark);
+    const auto t2 = static_cast<std::uint32_t>(marks[end_of(k2)] == mark);
+    const auto t3 = static_cast<std::uint32_t>(marks[end_of(k3)] == mark);
+    out[kept] = k0;
+    kept += t0;
+    out[kept] = k1;
+    kept += t1;
+    out[kept] = k2;
+    kept += t2;
+    out[kept] = k3;
+    kept += t3;
+  }
+  for (; x < n; ++x) {
+    out[kept] = keys[x];
+    kept += static_cast<std::uint32_t>(marks[end_of(keys[x])] == mark);
+  }
+  return kept;
+}
+
 }  // namespace
 
 std::uint8_t Selector::next_mark(JoinScratch& js) {
@@ -92,6 +136,8 @@ Selector::Selector(std::pmr::memory_resource* memory)
       count_(memory),
       total_(memory),
       pool_(memory),
+      owners_(memory),
+      min_areas_(memory),
       scratch_(memory),
       chunks_(memory) {}
 
@@ -104,8 +150,21 @@ constexpr int kChunksPerThread = 8;
 
 }  // namespace
 
-void Selector::reserve(const Limits& limits, std::uint32_t model_keypoints, bool completion,
-                       bool fill) {
+void Selector::reserve(const Limits& limits, const ModelIndex& index, bool completion, bool fill) {
+  const std::uint32_t model_keypoints = index.keypoint_count();
+  const auto models = static_cast<std::size_t>(index.model_count());
+  min_areas_.reserve(models);
+  owners_.clear();
+  if (models <= std::size_t{1} << 16) {
+    owners_.reserve(model_keypoints);
+    if (fill) {
+      for (int m = 0; m < index.model_count(); ++m) {
+        const ModelInfo info = index.model(m);
+        owners_.resize(info.keypoint_begin + std::size_t{info.keypoint_count},
+                       static_cast<std::uint16_t>(m));
+      }
+    }
+  }
   const auto half_edges = 6 * static_cast<std::size_t>(std::max(0, limits.max_scene_keypoints));
   state_.reserve(half_edges);
   begin_.reserve(half_edges);
@@ -426,7 +485,6 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
   std::uint8_t* const marks = js.marks.data();
   const Point2f* model_points = in.index->keypoints();
   const int* opposite = in.triangulation->halfedges().data();
-  auto arc = [](std::uint64_t key, int s) { return (key >> s) | (key << ((64 - s) & 63)); };
   js.triple_count = 0;
   bool room = true;
   for (int p = 0; p < 3 && room; ++p) {
@@ -447,28 +505,45 @@ bool Selector::complete_circuit(const SelectionInput& in, const SceneKeygraph& g
     const ArcSearch::Query& query = in.arcs->query(closing);
     const std::uint64_t* a_keys = pool_.data() + first.begin;
     const std::uint64_t* b_keys = pool_.data() + second.begin;
-    const int sa = first.reversed ? 32 : 0, sb = second.reversed ? 32 : 0;
-    // The sources of the second list; the first list's arcs into them.
-    const std::uint8_t sources = next_mark(js);
-    for (std::uint32_t x = 0; x < second.count; ++x) marks[key_from(arc(b_keys[x], sb))] = sources;
     std::uint64_t* const ka = js.kept[0].data();
-    std::uint32_t na = 0;
-    for (std::uint32_t x = 0; x < first.count; ++x) {
-      const std::uint64_t a = arc(a_keys[x], sa);
-      ka[na] = a;
-      na += static_cast<std::uint32_t>(marks[key_to(a)] == sources);
+    std::uint64_t* const kb = js.kept[1].data();
+    std::uint32_t na = 0, nb = 0;
+    // The semi-join with each list's direction known at compile time: a
+    // reversed key's ends are read in place, and only the few arcs kept are
+    // turned round (a rotation per arc read was a fifth of the loops).
+    auto semi_join = [&](auto a_reversed, auto b_reversed) {
+      constexpr bool kRa = decltype(a_reversed)::value, kRb = decltype(b_reversed)::value;
+      auto b_from = [](std::uint64_t k) { return kRb ? key_to(k) : key_from(k); };
+      auto a_to = [](std::uint64_t k) { return kRa ? key_from(k) : key_to(k); };
+      auto turn = [](std::uint64_t* keys, std::uint32_t n) {
+        for (std::uint32_t x = 0; x < n; ++x) keys[x] = (keys[x] >> 32) | (keys[x] << 32);
+      };
+      // The sources of the second list; the first list's arcs into them.
+      const std::uint8_t sources = next_mark(js);
+      mark_ends(b_keys, second.count, b_from, marks, sources);
+      na = keep_marked(a_keys, first.count, a_to, marks, sources, ka);
+      if (na == 0) return;
+      if constexpr (kRa) turn(ka, na);
+      // The targets kept; the second list's arcs out of them.
+      const std::uint8_t targets = next_mark(js);
+      for (std::uint32_t x = 0; x < na; ++x) marks[key_to(ka[x])] = targets;
+      nb = keep_marked(b_keys, second.count, b_from, marks, targets, kb);
+      if constexpr (kRb) turn(kb, nb);
+    };
+    using Yes = std::true_type;
+    using No = std::false_type;
+    if (first.reversed) {
+      if (second.reversed)
+        semi_join(Yes{}, Yes{});
+      else
+        semi_join(Yes{}, No{});
+    } else {
+      if (second.reversed)
+        semi_join(No{}, Yes{});
+      else
+        semi_join(No{}, No{});
     }
     if (na == 0) continue;
-    // The targets kept; the second list's arcs out of them.
-    const std::uint8_t targets = next_mark(js);
-    for (std::uint32_t x = 0; x < na; ++x) marks[key_to(ka[x])] = targets;
-    std::uint64_t* const kb = js.kept[1].data();
-    std::uint32_t nb = 0;
-    for (std::uint32_t x = 0; x < second.count; ++x) {
-      const std::uint64_t b = arc(b_keys[x], sb);
-      kb[nb] = b;
-      nb += static_cast<std::uint32_t>(marks[key_from(b)] == targets);
-    }
     // The kept arcs chained by their shared vertex w, each keypoint pair
     // once (views store a pair once per view that describes it
     // differently): linear in the kept arcs, where sorting both lists
@@ -598,29 +673,16 @@ bool Selector::join(const SelectionInput& in, const Limits& limits, const SceneK
     }
     return true;
   };
-  // Half the smallest pose area scale of each model (homography.h): a local
-  // map may shrink twice as much as the whole pose.
-  const float symmetric_min_area = 0.5f / static_cast<float>(params.ransac.max_scale_change);
-  // The model of the last keypoint asked about, with its keypoint range and
-  // smallest local area: a keygraph's candidates mostly lie in one model,
-  // and decoding its record for each of them was a tenth of the completion.
+  // A keygraph's model and that model's smallest local area scale, by its
+  // first model keypoint.
   struct Owner {
-    int model = -1;
-    float min_area = 0.f;
+    int model;
+    float min_area;
   };
-  Owner owner;
-  std::uint32_t owner_begin = 0, owner_count = 0;
+  const std::uint16_t* owners = owners_.empty() ? nullptr : owners_.data();
   auto owner_of = [&](std::uint32_t keypoint) {
-    if (keypoint - owner_begin < owner_count) return owner;
-    owner.model = in.index->model_of_keypoint(keypoint);
-    const ModelInfo info = in.index->model(owner.model);
-    owner_begin = info.keypoint_begin;
-    owner_count = info.keypoint_count;
-    owner.min_area =
-        params.views.min_size > 0.f
-            ? static_cast<float>(0.5 * smallest_area_scale(params, info.width, info.height))
-            : symmetric_min_area;
-    return owner;
+    const int model = owners != nullptr ? owners[keypoint] : in.index->model_of_keypoint(keypoint);
+    return Owner{model, min_areas_[static_cast<std::size_t>(model)]};
   };
   auto plausible = [&](const std::uint32_t* model, const SceneKeygraph& g) {
     Point2f mp[kMaxVertices], sp[kMaxVertices];
@@ -751,6 +813,18 @@ void Selector::select(const SelectionInput& in, const Limits& limits,
   count_.resize(edges);
   pool_used_ = 0;
   id_bits_ = id_bits(in.index->keypoint_count());
+  // Half the smallest pose area scale of each model (homography.h): a local
+  // map may shrink twice as much as the whole pose. Within reserve()'s
+  // capacity: no allocation.
+  const Params& params = *in.params;
+  min_areas_.resize(static_cast<std::size_t>(in.index->model_count()));
+  for (int m = 0; m < in.index->model_count(); ++m) {
+    const ModelInfo info = in.index->model(m);
+    min_areas_[static_cast<std::size_t>(m)] =
+        params.views.min_size > 0.f
+            ? static_cast<float>(0.5 * smallest_area_scale(params, info.width, info.height))
+            : 0.5f / static_cast<float>(params.ransac.max_scale_change);
+  }
   const bool completion =
       in.adjacency != nullptr && in.params->graph.structure == Structure::kCircuit3;
   const SceneKeygraph* keygraphs = in.keygraphs->data();

@@ -75,13 +75,14 @@ class Selector {
   explicit Selector(std::pmr::memory_resource* memory = std::pmr::get_default_resource());
 
   // Sizes the buffers for `limits` (scene keypoints, arc matches per query
-  // and per frame, correspondences, threads) and an index of
-  // `model_keypoints` keypoints: select() then allocates nothing, and stops
+  // and per frame, correspondences, threads) and `index`, and notes each of
+  // its keypoints' model: select() then allocates nothing, and stops
   // looking up model arcs once limits.max_arc_pool are kept in a frame.
-  // With `completion` (graph.complete_circuits), also the completed
-  // circuits. With fill false (Detector::workspace_bytes' measuring pass)
-  // only counts: nothing is written into the memory.
-  void reserve(const Limits& limits, std::uint32_t model_keypoints, bool completion = false,
+  // select() must be given the same index. With `completion`
+  // (graph.complete_circuits), also the completed circuits. With fill false
+  // (Detector::workspace_bytes' measuring pass) only counts: nothing is
+  // written into the memory.
+  void reserve(const Limits& limits, const ModelIndex& index, bool completion = false,
                bool fill = true);
 
   // Clears and fills `matches` (at most limits.max_correspondences); updates
@@ -209,6 +210,13 @@ class Selector {
   std::size_t pool_used_ = 0;
   std::size_t pool_limit_ = static_cast<std::size_t>(-1);
   int id_bits_ = 32;  // bits of the index's keypoint ids
+  // Per model keypoint its model (reserve(); empty for an index of more
+  // than 65536 models, whose keypoints ask ModelIndex::model_of_keypoint),
+  // and per model half the smallest area scale of its views (select(), for
+  // the frame's parameters): the join asks both for every candidate, and a
+  // binary search over the model records was most of what it paid for them.
+  WorkVector<std::uint16_t> owners_;
+  WorkVector<float> min_areas_;
   // One per thread (Limits::threads), the caller's first.
   WorkVector<JoinScratch> scratch_;
   WorkVector<Chunk> chunks_;
