@@ -5,9 +5,8 @@
 // Hessian response) are compiled in when the target has them and run unless
 // the level is kScalar; loops worth AVX2 (blur, Hessian response: the same source
 // compiled a second time; the triangle check's sampling: hand-written
-// gathers; the leaf scan, eight points a round) get an x86-64 AVX2 twin.
-// Every such loop branches on simd_level() at its entry, so one switch
-// chooses them all. The core is
+// gathers) get an x86-64 AVX2 twin. Every such loop branches on
+// simd_level() at its entry, so one switch chooses them all. The core is
 // compiled with -ffp-contract=off (AArch64 has FMA, x86-64's baseline not):
 // no multiply-add is fused, so every version computes every value with the
 // same operations in the same order: identical results.
