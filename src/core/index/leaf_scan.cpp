@@ -9,10 +9,6 @@
 #elif defined(KG_SIMD_SSE2)
 #include <emmintrin.h>
 #define KG_LEAF_SSE2 1
-#if defined(KG_DISPATCH_AVX2)
-#include <immintrin.h>
-#define KG_LEAF_AVX2 1
-#endif
 #endif
 
 namespace kg {
@@ -205,73 +201,6 @@ static int scan_leaf_i8_vector(const ArcSearchPointI8* p, int n, const ArcSearch
   return found;
 }
 
-#if defined(KG_LEAF_AVX2)
-// The SSE2 scan eight points a round (half the instructions a point, the
-// leaf scans being a tenth of a frame): each 128-bit lane holds every other
-// point (lane 0 points 0, 2, 4, 6; lane 1 points 1, 3, 5, 7), and the
-// eight answers are put back in point order before the mask is taken. The
-// last 1 to 7 points go to the SSE2 loop. Integer arithmetic throughout:
-// the same hits.
-KG_TARGET_AVX2 static int scan_leaf_i8_avx2(const ArcSearchPointI8* p, int n,
-                                            const ArcSearchPointI8& q, std::int32_t radius2,
-                                            std::int32_t box, std::uint16_t* hits) {
-  std::int64_t q64;
-  __builtin_memcpy(&q64, q.data(), sizeof q64);
-  const __m256i query = _mm256_cvtepi8_epi16(_mm_set1_epi64x(q64));  // q in both lanes
-  const __m256i descriptor_lanes =
-      _mm256_set_epi16(0, 0, -1, -1, -1, -1, -1, -1, 0, 0, -1, -1, -1, -1, -1, -1);
-  const __m256i limit = _mm256_set1_epi16(box_limit(box));
-  const __m256i r2 = _mm256_set1_epi32(radius2);
-  const __m256i zero = _mm256_setzero_si256();
-  const __m256i point_order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
-  int found = 0, i = 0;
-  for (; i + 8 <= n; i += 8) {
-    const auto* bytes = reinterpret_cast<const __m128i*>(p[i].data());
-    // Points 0 | 1, 2 | 3, 4 | 5 and 6 | 7 of the round, minus the query.
-    const __m256i a = _mm256_sub_epi16(_mm256_cvtepi8_epi16(_mm_loadu_si128(bytes)), query);
-    const __m256i b = _mm256_sub_epi16(_mm256_cvtepi8_epi16(_mm_loadu_si128(bytes + 1)), query);
-    const __m256i c = _mm256_sub_epi16(_mm256_cvtepi8_epi16(_mm_loadu_si128(bytes + 2)), query);
-    const __m256i d = _mm256_sub_epi16(_mm256_cvtepi8_epi16(_mm_loadu_si128(bytes + 3)), query);
-    const __m256i ma = _mm256_and_si256(a, descriptor_lanes);
-    const __m256i mb = _mm256_and_si256(b, descriptor_lanes);
-    const __m256i mc = _mm256_and_si256(c, descriptor_lanes);
-    const __m256i md = _mm256_and_si256(d, descriptor_lanes);
-    const __m256i sa = _mm256_madd_epi16(ma, ma), sb = _mm256_madd_epi16(mb, mb);
-    const __m256i sc = _mm256_madd_epi16(mc, mc), sd = _mm256_madd_epi16(md, md);
-    const __m256i ab =
-        _mm256_add_epi32(_mm256_unpacklo_epi32(sa, sb), _mm256_unpackhi_epi32(sa, sb));
-    const __m256i cd =
-        _mm256_add_epi32(_mm256_unpacklo_epi32(sc, sd), _mm256_unpackhi_epi32(sc, sd));
-    const __m256i d2 =
-        _mm256_add_epi32(_mm256_unpacklo_epi64(ab, cd), _mm256_unpackhi_epi64(ab, cd));
-    const __m256i ball = _mm256_cmpgt_epi32(r2, d2);
-    const __m256i attr =
-        _mm256_unpackhi_epi64(_mm256_unpackhi_epi32(a, b), _mm256_unpackhi_epi32(c, d));
-    const __m256i magnitude = _mm256_abs_epi16(attr);  // |d| <= 254: no overflow
-    const __m256i within = _mm256_cmpeq_epi32(_mm256_cmpgt_epi16(magnitude, limit), zero);
-    const __m256i inside = _mm256_permutevar8x32_epi32(_mm256_and_si256(ball, within), point_order);
-    const int bits = _mm256_movemask_ps(_mm256_castsi256_ps(inside));
-    // found <= i + 4 after the first half: both writes end by i + 8 <= n.
-    const std::uint64_t low =
-        kCompacted[bits & 15] + 0x0001000100010001ULL * static_cast<std::uint64_t>(i);
-    __builtin_memcpy(hits + found, &low, sizeof low);
-    found += kBitCount[bits & 15];
-    const std::uint64_t high =
-        kCompacted[bits >> 4] + 0x0001000100010001ULL * static_cast<std::uint64_t>(i + 4);
-    __builtin_memcpy(hits + found, &high, sizeof high);
-    found += kBitCount[bits >> 4];
-  }
-  if (i < n) {
-    // found <= i (i a multiple of 8): the SSE2 loop's rounded-up writes end
-    // by n rounded up to 4, as the caller's room allows.
-    const int first = found;
-    found += scan_leaf_i8_vector(p + i, n - i, q, radius2, box, hits + found);
-    for (int h = first; h < found; ++h) hits[h] = static_cast<std::uint16_t>(hits[h] + i);
-  }
-  return found;
-}
-#endif
-
 static bool leaf_may_match_i8_vector(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
                                      std::int32_t radius2, std::int32_t box) {
   std::int64_t q64, lo64, hi64;
@@ -317,18 +246,12 @@ static bool leaf_may_match_i8_vector(const ArcSearchPointI8* bounds, const ArcSe
 #endif
 
 const char* leaf_scan_isa() {
-#if defined(KG_LEAF_AVX2)
-  if (simd_level() == SimdLevel::kAvx2) return "avx2";
-#endif
   return simd_level() == SimdLevel::kScalar ? "scalar" : leaf_scan_vector_isa();
 }
 
 int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, std::int32_t radius2,
                  std::int32_t box, std::uint16_t* hits) {
   if (simd_level() == SimdLevel::kScalar) return scan_leaf_i8_scalar(p, n, q, radius2, box, hits);
-#if defined(KG_LEAF_AVX2)
-  if (simd_level() == SimdLevel::kAvx2) return scan_leaf_i8_avx2(p, n, q, radius2, box, hits);
-#endif
   return scan_leaf_i8_vector(p, n, q, radius2, box, hits);
 }
 

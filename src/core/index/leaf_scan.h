@@ -21,7 +21,7 @@ namespace kg {
 int scan_leaf_i8_scalar(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q,
                         std::int32_t radius2, std::int32_t box, std::uint16_t* hits);
 // The same, vectorised where the target has NEON or SSE2 and simd_level()
-// is not kScalar (else the scalar code); with AVX2 at level kAvx2.
+// is not kScalar (else the scalar code).
 int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, std::int32_t radius2,
                  std::int32_t box, std::uint16_t* hits);
 // Whether a leaf whose points lie in [bounds[0], bounds[1]] (component-wise)
@@ -34,8 +34,7 @@ bool leaf_may_match_i8_scalar(const ArcSearchPointI8* bounds, const ArcSearchPoi
 // The same, vectorised like scan_leaf_i8.
 bool leaf_may_match_i8(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
                        std::int32_t radius2, std::int32_t box);
-// Which implementation scan_leaf_i8 runs now: "neon", "sse2", "avx2" or
-// "scalar".
+// Which implementation scan_leaf_i8 runs now: "neon", "sse2" or "scalar".
 const char* leaf_scan_isa();
 
 }  // namespace kg
