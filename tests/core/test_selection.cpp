@@ -234,7 +234,7 @@ std::set<Match> select_all(const Case& c, const Limits& limits, DetectStats& sta
                                                 static_cast<double>(stats.join_arcs_in);
   std::set<Match> selected;
   for (const KeygraphMatch& m : matches) {
-    EXPECT_EQ(m.model_id, 0);
+    EXPECT_EQ(m.model_id, c.built.index().model_of_keypoint(m.model_vertices[0]));
     Match key{};
     for (int i = 0; i < vertex_count(c.params.graph.structure); ++i) {
       key[i] = m.model_vertices[i];
@@ -294,6 +294,32 @@ TEST(Selection, CompletedCircuitsWithExactSearchEqualBruteForceJoin) {
   std::printf("completion: %lld triples joined, %lld clockwise, %lld plausible, %lld closed\n",
               stats.completion_tried, stats.completion_clockwise, stats.completion_plausible,
               stats.completion_closed);
+}
+
+// Two models (box.png twice): each correspondence names the model of its
+// keypoints (the selector's table of keypoint owners, select_all() checks
+// it against ModelIndex::model_of_keypoint), and both models are found.
+TEST(Selection, NamesTheModelOfEachCorrespondence) {
+  Case c;
+  c.params.descriptor.encoding = DescriptorEncoding::kFloat32;
+  BuiltModel box, copy;
+  const cv::Mat gray = test::load_gray(test::opencv_data("box.png"));
+  ASSERT_TRUE(build_model(gray, "box", c.params, box).is_ok());
+  ASSERT_TRUE(build_model(gray, "box-copy", c.params, copy).is_ok());
+  ASSERT_TRUE(c.built.build({box, copy}, c.params).is_ok());
+  prepare_scene(test::load_gray(test::opencv_data("box_in_scene.png")), c.params, Limits{},
+                c.scene);
+  ArcAdjacency adjacency(std::pmr::get_default_resource());
+  adjacency.build(c.built.index(), true);
+  DetectStats stats;
+  const std::set<Match> selected = select_all(c, Limits{}, stats, nullptr, -1, &adjacency);
+  const std::uint32_t second = c.built.index().model(1).keypoint_begin;
+  int in_second = 0;
+  for (const Match& m : selected) in_second += m[0] >= second ? 1 : 0;
+  const auto in_first = static_cast<int>(selected.size()) - in_second;
+  std::printf("correspondences: %d of the first model, %d of its copy\n", in_first, in_second);
+  EXPECT_GT(in_first, 20);
+  EXPECT_GT(in_second, 20);
 }
 
 // With an approximate search of one leaf per query most arcs go unfound.
