@@ -241,6 +241,8 @@ void visit_params(P& p, F&& f) {
   f("graph.complete_circuits", p.graph.complete_circuits);                  // 6.5; 0: off
   f("graph.max_neighbour_rank", p.graph.max_neighbour_rank);  // 6.6; 0: every pair in range
   f("views.max_scale", p.views.max_scale);                    // 6.7; 0 in older files: read as 1
+  f("keypoints.hessian_fine_levels", p.keypoints.hessian_fine_levels);        // 0: off
+  f("keypoints.hessian_fine_threshold", p.keypoints.hessian_fine_threshold);  // 0: the threshold
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }
