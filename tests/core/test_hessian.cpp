@@ -243,8 +243,11 @@ TEST(Hessian, FineLevelsFindBlobsFinerThanTheFirstOctave) {
   const cv::Mat img = blob_image(all, cv::Size(180, 170));
   KeypointParams fine;
   fine.hessian_fine_levels = 3;
+  fine.hessian_fine_threshold = 0.f;  // the threshold of the other levels
+  KeypointParams off;
+  off.hessian_fine_levels = 0;
   const std::vector<Keypoint> with = detect(img, kManyKeypoints, fine);
-  const std::vector<Keypoint> without = detect(img);
+  const std::vector<Keypoint> without = detect(img, kManyKeypoints, off);
   for (const Blob& b : small) {
     const Keypoint* k = nearest(with, b.x, b.y);
     ASSERT_NE(k, nullptr);
@@ -282,7 +285,10 @@ TEST(Hessian, FineLevelsOnARealFrameAndTheirRange) {
   ASSERT_FALSE(img.empty());
   KeypointParams fine;
   fine.hessian_fine_levels = 3;
-  const std::vector<Keypoint> base = detect(img);
+  fine.hessian_fine_threshold = 0.f;
+  KeypointParams off;
+  off.hessian_fine_levels = 0;
+  const std::vector<Keypoint> base = detect(img, kManyKeypoints, off);
   const std::vector<Keypoint> more = detect(img, kManyKeypoints, fine);
   EXPECT_GT(more.size(), base.size() + base.size() / 5);
   int fine_scale = 0;
