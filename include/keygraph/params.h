@@ -48,6 +48,18 @@ struct KeypointParams {
   // levels per octave, 1..8. Defaults 4 and 3. Not in the paper.
   int hessian_octaves = 4;
   int hessian_levels = 3;  // scale levels per octave
+  // Hessian detector: scale levels below the first octave's first (sigma
+  // 1.6 px), each 2^(1/hessian_levels) finer, 0..hessian_levels: with 1,
+  // maxima at 1.6 px too (the level below, 1.27 px, their neighbour); with
+  // 3, down to 1.0 px. Their maxima must exceed hessian_fine_threshold (0:
+  // hessian_threshold), as noise and texture peak there too. Both sides
+  // use them (model views and frames). Defaults 1 and 0.0048: more signs
+  // found at 60-160 px for 1.03x the frame's instructions; 3 finds about as
+  // many on the sign sets and loses planar photos (docs/RESULTS.md, "Small
+  // signs, scene side (issue 38)"). Files written before them hold 0: off,
+  // as they were built. Not in the paper.
+  int hessian_fine_levels = 1;
+  float hessian_fine_threshold = 0.0048f;
   // MSER detector: OpenCV's delta (>= 1) and the smallest and largest
   // region in pixels (1 <= min <= max). Defaults 5, 30 and 14400: OpenCV's
   // defaults besides the area limits. Paper: MSER, no values.

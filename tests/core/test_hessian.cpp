@@ -15,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/image/blur.h"
+#include "core/index/index_format.h"
 #include "core/keypoints/hessian.h"
 #include "core/support/simd_dispatch.h"
 #include "keygraph/params.h"
@@ -204,6 +205,116 @@ TEST(Hessian, FindsSyntheticBlobsAtTheirCentresAndScales) {
     EXPECT_TRUE(on_blob) << "spurious keypoint at " << k.x << "," << k.y << " scale " << k.scale;
   }
   EXPECT_EQ(kps.size(), blobs.size());
+}
+
+// A grey image with Gaussian blobs (sigma and amplitude in grey levels).
+cv::Mat blob_image(const std::vector<Blob>& blobs, cv::Size size) {
+  cv::Mat img(size, CV_8U);
+  for (int y = 0; y < img.rows; ++y) {
+    for (int x = 0; x < img.cols; ++x) {
+      double v = 128.0;
+      for (const Blob& b : blobs) {
+        const double d2 = (x - b.x) * (x - b.x) + (y - b.y) * (y - b.y);
+        v += b.amplitude * std::exp(-d2 / (2.0 * b.sigma * b.sigma));
+      }
+      img.at<std::uint8_t>(y, x) = cv::saturate_cast<std::uint8_t>(v);
+    }
+  }
+  return img;
+}
+
+// The keypoint of `kps` nearest (x, y), or null.
+const Keypoint* nearest(const std::vector<Keypoint>& kps, double x, double y) {
+  const Keypoint* best = nullptr;
+  for (const Keypoint& k : kps)
+    if (!best || std::hypot(k.x - x, k.y - y) < std::hypot(best->x - x, best->y - y)) best = &k;
+  return best;
+}
+
+// keypoints.hessian_fine_levels (issue 38): blobs finer than the first
+// octave's maxima (sigma 2.0) are found, at their scale, only with the fine
+// levels; the coarser blob is found as before; hessian_fine_threshold drops
+// the fine maxima under it and keeps the rest.
+TEST(Hessian, FineLevelsFindBlobsFinerThanTheFirstOctave) {
+  const std::vector<Blob> small = {{40.4, 50.6, 1.1, 120}, {110.7, 45.2, 1.3, -110}};
+  const Blob large = {80.3, 120.8, 5.0, 100};
+  std::vector<Blob> all = small;
+  all.push_back(large);
+  const cv::Mat img = blob_image(all, cv::Size(180, 170));
+  KeypointParams fine;
+  fine.hessian_fine_levels = 3;
+  fine.hessian_fine_threshold = 0.f;  // the threshold of the other levels
+  KeypointParams off;
+  off.hessian_fine_levels = 0;
+  const std::vector<Keypoint> with = detect(img, kManyKeypoints, fine);
+  const std::vector<Keypoint> without = detect(img, kManyKeypoints, off);
+  for (const Blob& b : small) {
+    const Keypoint* k = nearest(with, b.x, b.y);
+    ASSERT_NE(k, nullptr);
+    EXPECT_LT(std::hypot(k->x - b.x, k->y - b.y), 0.5) << "blob at " << b.x << "," << b.y;
+    EXPECT_NEAR(k->scale, b.sigma, 0.25 * b.sigma) << "blob at " << b.x << "," << b.y;
+    // Without: nothing at the blob's scale (at most a coarser echo).
+    for (const Keypoint& o : without)
+      EXPECT_FALSE(std::hypot(o.x - b.x, o.y - b.y) < 2.0 && o.scale < 1.6f)
+          << "blob at " << b.x << "," << b.y << " scale " << o.scale;
+  }
+  for (const std::vector<Keypoint>* kps : {&with, &without}) {
+    const Keypoint* k = nearest(*kps, large.x, large.y);
+    ASSERT_NE(k, nullptr);
+    EXPECT_LT(std::hypot(k->x - large.x, k->y - large.y), 0.5);
+    EXPECT_NEAR(k->scale, large.sigma, 0.3 * large.sigma);
+  }
+  // A fine threshold above the small blobs' responses: they are gone, the
+  // large blob (a first-octave maximum) stays.
+  const Keypoint* k = nearest(with, small[0].x, small[0].y);
+  fine.hessian_fine_threshold = 2.f * k->response;
+  const std::vector<Keypoint> strict = detect(img, kManyKeypoints, fine);
+  for (const Blob& b : small) {
+    const Keypoint* s = nearest(strict, b.x, b.y);
+    EXPECT_TRUE(s == nullptr || std::hypot(s->x - b.x, s->y - b.y) > 2.0 || s->scale >= 1.6f);
+  }
+  const Keypoint* kept = nearest(strict, large.x, large.y);
+  ASSERT_NE(kept, nullptr);
+  EXPECT_LT(std::hypot(kept->x - large.x, kept->y - large.y), 0.5);
+}
+
+// On a real frame the fine levels add keypoints (and keep the strongest of
+// the defaults); out-of-range values are refused when an index is checked.
+TEST(Hessian, FineLevelsOnARealFrameAndTheirRange) {
+  const cv::Mat img = test::load_gray(test::opencv_data("box_in_scene.png"));
+  ASSERT_FALSE(img.empty());
+  KeypointParams fine;
+  fine.hessian_fine_levels = 3;
+  fine.hessian_fine_threshold = 0.f;
+  KeypointParams off;
+  off.hessian_fine_levels = 0;
+  const std::vector<Keypoint> base = detect(img, kManyKeypoints, off);
+  const std::vector<Keypoint> more = detect(img, kManyKeypoints, fine);
+  EXPECT_GT(more.size(), base.size() + base.size() / 5);
+  int fine_scale = 0;
+  for (const Keypoint& k : more) fine_scale += k.scale < 1.6f;
+  EXPECT_GT(fine_scale, 0);
+  // Of the defaults' 50 strongest, nearly all are still there (within 0.1
+  // px): a maximum at the first octave's finest level may move to a fine
+  // level now that the level below it is one too.
+  int kept = 0;
+  for (std::size_t i = 0; i < 50 && i < base.size(); ++i) {
+    const Keypoint* k = nearest(more, base[i].x, base[i].y);
+    kept += k != nullptr && std::hypot(k->x - base[i].x, k->y - base[i].y) < 0.1;
+  }
+  EXPECT_GE(kept, 45);
+  Params p;
+  EXPECT_TRUE(format::validate_params(p));
+  p.keypoints.hessian_fine_levels = 3;
+  p.keypoints.hessian_fine_threshold = 0.0064f;
+  EXPECT_TRUE(format::validate_params(p));
+  p.keypoints.hessian_fine_levels = 4;  // more than hessian_levels: sigma under 0.8
+  EXPECT_FALSE(format::validate_params(p));
+  p.keypoints.hessian_fine_levels = -1;
+  EXPECT_FALSE(format::validate_params(p));
+  p.keypoints.hessian_fine_levels = 1;
+  p.keypoints.hessian_fine_threshold = -1.f;
+  EXPECT_FALSE(format::validate_params(p));
 }
 
 TEST(Hessian, NoKeypointsOnConstantImage) {

@@ -1217,6 +1217,8 @@ TEST(Golden, EveryGoldenLoadsAndDetects) {
     // No views larger than the model image (6.7): the default, and what
     // older files' zero reads as.
     EXPECT_EQ(index.params().views.max_scale, 1.f);
+    // Fine Hessian levels (6.8): one by default; older files' zero is none.
+    EXPECT_EQ(index.params().keypoints.hessian_fine_levels, index.version_minor() >= 8 ? 1 : 0);
     if (index.version_minor() >= 2) {
       ASSERT_TRUE(index.has_appearance());
       const ModelAppearance look = index.appearance(0);
@@ -1828,6 +1830,32 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
   put_params(b, p);
   EXPECT_TRUE(
       rejected(b, "parameter views.max_scale must be at most sqrt(ransac.max_scale_change)"));
+  // keypoints.hessian_fine_levels (issue 38): 0..hessian_levels, read back
+  // as written; a negative fine threshold is refused.
+  for (const int fine : {-1, 4}) {
+    p = paper_params();
+    p.keypoints.hessian_fine_levels = fine;
+    b = bytes();
+    put_params(b, p);
+    EXPECT_TRUE(rejected(b, "parameter keypoints.hessian_fine_levels must be in 0..")) << fine;
+  }
+  p = paper_params();
+  p.keypoints.hessian_fine_threshold = -0.001f;
+  b = bytes();
+  put_params(b, p);
+  EXPECT_TRUE(rejected(b, "parameter keypoints.hessian_fine_threshold must be >= 0"));
+  {
+    p = paper_params();
+    p.keypoints.hessian_fine_levels = 3;
+    p.keypoints.hessian_fine_threshold = 0.0048f;
+    b = bytes();
+    put_params(b, p);
+    AlignedBytes buffer(b);
+    ModelIndex index;
+    ASSERT_TRUE(ModelIndex::view(buffer.data(), buffer.size(), index));
+    EXPECT_EQ(index.params().keypoints.hessian_fine_levels, 3);
+    EXPECT_EQ(index.params().keypoints.hessian_fine_threshold, 0.0048f);
+  }
   p = paper_params();
   p.descriptor.search_reference_models = -1;
   b = bytes();

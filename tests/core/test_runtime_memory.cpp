@@ -144,8 +144,9 @@ TEST(RuntimeMemory, UpsampledFramesAllocateNothingEither) {
   // grid's cells at 1280x960, and the 1.2 MB upsampled frame (39 346 084
   // against 17 522 620 before the 2 M-key arc pool of format 6.3).
   // 53 820 212 since the selection holds each model keypoint's model (two
-  // bytes a keypoint) and each model's smallest local area scale.
-  constexpr std::size_t kRecorded = 53'821'000;
+  // bytes a keypoint) and each model's smallest local area scale; 53 887 652
+  // with the fine Hessian levels (issue 38): box.png's model keypoints.
+  constexpr std::size_t kRecorded = 53'900'000;
   std::printf("workspace with scene_upsample 3 at 640x480: %zu bytes\n",
               detector.workspace_bytes());
   EXPECT_LE(detector.workspace_bytes(), kRecorded) << "the workspace grew past the recorded figure";
@@ -359,7 +360,9 @@ TEST(RuntimeMemory, WorkspaceForDefaultLimitsAt640x480) {
   ASSERT_EQ(limits.max_width, 640);
   ASSERT_EQ(limits.max_height, 480);
   const std::size_t bytes = Detector::workspace_bytes(f.index, limits);
-  // measured 31 993 500 (x86-64) since the scene's arcs are described in a
+  // measured 32 062 708 (x86-64) since the fine Hessian levels (issue 38)
+  // give box.png more model keypoints (their chain heads and tables; the
+  // ceiling was 32 000 000); 31 993 500 since the scene's arcs are described in a
   // stage of their own and, with circuit completion, all looked up before
   // the joins (per scene half-edge: the direction described, its place in
   // the description's order and the arcs its search found, 108 992
@@ -381,7 +384,7 @@ TEST(RuntimeMemory, WorkspaceForDefaultLimitsAt640x480) {
   // for the upsampled pass's detections (scene_upsample 3); 21 235 408 when
   // the pool also held a reversed copy of every look-up and so had twice
   // the keys
-  constexpr std::size_t kRecorded = 32'000'000;
+  constexpr std::size_t kRecorded = 32'100'000;
   std::printf("workspace for default limits at 640x480: %zu bytes\n", bytes);
   EXPECT_LE(bytes, kRecorded) << "the workspace grew past the recorded figure";
   // The figure is the layout itself: a detector hands out exactly that.

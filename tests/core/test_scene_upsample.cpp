@@ -106,6 +106,10 @@ class SceneUpsample : public ::testing::Test {
     off_ = new test::InMemoryIndex;
     on_ = new test::InMemoryIndex;
     Params params;
+    // The keypoints these cases were measured with (before the fine levels
+    // of issue 38): with them the window of SmallBoxFoundInAnUpsampledWindow
+    // no longer lands on the box (docs/RESULTS.md, "Small signs, scene side").
+    params.keypoints.hessian_fine_levels = 0;
     ASSERT_TRUE(test::build_in_memory({{"box", *box_}}, params, *off_));
     params.keypoints.scene_upsample = 2;
     ASSERT_TRUE(test::build_in_memory({{"box", *box_}}, params, *on_));

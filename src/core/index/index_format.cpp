@@ -137,6 +137,12 @@ Status validate_params(const Params& p) {
     return bad("keypoints.hessian_octaves", "must be in 1..8");
   if (p.keypoints.hessian_levels < 1 || p.keypoints.hessian_levels > 8)
     return bad("keypoints.hessian_levels", "must be in 1..8");
+  if (p.keypoints.hessian_fine_levels < 0 ||
+      p.keypoints.hessian_fine_levels > p.keypoints.hessian_levels)
+    return bad("keypoints.hessian_fine_levels", "must be in 0..keypoints.hessian_levels");
+  if (!(std::isfinite(p.keypoints.hessian_fine_threshold) &&
+        p.keypoints.hessian_fine_threshold >= 0.f))
+    return bad("keypoints.hessian_fine_threshold", "must be >= 0 (0: keypoints.hessian_threshold)");
   if (p.keypoints.mser_delta < 1 || p.keypoints.mser_min_area < 1 ||
       p.keypoints.mser_max_area < p.keypoints.mser_min_area)
     return bad("keypoints.mser_delta, keypoints.mser_min_area, keypoints.mser_max_area",

@@ -40,7 +40,10 @@ inline constexpr std::uint16_t kVersionMajor = 6;
 // older files read it as 0, every pair in range, as they were built.
 // 6.7: views.max_scale (views larger than the model image); older files
 // read it as 1, none, as they were built.
-inline constexpr std::uint16_t kVersionMinor = 7;
+// 6.8: keypoints.hessian_fine_levels and hessian_fine_threshold (Hessian
+// levels below the first octave's, issue 38); older files read them as 0,
+// no fine levels, as they were built.
+inline constexpr std::uint16_t kVersionMinor = 8;
 inline constexpr std::size_t kAlignment = 64;
 
 inline constexpr std::size_t kHeaderSize = 64;
@@ -241,6 +244,8 @@ void visit_params(P& p, F&& f) {
   f("graph.complete_circuits", p.graph.complete_circuits);                  // 6.5; 0: off
   f("graph.max_neighbour_rank", p.graph.max_neighbour_rank);  // 6.6; 0: every pair in range
   f("views.max_scale", p.views.max_scale);                    // 6.7; 0 in older files: read as 1
+  f("keypoints.hessian_fine_levels", p.keypoints.hessian_fine_levels);        // 6.8; 0: off
+  f("keypoints.hessian_fine_threshold", p.keypoints.hessian_fine_threshold);  // 0: the threshold
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }

@@ -516,8 +516,13 @@ bool HessianDetector::detect(ImageView image, const KeypointParams& params, int 
   info.sigma0 = kSigma0;
   info.log_k = static_cast<float>(std::log(k));
   const int input_bands = bands_for(image.width, image.height);
-
-  // Octave 0 starts at sigma0 from the input's assumed blur.
+  // Octave 0 may start below sigma0 (hessian_fine_levels: smaller blobs,
+  // for small signs); its level j has sigma0 k^j from j = -fine.
+  const int fine = std::clamp(params.hessian_fine_levels, 0, levels);
+  const float fine_threshold =
+      params.hessian_fine_threshold > 0.f ? params.hessian_fine_threshold : info.threshold;
+  const double octave0_sigma = kSigma0 * std::pow(k, -fine);
+  // Octave 0 starts at its first sigma from the input's assumed blur.
   Level convert;
   convert.image = image;
   convert.unit = &levels_[1];
@@ -525,49 +530,55 @@ bool HessianDetector::detect(ImageView image, const KeypointParams& params, int 
   run_level(convert, input_bands);
   Level input;
   input.L = &levels_[1];
-  input.blur_sigma = std::sqrt(kSigma0 * kSigma0 - kInputSigma * kInputSigma);
+  // In float, as without fine levels (the same keypoints, bit for bit).
+  const auto s0 = static_cast<float>(octave0_sigma);
+  input.blur_sigma = std::sqrt(s0 * s0 - kInputSigma * kInputSigma);
   input.blurred = &levels_[0];
   run_level(input, input_bands);
-  const Plane<float>* first = &levels_[0];
 
+  const Plane<float>* first = &levels_[0];
   for (int octave = 0; octave < params.hessian_octaves; ++octave) {
     if (std::min(first->width(), first->height()) < 2 * kBorder + 3) break;
     info.octave_scale = std::ldexp(1.f, octave);
     const bool more = octave + 1 < params.hessian_octaves;
     const int bands = bands_for(first->width(), first->height());
-    // Level j has sigma0 k^j (octave pixels); levels 0 and levels + 1 exist
-    // only as scale neighbours of levels 1..levels.
+    // Level j has sigma0 k^j (octave pixels); levels j0 and levels + 1 exist
+    // only as scale neighbours of levels j0 + 1..levels.
     // After octave 0 the first level also carries halve()'s box blur.
+    const int j0 = octave == 0 ? -fine : 0;
     const double first_sigma =
-        octave == 0 ? kSigma0 : std::sqrt(kSigma0 * kSigma0 + kHalvingVariance);
+        octave == 0 ? octave0_sigma : std::sqrt(kSigma0 * kSigma0 + kHalvingVariance);
     const Plane<float>* cur = first;
-    for (int j = 0; j <= levels + 1; ++j) {
-      const double s_cur = j == 0 ? first_sigma : kSigma0 * std::pow(k, j);
+    for (int j = j0; j <= levels + 1; ++j) {
+      const int i = j - j0;  // the level's place in this octave: the rings' slot
+      const double s_cur = j == j0 ? first_sigma : kSigma0 * std::pow(k, j);
       const auto sigma = static_cast<float>(s_cur);
       Level level;
       level.L = cur;
       level.norm = sigma * sigma * sigma * sigma;
-      level.threshold = info.threshold;
-      level.R = &responses_[j % 3];
-      if (j >= 1) level.below = &responses_[(j - 1) % 3];
-      // Candidates only where maxima are taken: levels 1..levels.
-      if (j >= 1 && j <= levels) level.candidates = &candidates_[j % 2];
+      // The fine levels' maxima have a threshold of their own: at these
+      // scales noise and texture peak too (docs/RESULTS.md, issue 38).
+      level.threshold = j < 1 ? fine_threshold : info.threshold;
+      level.R = &responses_[i % 3];
+      if (i >= 1) level.below = &responses_[(i - 1) % 3];
+      // Candidates only where maxima are taken: levels j0 + 1..levels.
+      if (i >= 1 && j <= levels) level.candidates = &candidates_[i % 2];
       // The next level, blurred from this one: Gaussians compose by adding
       // variances, so blur by the difference. Levels ping-pong between two
-      // planes; octave 0's first level lives in levels_[0], which level 2
-      // overwrites, so the next octave's first level gets its own plane.
+      // planes; octave 0's first level lives in levels_[0], which its third
+      // level overwrites, so the next octave's first level gets its own plane.
       if (j <= levels) {
         const double s_next = kSigma0 * std::pow(k, j + 1);
         level.blur_sigma = static_cast<float>(std::sqrt(s_next * s_next - s_cur * s_cur));
-        level.blurred = &levels_[(j + 1) % 2];
+        level.blurred = &levels_[(i + 1) % 2];
       }
       if (j == levels && more) level.halved = &next_octave_;
       run_level(level, bands);
       if (level.candidates) complete &= bands_[0].complete;
-      if (j >= 2) {
+      if (i >= 2) {
         info.level = j - 1;
-        scan_level(candidates_[(j - 1) % 2], responses_[(j - 2) % 3], responses_[(j - 1) % 3],
-                   responses_[j % 3], info, max_keypoints, out);
+        scan_level(candidates_[(i - 1) % 2], responses_[(i - 2) % 3], responses_[(i - 1) % 3],
+                   responses_[i % 3], info, max_keypoints, out);
       }
       cur = level.blurred;
     }

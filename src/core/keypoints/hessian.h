@@ -43,9 +43,11 @@ class HessianDetector {
 
   // Clears `out` and fills it with at most `max_keypoints` keypoints, the
   // strongest first (ties broken by position so the result is
-  // deterministic). Uses params.hessian_threshold, hessian_octaves and
-  // hessian_levels. Buffers are kept between calls and reused. Returns
-  // false when candidates were dropped (reserve()).
+  // deterministic). Uses params.hessian_threshold, hessian_octaves,
+  // hessian_levels and the fine levels below the first octave
+  // (hessian_fine_levels, hessian_fine_threshold). Buffers are kept
+  // between calls and reused. Returns false when candidates were dropped
+  // (reserve()).
   bool detect(ImageView image, const KeypointParams& params, int max_keypoints,
               WorkVector<Keypoint>& out);
   // The same into a std::vector (desktop and tests).
