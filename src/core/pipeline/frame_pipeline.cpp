@@ -424,7 +424,8 @@ void FramePipeline::select_correspondences() {
     stats_.stopped_early = "selection";
   stats_.arcs_described = arcs_.described_count();
   stats_.patch_rejections =
-      check_triangle_patches(*index_, params_, arcs_.blurred(), scene_points_.data(), matches_);
+      check_triangle_patches(*index_, params_, arcs_.blurred(), scene_points_.data(), matches_,
+                             workers_.threads() > 1 ? &workers_ : nullptr);
   stats_.ms_select = ms_since(start);
 }
 

@@ -21,6 +21,11 @@ constexpr double kSelected = 0.3;  // share of the pixels the Gauss-Newton steps
 constexpr std::size_t kMinSelected = 200;
 constexpr double kTukey = 4.685;           // Tukey's biweight constant (95 % efficiency)
 constexpr double kMinResidualScale = 2.0;  // grey levels: the noise floor of the residuals
+// Sampling on the workers: a few chunks per thread (a thread that wakes late
+// still finds work), none smaller than this many pixels (each run wakes the
+// workers, which costs more than sampling a few hundred pixels).
+constexpr int kChunksPerThread = 4;
+constexpr std::size_t kMinChunkPixels = 256;
 
 void multiply(const double a[9], const double b[9], double out[9]) {
   double r[9];
@@ -154,28 +159,46 @@ void AppearanceAligner::warp_level(const Level& level, ImageView frame, const do
   const double step = 1.0 / (sub * half_long);
   const double first = (0.5 / sub - 0.5) / half_long;
   const float weight = 1.f / static_cast<float>(sub * sub);
-  for (std::size_t k = 0; k < count; ++k) {
-    const std::uint32_t i = pixels[k];
-    const double xn0 =
-        (static_cast<int>(i % static_cast<std::uint32_t>(w)) - cx) / half_long + first;
-    const double yn0 =
-        (static_cast<int>(i / static_cast<std::uint32_t>(w)) - cy) / half_long + first;
-    float sum = 0.f;
-    bool inside = true;
-    for (int sy = 0; sy < sub && inside; ++sy) {
-      for (int sx = 0; sx < sub; ++sx) {
-        double x, y;
-        project(g, xn0 + sx * step, yn0 + sy * step, x, y);
-        if (!(x >= 0.0 && y >= 0.0 && x < max_x && y < max_y)) {
-          inside = false;
-          break;
+  const auto warp = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::uint32_t i = pixels[k];
+      const double xn0 =
+          (static_cast<int>(i % static_cast<std::uint32_t>(w)) - cx) / half_long + first;
+      const double yn0 =
+          (static_cast<int>(i / static_cast<std::uint32_t>(w)) - cy) / half_long + first;
+      float sum = 0.f;
+      bool inside = true;
+      for (int sy = 0; sy < sub && inside; ++sy) {
+        for (int sx = 0; sx < sub; ++sx) {
+          double x, y;
+          project(g, xn0 + sx * step, yn0 + sy * step, x, y);
+          if (!(x >= 0.0 && y >= 0.0 && x < max_x && y < max_y)) {
+            inside = false;
+            break;
+          }
+          sum += bilinear(frame, x, y);
         }
-        sum += bilinear(frame, x, y);
       }
+      valid_[i] = inside ? 1 : 0;
+      warped_[i] = inside ? sum * weight : 0.f;
     }
-    valid_[i] = inside ? 1 : 0;
-    warped_[i] = inside ? sum * weight : 0.f;
+  };
+  // Each pixel is sampled on its own (the listed pixels are distinct), so
+  // the pixels can be split over the workers in any way.
+  const int chunks = workers_ == nullptr
+                         ? 1
+                         : static_cast<int>(std::min<std::size_t>(
+                               static_cast<std::size_t>(kChunksPerThread * workers_->threads()),
+                               count / kMinChunkPixels));
+  if (chunks <= 1) {
+    warp(0, count);
+    return;
   }
+  auto chunk = [&](int c, int) {
+    warp(count * static_cast<std::size_t>(c) / static_cast<std::size_t>(chunks),
+         count * static_cast<std::size_t>(c + 1) / static_cast<std::size_t>(chunks));
+  };
+  workers_->run(chunks, chunk);
 }
 
 bool AppearanceAligner::correlation(const Level& level, ImageView frame, const double g[9],

@@ -35,6 +35,10 @@ class PoseEstimator {
   // that model) to `out`, at most `max_out` in total in `out`. Returns the
   // RANSAC iterations run.
   // `params` are the index's with the detector's options applied.
+  // Workers (nullptr: none) for the appearance alignment's frame sampling
+  // (AppearanceAligner::set_workers): the same instances with or without.
+  void set_workers(WorkerPool* workers) { aligner_.set_workers(workers); }
+
   int estimate(const ModelIndex& index, const Params& params, int model_id,
                const KeygraphMatch* matches, int n, const Point2f* scene_points,
                const FrameKeypoints& frame, Rng& rng, int max_out, DetectionList& out,
