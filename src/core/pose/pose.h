@@ -31,14 +31,14 @@ class PoseEstimator {
   void reserve(int max_matches, int k, std::uint32_t max_model_keypoints,
                int max_appearance_pixels);
 
-  // Appends the instances of `model_id` found among matches[0..n) (all of
-  // that model) to `out`, at most `max_out` in total in `out`. Returns the
-  // RANSAC iterations run.
-  // `params` are the index's with the detector's options applied.
   // Workers (nullptr: none) for the appearance alignment's frame sampling
   // (AppearanceAligner::set_workers): the same instances with or without.
   void set_workers(WorkerPool* workers) { aligner_.set_workers(workers); }
 
+  // Appends the instances of `model_id` found among matches[0..n) (all of
+  // that model) to `out`, at most `max_out` in total in `out`. Returns the
+  // RANSAC iterations run.
+  // `params` are the index's with the detector's options applied.
   int estimate(const ModelIndex& index, const Params& params, int model_id,
                const KeygraphMatch* matches, int n, const Point2f* scene_points,
                const FrameKeypoints& frame, Rng& rng, int max_out, DetectionList& out,
