@@ -109,6 +109,31 @@ TEST(AppearanceAlign, BringsAPoseSeveralPixelsOffToSubPixel) {
   EXPECT_GT(fit.ncc, fit.ncc_before);
 }
 
+TEST(AppearanceAlign, SameFitWithWorkers) {
+  // The frame sampled on 1, 2 or 3 threads: the same fit, bit for bit.
+  const Scene s = make_scene(kCorners);
+  ASSERT_FALSE(s.frame.empty());
+  AppearanceAligner alone;
+  alone.reserve(kAppearanceSize * kAppearanceSize);
+  Homography reference = perturbed(s, kCorners, kOffsets);
+  const AppearanceFit first = alone.align(image_of(s), test::view(s.frame), reference);
+  ASSERT_TRUE(first.aligned);
+  for (int threads : {2, 3}) {
+    WorkerPool pool(threads);
+    AppearanceAligner aligner;
+    aligner.reserve(kAppearanceSize * kAppearanceSize);
+    aligner.set_workers(&pool);
+    for (int round = 0; round < 2; ++round) {
+      Homography h = perturbed(s, kCorners, kOffsets);
+      const AppearanceFit fit = aligner.align(image_of(s), test::view(s.frame), h);
+      EXPECT_EQ(h, reference) << threads << " threads";
+      EXPECT_EQ(fit.ncc, first.ncc) << threads << " threads";
+      EXPECT_EQ(fit.ncc_before, first.ncc_before) << threads << " threads";
+      EXPECT_EQ(fit.iterations, first.iterations) << threads << " threads";
+    }
+  }
+}
+
 TEST(AppearanceAlign, IgnoresGainAndBias) {
   Scene s = make_scene(kCorners);
   ASSERT_FALSE(s.frame.empty());

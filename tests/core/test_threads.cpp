@@ -170,6 +170,29 @@ TEST(Threads, SamePosesWhenSeveralModelsHaveInstances) {
   expect_same_for_any_thread_count(Limits{}, f);
 }
 
+// The box alone: box_in_scene's one pose task runs on the caller's thread
+// with the appearance alignment's sampling on the workers.
+const Fixture& box_alone() {
+  static Fixture f = [] {
+    Fixture x;
+    const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+    EXPECT_TRUE(test::build_in_memory({{"box", box}}, Params{}, x.built));
+    x.scenes = fixture().scenes;
+    return x;
+  }();
+  return f;
+}
+
+TEST(Threads, SamePoseWhenOneModelIsAlignedOnTheWorkers) {
+  const Fixture& f = box_alone();
+  Detector one(f.built.index, Limits{}.for_frame(800, 640));
+  DetectionList found;
+  ASSERT_TRUE(one.detect(test::view(f.scenes[0]), found));
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_GE(found[0].appearance, 0.0);  // the appearance was aligned
+  expect_same_for_any_thread_count(Limits{}, f);
+}
+
 TEST(Threads, SamePosesWhenTheDetectionsReachTheirCap) {
   // One detection: the second box's instance is one too many for one
   // thread, which then stops that model's attempts.

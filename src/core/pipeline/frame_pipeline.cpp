@@ -310,14 +310,32 @@ Status FramePipeline::run(ImageView frame, const Keypoint* keypoints, int count,
     count = limits_.max_keypoints;
   }
   if (out_of_time("keypoints")) return Status::ok();
-  // 5. Sampling: a maximal subset, no two closer than scene_sample_distance.
-  sample(keypoints, count, descriptors);
-  // 6. Scene keygraphs from the Delaunay triangulation of the sample.
-  build_keygraphs();
+  const auto graph = [&] {
+    // 5. Sampling: a maximal subset, no two closer than scene_sample_distance.
+    sample(keypoints, count, descriptors);
+    // 6. Scene keygraphs from the Delaunay triangulation of the sample.
+    build_keygraphs();
+  };
+  // The frame blurred for the arc descriptors (7) does not depend on the
+  // graph: with workers, one thread blurs while the other builds the graph
+  // (each writes its own members), and ms_graph holds both.
+  const bool blur_beside = workers_.threads() > 1;
+  if (blur_beside) {
+    auto task = [&](int i, int) {
+      if (i == 0) {
+        graph();
+      } else {
+        arcs_.blur(frame, params_.descriptor);
+      }
+    };
+    workers_.run(2, task);
+  } else {
+    graph();
+  }
   stats_.ms_graph = ms_since(start);
   if (out_of_time("keygraphs")) return Status::ok();
   // 7. Arc descriptors, on the frame blurred once.
-  describe_arcs(frame);
+  describe_arcs(frame, !blur_beside);
   if (out_of_time("description")) return Status::ok();
   // 8. Keygraph correspondences through keytuples, then the triangle check.
   select_correspondences();
@@ -387,9 +405,9 @@ void FramePipeline::build_keygraphs() {
   stats_.keygraphs = static_cast<int>(keygraphs_.size());
 }
 
-void FramePipeline::describe_arcs(ImageView frame) {
+void FramePipeline::describe_arcs(ImageView frame, bool blur) {
   const auto start = Clock::now();
-  arcs_.blur(frame, params_.descriptor);
+  if (blur) arcs_.blur(frame, params_.descriptor);
   // The arcs the selection looks up: every arc of a circuit, the one arc of
   // an arc keygraph.
   const Structure structure = params_.graph.structure;
@@ -424,7 +442,8 @@ void FramePipeline::select_correspondences() {
     stats_.stopped_early = "selection";
   stats_.arcs_described = arcs_.described_count();
   stats_.patch_rejections =
-      check_triangle_patches(*index_, params_, arcs_.blurred(), scene_points_.data(), matches_);
+      check_triangle_patches(*index_, params_, arcs_.blurred(), scene_points_.data(), matches_,
+                             workers_.threads() > 1 ? &workers_ : nullptr);
   stats_.ms_select = ms_since(start);
 }
 

@@ -77,7 +77,8 @@ class FramePipeline {
   void keep_strongest(const Keypoint* keypoints, int count, const std::uint8_t* descriptors);
   void sample(const Keypoint* keypoints, int count, const std::uint8_t* descriptors);
   void build_keygraphs();
-  void describe_arcs(ImageView frame);
+  // blur false: the frame was blurred already (run()).
+  void describe_arcs(ImageView frame, bool blur);
   void select_correspondences();
   void estimate_poses(ImageView frame, const Keypoint* keypoints, int count, DetectionList& out);
   void apply_confidence_floor(DetectionList& out) const;

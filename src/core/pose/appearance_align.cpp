@@ -21,6 +21,11 @@ constexpr double kSelected = 0.3;  // share of the pixels the Gauss-Newton steps
 constexpr std::size_t kMinSelected = 200;
 constexpr double kTukey = 4.685;           // Tukey's biweight constant (95 % efficiency)
 constexpr double kMinResidualScale = 2.0;  // grey levels: the noise floor of the residuals
+// Sampling on the workers: a few chunks per thread (a thread that wakes late
+// still finds work), none smaller than this many pixels (each run wakes the
+// workers, which costs more than sampling a few hundred pixels).
+constexpr int kChunksPerThread = 4;
+constexpr std::size_t kMinChunkPixels = 256;
 
 void multiply(const double a[9], const double b[9], double out[9]) {
   double r[9];
@@ -109,6 +114,44 @@ bool solve8(double a[kParams][kParams], const double b[kParams], double x[kParam
   return true;
 }
 
+// The sampling of warp_level(): the level's pixel grid under g.
+struct WarpGrid {
+  double g[9];
+  int w, sub;
+  double half_long, cx, cy, step, first, max_x, max_y;
+  float weight;
+};
+
+// Samples pixels[begin..end) of the level (their flags into valid, their
+// values into warped). The grid is copied into locals: the byte stores to
+// `valid` may alias anything reached through a pointer, which would then be
+// reloaded for every pixel.
+void warp_pixels(const WarpGrid& grid, ImageView frame, const std::uint32_t* pixels,
+                 std::size_t begin, std::size_t end, std::uint8_t* valid, float* warped) {
+  const WarpGrid q = grid;
+  const auto w = static_cast<std::uint32_t>(q.w);
+  for (std::size_t k = begin; k < end; ++k) {
+    const std::uint32_t i = pixels[k];
+    const double xn0 = (static_cast<int>(i % w) - q.cx) / q.half_long + q.first;
+    const double yn0 = (static_cast<int>(i / w) - q.cy) / q.half_long + q.first;
+    float sum = 0.f;
+    bool inside = true;
+    for (int sy = 0; sy < q.sub && inside; ++sy) {
+      for (int sx = 0; sx < q.sub; ++sx) {
+        double x, y;
+        project(q.g, xn0 + sx * q.step, yn0 + sy * q.step, x, y);
+        if (!(x >= 0.0 && y >= 0.0 && x < q.max_x && y < q.max_y)) {
+          inside = false;
+          break;
+        }
+        sum += bilinear(frame, x, y);
+      }
+    }
+    valid[i] = inside ? 1 : 0;
+    warped[i] = inside ? sum * q.weight : 0.f;
+  }
+}
+
 }  // namespace
 
 AppearanceAligner::AppearanceAligner(std::pmr::memory_resource* memory)
@@ -138,44 +181,43 @@ void AppearanceAligner::reserve(int max_pixels) {
 
 void AppearanceAligner::warp_level(const Level& level, ImageView frame, const double g[9],
                                    const std::uint32_t* pixels, std::size_t count) {
-  const int w = level.width;
-  const double half_long = 0.5 * std::max(w, level.height);
-  const double cx = 0.5 * (w - 1), cy = 0.5 * (level.height - 1);
+  WarpGrid grid;
+  grid.w = level.width;
+  grid.half_long = 0.5 * std::max(grid.w, level.height);
+  grid.cx = 0.5 * (grid.w - 1);
+  grid.cy = 0.5 * (level.height - 1);
   // Frame pixels per level pixel at the centre: where it exceeds one, each
   // level pixel averages a grid of samples (the appearance is area-averaged).
   const double wanted = std::ceil(footprint(level, g) - 0.25);
   // NaN or huge for a degenerate pose: one sample (which then fails the
   // bounds test) rather than a float-to-int conversion out of range.
-  const int sub =
-      std::isfinite(wanted)
-          ? static_cast<int>(std::clamp(wanted, 1.0, static_cast<double>(kMaxSubsamples)))
-          : 1;
-  const double max_x = frame.width - 1.001, max_y = frame.height - 1.001;
-  const double step = 1.0 / (sub * half_long);
-  const double first = (0.5 / sub - 0.5) / half_long;
-  const float weight = 1.f / static_cast<float>(sub * sub);
-  for (std::size_t k = 0; k < count; ++k) {
-    const std::uint32_t i = pixels[k];
-    const double xn0 =
-        (static_cast<int>(i % static_cast<std::uint32_t>(w)) - cx) / half_long + first;
-    const double yn0 =
-        (static_cast<int>(i / static_cast<std::uint32_t>(w)) - cy) / half_long + first;
-    float sum = 0.f;
-    bool inside = true;
-    for (int sy = 0; sy < sub && inside; ++sy) {
-      for (int sx = 0; sx < sub; ++sx) {
-        double x, y;
-        project(g, xn0 + sx * step, yn0 + sy * step, x, y);
-        if (!(x >= 0.0 && y >= 0.0 && x < max_x && y < max_y)) {
-          inside = false;
-          break;
-        }
-        sum += bilinear(frame, x, y);
-      }
-    }
-    valid_[i] = inside ? 1 : 0;
-    warped_[i] = inside ? sum * weight : 0.f;
+  grid.sub = std::isfinite(wanted)
+                 ? static_cast<int>(std::clamp(wanted, 1.0, static_cast<double>(kMaxSubsamples)))
+                 : 1;
+  grid.max_x = frame.width - 1.001;
+  grid.max_y = frame.height - 1.001;
+  grid.step = 1.0 / (grid.sub * grid.half_long);
+  grid.first = (0.5 / grid.sub - 0.5) / grid.half_long;
+  grid.weight = 1.f / static_cast<float>(grid.sub * grid.sub);
+  std::copy(g, g + 9, grid.g);
+  // Each pixel is sampled on its own (the listed pixels are distinct), so
+  // the pixels can be split over the workers in any way.
+  const int chunks = workers_ == nullptr
+                         ? 1
+                         : static_cast<int>(std::min<std::size_t>(
+                               static_cast<std::size_t>(kChunksPerThread * workers_->threads()),
+                               count / kMinChunkPixels));
+  if (chunks <= 1) {
+    warp_pixels(grid, frame, pixels, 0, count, valid_.data(), warped_.data());
+    return;
   }
+  auto chunk = [&](int c, int) {
+    warp_pixels(grid, frame, pixels,
+                count * static_cast<std::size_t>(c) / static_cast<std::size_t>(chunks),
+                count * static_cast<std::size_t>(c + 1) / static_cast<std::size_t>(chunks),
+                valid_.data(), warped_.data());
+  };
+  workers_->run(chunks, chunk);
 }
 
 bool AppearanceAligner::correlation(const Level& level, ImageView frame, const double g[9],

@@ -16,6 +16,7 @@
 
 #include <cstdint>
 
+#include "core/support/worker_pool.h"
 #include "core/support/workspace.h"
 #include "keygraph/image.h"
 #include "keygraph/types.h"
@@ -59,6 +60,11 @@ class AppearanceAligner {
   // appearance larger than reserved is not aligned (measured stays false).
   AppearanceFit align(const AppearanceImage& appearance, ImageView frame, Homography& h);
 
+  // Workers (nullptr: none) to sample the frame under the pose with: each
+  // pixel's sample is computed on its own, so the fit is the same, bit for
+  // bit, with or without them. Not while the pool runs another task.
+  void set_workers(WorkerPool* workers) { workers_ = workers; }
+
  private:
   struct Level {
     const float* values = nullptr;
@@ -79,6 +85,8 @@ class AppearanceAligner {
   // warped_ and valid_, indexed by pixel).
   void warp_level(const Level& level, ImageView frame, const double g[9],
                   const std::uint32_t* pixels, std::size_t count);
+
+  WorkerPool* workers_ = nullptr;
 
   WorkVector<float> full_;              // the appearance, lightly smoothed
   WorkVector<float> half_;              // the same at half resolution

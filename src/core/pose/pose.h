@@ -31,6 +31,10 @@ class PoseEstimator {
   void reserve(int max_matches, int k, std::uint32_t max_model_keypoints,
                int max_appearance_pixels);
 
+  // Workers (nullptr: none) for the appearance alignment's frame sampling
+  // (AppearanceAligner::set_workers): the same instances with or without.
+  void set_workers(WorkerPool* workers) { aligner_.set_workers(workers); }
+
   // Appends the instances of `model_id` found among matches[0..n) (all of
   // that model) to `out`, at most `max_out` in total in `out`. Returns the
   // RANSAC iterations run.

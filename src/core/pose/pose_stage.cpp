@@ -73,10 +73,14 @@ void PoseStage::group(const ModelIndex& index, const KeygraphMatch* matches, std
 PoseStage::Result PoseStage::estimate_in_order(const ModelIndex& index, const Params& params,
                                                const Point2f* scene_points,
                                                const FrameKeypoints& frame, int max_out,
+                                               WorkerPool* workers,
                                                const Clock::time_point* deadline,
                                                DetectionList& out) {
   Result r;
   PoseEstimator& pose = estimators_[0];
+  // The pool is free while the models run in order; not afterwards, when
+  // this estimator may run a model as a task of the pool.
+  pose.set_workers(workers);
   for (int model = 0; model < index.model_count(); ++model) {
     const std::uint32_t begin = model_begin_[static_cast<std::size_t>(model)];
     const std::uint32_t end = model_begin_[static_cast<std::size_t>(model) + 1];
@@ -90,6 +94,7 @@ PoseStage::Result PoseStage::estimate_in_order(const ModelIndex& index, const Pa
         pose.estimate(index, params, model, grouped_.data() + begin, static_cast<int>(end - begin),
                       scene_points, frame, rng, max_out, out, r.truncated);
   }
+  pose.set_workers(nullptr);
   return r;
 }
 
@@ -102,7 +107,7 @@ PoseStage::Result PoseStage::estimate(const ModelIndex& index, const Params& par
   const int threads =
       workers == nullptr ? 1 : std::min(workers->threads(), static_cast<int>(found_.size()));
   if (threads <= 1)
-    return estimate_in_order(index, params, scene_points, frame, max_out, deadline, out);
+    return estimate_in_order(index, params, scene_points, frame, max_out, nullptr, deadline, out);
   const int least = sample_size(params.graph.structure);  // fewer estimate nothing
   tasks_.clear();
   for (int model = 0; model < index.model_count(); ++model) {
@@ -113,7 +118,7 @@ PoseStage::Result PoseStage::estimate(const ModelIndex& index, const Params& par
     if (t.end - t.begin >= static_cast<std::uint32_t>(least)) tasks_.push_back(t);
   }
   if (tasks_.size() <= 1)
-    return estimate_in_order(index, params, scene_points, frame, max_out, deadline, out);
+    return estimate_in_order(index, params, scene_points, frame, max_out, workers, deadline, out);
 
   // The largest models first, so that no thread starts a long one last
   // (ties by id: the order does not depend on timing).
@@ -140,7 +145,12 @@ PoseStage::Result PoseStage::estimate(const ModelIndex& index, const Params& par
         scene_points, frame, rng, static_cast<int>(DetectionList::capacity()), list, t.truncated);
     t.last = static_cast<std::uint32_t>(list.size());
   };
-  workers->run(static_cast<int>(tasks_.size()), run_task);
+  // A thread out of models helps the ones still running with their
+  // appearance alignments (WorkerPool::run_with_help): a frame's one found
+  // object is the longest task.
+  for (PoseEstimator& e : estimators_) e.set_workers(workers);
+  workers->run_with_help(static_cast<int>(tasks_.size()), run_task);
+  for (PoseEstimator& e : estimators_) e.set_workers(nullptr);
 
   // Back in model order.
   std::sort(tasks_.begin(), tasks_.end(),
@@ -158,7 +168,7 @@ PoseStage::Result PoseStage::estimate(const ModelIndex& index, const Params& par
     // One thread would have reached max_out (and cut a model's attempts
     // short): its answer, from the start. (With the budget spent a rerun
     // would find nothing: the instances found are cut at max_out instead.)
-    return estimate_in_order(index, params, scene_points, frame, max_out, deadline, out);
+    return estimate_in_order(index, params, scene_points, frame, max_out, workers, deadline, out);
   }
   Result r;
   for (const Task& t : tasks_) {

@@ -8,7 +8,10 @@
 // Where one thread would have reached max_detections (and stopped that
 // model's attempts early) the models are estimated again in order on the
 // caller's thread: the output is the same for any thread count, byte for
-// byte, stats included. Nothing is allocated after reserve().
+// byte, stats included. The appearance alignments sample the frame on the
+// threads left idle (AppearanceAligner::set_workers, a nested run of the
+// pool), which changes nothing in their results. Nothing is allocated after
+// reserve().
 #pragma once
 
 #include <chrono>
@@ -64,10 +67,12 @@ class PoseStage {
     bool skipped = false;    // out of time before it started
   };
   void group(const ModelIndex& index, const KeygraphMatch* matches, std::size_t n);
-  // The models one after another into `out`, as one thread does.
+  // The models one after another into `out`, as one thread does; the
+  // appearance alignments sample the frame on `workers` (nullptr: none).
   Result estimate_in_order(const ModelIndex& index, const Params& params,
                            const Point2f* scene_points, const FrameKeypoints& frame, int max_out,
-                           const Clock::time_point* deadline, DetectionList& out);
+                           WorkerPool* workers, const Clock::time_point* deadline,
+                           DetectionList& out);
 
   std::pmr::memory_resource* memory_;
   WorkVector<KeygraphMatch> grouped_;      // the correspondences grouped by model (stable)

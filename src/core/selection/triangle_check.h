@@ -6,6 +6,7 @@
 // kept.
 #pragma once
 
+#include "core/support/worker_pool.h"
 #include "core/support/workspace.h"
 #include "keygraph/detection.h"
 #include "keygraph/image.h"
@@ -18,8 +19,11 @@ namespace kg {
 // scene_points) on `blurred` (the frame as the descriptors saw it), records
 // its correlation, and drops in place, keeping the order, those below
 // params.ransac.min_triangle_correlation. Returns how many were dropped (0
-// when the check is off or the structure has fewer than 3 vertices).
+// when the check is off or the structure has fewer than 3 vertices). With
+// `workers` (nullptr: none) the correspondences are measured on them, each
+// on its own: the same output for any thread count.
 int check_triangle_patches(const ModelIndex& index, const Params& params, ImageView blurred,
-                           const Point2f* scene_points, WorkVector<KeygraphMatch>& matches);
+                           const Point2f* scene_points, WorkVector<KeygraphMatch>& matches,
+                           WorkerPool* workers = nullptr);
 
 }  // namespace kg
