@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <thread>
 #include <vector>
 
@@ -84,19 +85,36 @@ TEST(WorkerPool, NestedRunsRunEveryTaskOnce) {
 }
 
 TEST(WorkerPool, IdleThreadsHelpTheLastTask) {
-  // One outer task and 2 threads: the other thread has nothing but the
-  // nested runs. Timing decides how much it takes, so only that it took
-  // some over many runs (the machine may be busy) is checked.
-  if (std::thread::hardware_concurrency() < 2) GTEST_SKIP() << "one CPU";
+  // Two outer tasks on 2 threads: one returns at once, the other starts a
+  // nested run whose tasks, on the outer task's own thread, wait until
+  // another thread has run one of them. Only the thread out of tasks can:
+  // without its help the wait runs out (10 s). On one CPU the waiting
+  // thread yields, so the helper gets its turn there too.
   WorkerPool pool(2);
-  bool ever = false;
-  for (int round = 0; round < 50 && !ever; ++round) {
-    bool all_once = false, helped = false;
-    run_nested(pool, true, 2, all_once, helped);
-    ASSERT_TRUE(all_once);
-    ever = helped;
-  }
-  EXPECT_TRUE(ever);
+  constexpr int kNested = 16;
+  std::vector<int> ran(kNested, 0);
+  std::atomic<int> by_others{0};
+  std::atomic<bool> waited_out{false};
+  auto outer = [&](int o, int worker) {
+    if (o != 0) return;
+    auto nested = [&](int i, int w) {
+      ++ran[static_cast<std::size_t>(i)];
+      if (w != worker) {
+        ++by_others;
+        return;
+      }
+      const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+      while (by_others.load() == 0 && !waited_out.load()) {
+        if (std::chrono::steady_clock::now() > give_up) waited_out = true;
+        std::this_thread::yield();
+      }
+    };
+    pool.run(kNested, nested);
+  };
+  pool.run_with_help(2, outer);
+  for (int r : ran) EXPECT_EQ(r, 1);
+  EXPECT_FALSE(waited_out.load()) << "no thread helped the nested run";
+  EXPECT_GT(by_others.load(), 0);
 }
 
 }  // namespace
