@@ -290,8 +290,10 @@ Rows band_rows(int rows, int band, int bands) {
 }
 
 // Levels smaller than this many pixels per band run on fewer bands: waking
-// the workers would cost more than the work.
-constexpr long long kMinBandPixels = 16384;
+// the workers would cost more than the work. (A 640x480 frame's third
+// octave, 160x120, runs on two bands: it was 2 M instructions a frame on
+// the caller alone; the workers poll for the next run, WorkerPool.)
+constexpr long long kMinBandPixels = 8192;
 
 // Solves H o = -g (H symmetric 3x3) by Cramer's rule; false when singular.
 bool solve_offset(const double H[3][3], const double g[3], double o[3]) {
