@@ -169,8 +169,9 @@ KG_ALWAYS_INLINE void response_row(const Plane<float>& L, int y, float norm, flo
 // The response rows of [y0, y1) that have all 8 neighbours (the 1-px frame
 // is never written). With `cand`, also the extremum candidates of those
 // rows, collected while the rows are still in cache; `below` is then the
-// response of the level below, and `halo` two rows for the responses of
-// rows y0 - 1 and y1, which the test reads and the neighbouring bands write.
+// response of the level below. With `halo` (bands but the only one), two
+// rows for the responses of rows y0 - 1 and y1, which the candidate test
+// and the scan of the level below read and the neighbouring bands write.
 template <bool kNeon>
 KG_ALWAYS_INLINE bool hessian_band_rows(const Plane<float>& L, float norm, float threshold,
                                         Plane<float>& R, int y0, int y1, const Plane<float>* below,
@@ -184,12 +185,13 @@ KG_ALWAYS_INLINE bool hessian_band_rows(const Plane<float>& L, float norm, float
   const int c0 = std::max(y0, kBorder);
   const int c1 = std::min(y1, h - kBorder);
   const bool collect = cand != nullptr && c0 < c1;
+  const bool halos = halo != nullptr && c0 < c1;
   float* above = halo;
   float* after = halo != nullptr ? halo + w : nullptr;
   const auto response = [&](int y) -> const float* {
     return y < y0 ? above : y >= y1 ? after : R.row(y);
   };
-  if (collect && c0 - 1 < y0) response_row<kNeon>(L, c0 - 1, norm, above);
+  if (halos && c0 - 1 < y0) response_row<kNeon>(L, c0 - 1, norm, above);
   bool complete = true;
   for (int y = r0; y < r1; ++y) {
     response_row<kNeon>(L, y, norm, R.row(y));
@@ -201,11 +203,12 @@ KG_ALWAYS_INLINE bool hessian_band_rows(const Plane<float>& L, float norm, float
                                            *cand, limit);
   }
   // The band's last candidate row, when its row below is the next band's.
-  if (collect && complete && c1 >= r1) {
+  if (halos && c1 >= r1) {
     response_row<kNeon>(L, c1, norm, after);
-    complete = collect_candidates<kNeon>(response(c1 - 2), response(c1 - 1), after,
-                                         below->row(c1 - 2), below->row(c1 - 1), below->row(c1),
-                                         c1 - 1, w, threshold, mask, *cand, limit);
+    if (collect && complete)
+      complete = collect_candidates<kNeon>(response(c1 - 2), response(c1 - 1), after,
+                                           below->row(c1 - 2), below->row(c1 - 1), below->row(c1),
+                                           c1 - 1, w, threshold, mask, *cand, limit);
   }
   return complete;
 }
@@ -287,8 +290,10 @@ Rows band_rows(int rows, int band, int bands) {
 }
 
 // Levels smaller than this many pixels per band run on fewer bands: waking
-// the workers would cost more than the work.
-constexpr long long kMinBandPixels = 16384;
+// the workers would cost more than the work. (A 640x480 frame's third
+// octave, 160x120, runs on two bands: it was 2 M instructions a frame on
+// the caller alone; the workers poll for the next run, WorkerPool.)
+constexpr long long kMinBandPixels = 8192;
 
 // Solves H o = -g (H symmetric 3x3) by Cramer's rule; false when singular.
 bool solve_offset(const double H[3][3], const double g[3], double o[3]) {
@@ -314,15 +319,28 @@ struct LevelInfo {
   float log_k;  // log of the scale ratio between levels
 };
 
+// The response of the level above as one band's scan reads it while the
+// level above is computed: the band's rows [y0, y1) in `plane`, rows y0 - 1
+// and y1 (the neighbouring bands') from the band's halo.
+struct BandRows {
+  const Plane<float>* plane;
+  int y0;
+  int y1;
+  const float* above;
+  const float* after;
+  const float* row(int y) const { return y < y0 ? above : y >= y1 ? after : plane->row(y); }
+};
+
 // Local maxima of `mid` over its 26 neighbours in (lo, mid, hi), among the
-// candidates collected with it (already above their 17 neighbours in lo and
-// mid, so only hi is left to test); refined and offered to `out`. A plateau
-// yields one maximum: values must be strictly above the neighbours before
-// them in (scale, y, x) order, and at least equal to those after.
-void scan_level(const WorkVector<std::int32_t>& cand, const Plane<float>& lo,
-                const Plane<float>& mid, const Plane<float>& hi, const LevelInfo& info,
+// `ints` / 2 candidates collected with it (already above their 17
+// neighbours in lo and mid, so only hi is left to test); refined and
+// offered to the heap `out`. A plateau yields one maximum: values must be
+// strictly above the neighbours before them in (scale, y, x) order, and at
+// least equal to those after.
+void scan_level(const std::int32_t* cand, std::size_t ints, const Plane<float>& lo,
+                const Plane<float>& mid, const BandRows& hi, const LevelInfo& info,
                 int max_keypoints, WorkVector<Keypoint>& out) {
-  for (std::size_t i = 0; i + 1 < cand.size(); i += 2) {
+  for (std::size_t i = 0; i + 1 < ints; i += 2) {
     const int x = cand[i];
     const int y = cand[i + 1];
     const float* m0 = mid.row(y - 1);
@@ -376,9 +394,12 @@ void scan_level(const WorkVector<std::int32_t>& cand, const Plane<float>& lo,
 }  // namespace
 
 // One scale level's work, done band by band: the response of `L` into `R`
-// (with the level below `below` and the candidates into `candidates`, when
-// set), the blur of `L` into `blurred`, the halving of `L` into `halved`
-// and, for the input, its conversion to float in `unit`.
+// (with the level below `below` and the candidates into each band's list
+// `collect`, when set), the scan of the level below's candidates (`scan`:
+// the bands' lists of the run before, with the same bands; levels
+// `scan_lo` and `scan_mid`, and `R` above them) into each band's heap, the
+// blur of `L` into `blurred`, the halving of `L` into `halved` and, for the
+// input, its conversion to float in `unit`.
 struct HessianDetector::Level {
   ImageView image;
   Plane<float>* unit = nullptr;
@@ -387,7 +408,13 @@ struct HessianDetector::Level {
   float threshold = 0.f;
   Plane<float>* R = nullptr;
   const Plane<float>* below = nullptr;
-  WorkVector<std::int32_t>* candidates = nullptr;
+  int collect = -1;  // the bands' candidate list (slot) to fill
+  int scan = -1;     // the bands' candidate list to scan
+  const Plane<float>* scan_lo = nullptr;
+  const Plane<float>* scan_mid = nullptr;
+  LevelInfo scan_info{};
+  int max_keypoints = 0;
+  WorkVector<Keypoint>* strongest = nullptr;  // the first band's heap
   float blur_sigma = 0.f;
   Plane<float>* blurred = nullptr;
   Plane<float>* halved = nullptr;
@@ -399,7 +426,6 @@ HessianDetector::HessianDetector(std::pmr::memory_resource* memory)
       next_octave_(memory),
       bands_{Band(memory), Band(memory), Band(memory), Band(memory),
              Band(memory), Band(memory), Band(memory), Band(memory)},
-      candidates_{WorkVector<std::int32_t>(memory), WorkVector<std::int32_t>(memory)},
       copy_(memory) {}
 
 void HessianDetector::reserve(int max_width, int max_height, const KeypointParams& params,
@@ -412,15 +438,16 @@ void HessianDetector::reserve(int max_width, int max_height, const KeypointParam
   const int radius = blur_radius(
       static_cast<float>(kSigma0 * std::pow(2.0, static_cast<double>(levels + 1) / levels)));
   max_candidate_ints_ = 2 * static_cast<std::size_t>(std::max(0, max_candidates));
-  for (auto& c : candidates_) c.reserve(max_candidate_ints_);
+  const auto keep = static_cast<std::size_t>(std::max(0, max_keypoints));
   reserved_bands_ = std::clamp(threads, 1, kMaxBands);
   for (int b = 0; b < reserved_bands_; ++b) {
     Band& band = bands_[static_cast<std::size_t>(b)];
     band.scratch.reserve(max_width + 2 * radius, 1);
     band.mask.reserve(static_cast<std::size_t>(max_width) + 8);
     if (reserved_bands_ > 1) band.halo.reserve(max_width, 2);
-    // The first band collects straight into candidates_.
-    if (b > 0) band.candidates.reserve(max_candidate_ints_);
+    for (auto& c : band.candidates) c.reserve(max_candidate_ints_);
+    // The first band's maxima go straight into detect()'s output.
+    if (b > 0) band.strongest.reserve(keep);
   }
   copy_.reserve(static_cast<std::size_t>(std::max(0, max_keypoints)));
 }
@@ -445,7 +472,6 @@ void HessianDetector::run_level(const Level& level, int bands) {
   if (level.R) level.R->resize(w, h);
   if (level.blurred) level.blurred->resize(w, h);
   if (level.halved) level.halved->resize(w / 2, h / 2);
-  if (level.candidates) level.candidates->clear();
   const bool neon = kHaveNeon && simd_level() != SimdLevel::kScalar;
   auto task = [&](int b, int /*worker*/) {
     Band& band = bands_[static_cast<std::size_t>(b)];
@@ -460,19 +486,31 @@ void HessianDetector::run_level(const Level& level, int bands) {
     }
     if (level.R) {
       WorkVector<std::int32_t>* cand = nullptr;
-      if (level.candidates) {
-        cand = b == 0 ? level.candidates : &band.candidates;
+      if (level.collect >= 0) {
+        cand = &band.candidates[static_cast<std::size_t>(level.collect)];
         cand->clear();
         band.mask.resize(static_cast<std::size_t>(w) + 8);  // +8: the skip reads 8 bytes at a time
       }
       // One band reads no rows of another: no halo (none reserved with one thread).
       float* halo = nullptr;
-      if (bands > 1) {
+      if (bands > 1 && (cand != nullptr || level.scan >= 0)) {
         band.halo.resize(w, 2);
         halo = band.halo.data();
       }
-      band.complete = hessian_band(L, level.norm, level.threshold, *level.R, rows.begin, rows.end,
-                                   level.below, band.mask.data(), halo, cand, max_candidate_ints_);
+      const bool complete =
+          hessian_band(L, level.norm, level.threshold, *level.R, rows.begin, rows.end, level.below,
+                       band.mask.data(), halo, cand, max_candidate_ints_);
+      if (cand != nullptr) band.complete[static_cast<std::size_t>(level.collect)] = complete;
+      if (level.scan >= 0) {
+        // The band's rows of the level above are done, and the rows around
+        // them are in its halo: the level below's maxima in this band.
+        const BandRows above{level.R, rows.begin, rows.end, halo,
+                             halo != nullptr ? halo + w : nullptr};
+        scan_level(band.candidates[static_cast<std::size_t>(level.scan)].data(),
+                   kept_candidates(level.scan, b), *level.scan_lo, *level.scan_mid, above,
+                   level.scan_info, level.max_keypoints,
+                   b == 0 ? *level.strongest : band.strongest);
+      }
     }
     if (level.blurred)
       gaussian_blur_rows(L, level.blur_sigma, *level.blurred, rows.begin, rows.end, band.scratch);
@@ -490,24 +528,36 @@ void HessianDetector::run_level(const Level& level, int bands) {
   } else {
     task(0, 0);
   }
-  if (!level.candidates) return;
-  // The bands' candidates in scan order, cut where one list would have been.
-  WorkVector<std::int32_t>& all = *level.candidates;
-  bool complete = bands_[0].complete;
-  for (int b = 1; b < bands && complete; ++b) {
-    const Band& band = bands_[static_cast<std::size_t>(b)];
-    const std::size_t room = max_candidate_ints_ - all.size();
-    const std::size_t n = std::min(band.candidates.size(), room);
-    all.insert(all.end(), band.candidates.begin(), band.candidates.begin() + n);
-    complete = band.complete && n == band.candidates.size();
+}
+
+std::size_t HessianDetector::kept_candidates(int slot, int band) const {
+  const auto s = static_cast<std::size_t>(slot);
+  std::size_t room = max_candidate_ints_;
+  for (int b = 0; b < band; ++b) {
+    const Band& earlier = bands_[static_cast<std::size_t>(b)];
+    const std::size_t n = earlier.candidates[s].size();
+    if (!earlier.complete[s] || n >= room) return 0;
+    room -= n;
   }
-  bands_[0].complete = complete;
+  return std::min(bands_[static_cast<std::size_t>(band)].candidates[s].size(), room);
+}
+
+bool HessianDetector::candidates_complete(int slot, int bands) const {
+  const auto s = static_cast<std::size_t>(slot);
+  std::size_t total = 0;
+  for (int b = 0; b < bands; ++b) {
+    const Band& band = bands_[static_cast<std::size_t>(b)];
+    if (!band.complete[s]) return false;
+    total += band.candidates[s].size();
+  }
+  return total <= max_candidate_ints_;
 }
 
 bool HessianDetector::detect(ImageView image, const KeypointParams& params, int max_keypoints,
                              WorkVector<Keypoint>& out) {
   out.clear();
   if (image.empty() || max_keypoints <= 0 || params.hessian_octaves <= 0) return true;
+  for (Band& band : bands_) band.strongest.clear();
   bool complete = true;
   const int levels = std::max(1, params.hessian_levels);
   const double k = std::pow(2.0, 1.0 / levels);
@@ -562,7 +612,19 @@ bool HessianDetector::detect(ImageView image, const KeypointParams& params, int 
       level.R = &responses_[i % 3];
       if (i >= 1) level.below = &responses_[(i - 1) % 3];
       // Candidates only where maxima are taken: levels j0 + 1..levels.
-      if (i >= 1 && j <= levels) level.candidates = &candidates_[i % 2];
+      if (i >= 1 && j <= levels) level.collect = i % 2;
+      // The level below's maxima, in this level's run: each band scans
+      // what it collected there (the octave's bands are the same), reading
+      // this level's response where it has just computed it.
+      if (i >= 2) {
+        level.scan = (i - 1) % 2;
+        level.scan_lo = &responses_[(i - 2) % 3];
+        level.scan_mid = &responses_[(i - 1) % 3];
+        level.scan_info = info;
+        level.scan_info.level = j - 1;
+        level.max_keypoints = max_keypoints;
+        level.strongest = &out;
+      }
       // The next level, blurred from this one: Gaussians compose by adding
       // variances, so blur by the difference. Levels ping-pong between two
       // planes; octave 0's first level lives in levels_[0], which its third
@@ -574,16 +636,17 @@ bool HessianDetector::detect(ImageView image, const KeypointParams& params, int 
       }
       if (j == levels && more) level.halved = &next_octave_;
       run_level(level, bands);
-      if (level.candidates) complete &= bands_[0].complete;
-      if (i >= 2) {
-        info.level = j - 1;
-        scan_level(candidates_[(i - 1) % 2], responses_[(i - 2) % 3], responses_[(i - 1) % 3],
-                   responses_[i % 3], info, max_keypoints, out);
-      }
+      if (level.collect >= 0) complete &= candidates_complete(level.collect, bands);
       cur = level.blurred;
     }
     first = &next_octave_;
   }
+  // The strongest of all are the strongest of each band's strongest
+  // (`stronger` is a total order on distinct keypoints): the same whichever
+  // band found them.
+  const auto keep = static_cast<std::size_t>(max_keypoints);
+  for (std::size_t b = 1; b < bands_.size(); ++b)
+    for (const Keypoint& kp : bands_[b].strongest) offer_strongest(out, kp, keep, stronger);
   std::sort_heap(out.begin(), out.end(), stronger);
   return complete;
 }

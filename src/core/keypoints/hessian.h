@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -33,11 +34,11 @@ class HessianDetector {
   void reserve(int max_width, int max_height, const KeypointParams& params, int max_keypoints,
                int max_candidates, int threads = 1);
 
-  // Splits each scale level's work (blur, response, candidates, halving)
-  // into row bands on `workers` (null: the calling thread only): at most
-  // one band per thread and as many as reserve() made room for, fewer on
-  // small levels. The keypoints are the same, byte for byte, for any
-  // number of bands.
+  // Splits each scale level's work (blur, response, candidates, the scan
+  // of the level below for maxima, halving) into row bands on `workers`
+  // (null: the calling thread only): at most one band per thread and as
+  // many as reserve() made room for, fewer on small levels. The keypoints
+  // are the same, byte for byte, for any number of bands.
   void set_workers(WorkerPool* workers) { workers_ = workers; }
   static constexpr int kMaxBands = 8;
 
@@ -56,20 +57,33 @@ class HessianDetector {
 
  private:
   // What one row band works with: its blur row, candidate flags, the two
-  // response rows above and below it that the 3x3x3 test reads, and (bands
-  // after the first) its candidates before they are joined in scan order.
+  // response rows above and below it that the 3x3x3 test reads, its
+  // candidates of the two levels last computed (slot: the level's place in
+  // the octave % 2), which it scans itself, and (bands after the first) the
+  // heap of its strongest maxima, joined at the end.
   struct Band {
     explicit Band(std::pmr::memory_resource* memory)
-        : scratch(memory), mask(memory), halo(memory), candidates(memory) {}
+        : scratch(memory),
+          mask(memory),
+          halo(memory),
+          candidates{WorkVector<std::int32_t>(memory), WorkVector<std::int32_t>(memory)},
+          strongest(memory) {}
     Plane<float> scratch;
     WorkVector<std::uint8_t> mask;
     Plane<float> halo;
-    WorkVector<std::int32_t> candidates;
-    bool complete = true;  // no candidate dropped (the first band's: none in the joined list)
+    std::array<WorkVector<std::int32_t>, 2> candidates;
+    std::array<bool, 2> complete{true, true};  // no candidate of the slot's list dropped
+    WorkVector<Keypoint> strongest;
   };
   struct Level;
   // Runs one level's work on `bands` row bands (below).
   void run_level(const Level& level, int bands);
+  // How many ints of band `band`'s candidates in `slot` one list would
+  // have kept: the bands' lists, joined in scan order, cut at
+  // max_candidate_ints_.
+  std::size_t kept_candidates(int slot, int band) const;
+  // No candidate of the level in `slot` dropped.
+  bool candidates_complete(int slot, int bands) const;
   // Bands for a w x h level: one per thread, fewer on small levels.
   int bands_for(int w, int h) const;
 
@@ -82,8 +96,6 @@ class HessianDetector {
   std::array<Band, kMaxBands> bands_;
   int reserved_bands_ = 1;
   WorkerPool* workers_ = nullptr;
-  // Extremum candidates, (x, y) pairs, of the two levels last computed.
-  std::array<WorkVector<std::int32_t>, 2> candidates_;
   std::size_t max_candidate_ints_ = static_cast<std::size_t>(-1);  // 2 per candidate
   WorkVector<Keypoint> copy_;  // the std::vector overload's result, before the copy
 };

@@ -1,11 +1,35 @@
 #include "core/support/worker_pool.h"
 
+#include <chrono>
+
 namespace kg {
 
 namespace {
 
 // The index of the pool thread this is (0: the caller's), for nested runs.
 thread_local int this_worker = 0;
+
+// How long a thread polls before it sleeps on a condition variable.
+constexpr std::chrono::microseconds kSpin{50};
+
+void pause_briefly() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#elif defined(__aarch64__) || (defined(__arm__) && defined(__ARM_ARCH) && __ARM_ARCH >= 7)
+  asm volatile("yield");
+#endif
+}
+
+// Polls `done` for up to kSpin; true when it held.
+template <class Done>
+bool spin_until(Done done) {
+  const auto until = std::chrono::steady_clock::now() + kSpin;
+  for (unsigned n = 1;; ++n) {
+    if (done()) return true;
+    pause_briefly();
+    if ((n & 63) == 0 && std::chrono::steady_clock::now() > until) return false;
+  }
+}
 
 }  // namespace
 
@@ -107,7 +131,7 @@ void WorkerPool::run(int tasks, Task task, void* context, bool help) {
     next_.store(0, std::memory_order_relaxed);
     finished_.store(0, std::memory_order_relaxed);
     running_.store(true, std::memory_order_release);
-    ++generation_;
+    generation_.fetch_add(1, std::memory_order_release);
   }
   start_.notify_all();
   take_tasks(0);
@@ -115,8 +139,9 @@ void WorkerPool::run(int tasks, Task task, void* context, bool help) {
   // workers still running one. A worker that wakes later finds nothing left
   // and does not join this run (work()), so a busy machine's slow wake-ups
   // do not hold the frame up.
+  spin_until([this] { return active_.load(std::memory_order_acquire) == 0; });
   std::unique_lock<std::mutex> lock(mutex_);
-  done_.wait(lock, [this] { return active_ == 0; });
+  done_.wait(lock, [this] { return active_.load(std::memory_order_relaxed) == 0; });
   running_.store(false, std::memory_order_release);
 }
 
@@ -124,11 +149,14 @@ void WorkerPool::work(int worker) {
   this_worker = worker;
   std::uint64_t seen = 0;
   for (;;) {
+    // The next run usually starts within microseconds (above).
+    spin_until([&] { return generation_.load(std::memory_order_acquire) != seen; });
     {
       std::unique_lock<std::mutex> lock(mutex_);
-      start_.wait(lock, [&] { return stopping_ || generation_ != seen; });
+      start_.wait(lock,
+                  [&] { return stopping_ || generation_.load(std::memory_order_relaxed) != seen; });
       if (stopping_) return;
-      seen = generation_;
+      seen = generation_.load(std::memory_order_relaxed);
       // Joining under the lock: run() cannot return (nor the next run
       // change task_, context_ and tasks_) while this worker is active. A
       // helping run is joined while a task is still running.
@@ -139,7 +167,7 @@ void WorkerPool::work(int worker) {
     }
     take_tasks(worker);
     std::lock_guard<std::mutex> lock(mutex_);
-    if (--active_ == 0) done_.notify_one();
+    if (active_.fetch_sub(1, std::memory_order_release) == 1) done_.notify_one();
   }
 }
 

@@ -15,6 +15,12 @@
 // the one model of a frame with an appearance to align, then gets the idle
 // threads' help. A nested task's `worker` is its thread's index. (A run of
 // one task runs on the caller: the runs it starts are not nested.)
+//
+// A worker that finished a run polls for the next one for a few tens of
+// microseconds before it sleeps, and the caller polls for the workers
+// still in the run before it sleeps: a frame's runs (the keypoints' levels)
+// follow each other closely, and waking a sleeping thread costs about as
+// long as a small run.
 #pragma once
 
 #include <atomic>
@@ -74,9 +80,10 @@ class WorkerPool {
   std::condition_variable start_;
   std::condition_variable done_;
   std::condition_variable help_;  // a nested run opened, or the run's tasks all done
-  std::uint64_t generation_ = 0;  // one per run(), under mutex_
-  int active_ = 0;                // workers running tasks of this run, under mutex_
-  bool stopping_ = false;         // under mutex_
+  // Changed under mutex_; read without it only to spin (worker_pool.cpp).
+  std::atomic<std::uint64_t> generation_{0};  // one per run()
+  std::atomic<int> active_{0};                // workers running tasks of this run
+  bool stopping_ = false;                     // under mutex_
   // The run in progress.
   Task task_ = nullptr;
   void* context_ = nullptr;
