@@ -55,17 +55,20 @@ struct PointEstimator {
   }
   RansacScore score(const Model& h) const {
     RansacScore r;
-    for (std::size_t i = 0; i < model->size(); ++i) {
-      const double e = reprojection(h, (*model)[i], (*scene)[i]);
-      if (e < threshold) {
-        ++r.point_inliers;
-        r.cost += e * e;
-      } else {
-        r.cost += threshold * threshold;
-      }
-    }
+    for (std::size_t i = 0; i < model->size(); ++i) score_point(h, i, r);
     r.sample_inliers = r.point_inliers;
     return r;
+  }
+  // Adds point i to r; whether it is an inlier.
+  bool score_point(const Model& h, std::size_t i, RansacScore& r) const {
+    const double e = reprojection(h, (*model)[i], (*scene)[i]);
+    if (e < threshold) {
+      ++r.point_inliers;
+      r.cost += e * e;
+      return true;
+    }
+    r.cost += threshold * threshold;
+    return false;
   }
 };
 
@@ -167,6 +170,54 @@ TEST(Ransac, SameSeedGivesSameResult) {
   EXPECT_EQ(s1.best.cost, s2.best.cost);
   EXPECT_EQ(first, second);
   // The random state advanced identically too.
+  EXPECT_EQ(r1.next(), r2.next());
+}
+
+// PointEstimator that scores against the best so far (ransac.h's
+// score_if_better): it stops once too many points are outliers.
+struct BoundedPointEstimator : PointEstimator {
+  int stopped = 0;  // scorings that stopped early
+  RansacScore score_if_better(const Model& h, const RansacScore& best) {
+    RansacScore r;
+    const int most_outliers = static_cast<int>(model->size()) - best.point_inliers;
+    int outliers = 0;
+    for (std::size_t i = 0; i < model->size(); ++i) {
+      if (!score_point(h, i, r) && ++outliers > most_outliers) {
+        ++stopped;
+        return r;
+      }
+    }
+    r.sample_inliers = r.point_inliers;
+    return r;
+  }
+};
+static_assert(has_score_if_better<BoundedPointEstimator>::value);
+static_assert(!has_score_if_better<PointEstimator>::value);
+
+TEST(Ransac, ScoringAgainstTheBestGivesTheSameResult) {
+  const Correspondences c = make_correspondences(60, 240, 0.5, 23);
+  RansacOptions options;
+  options.max_iterations = 3000;
+  PointEstimator plain;
+  plain.model = &c.model;
+  plain.scene = &c.scene;
+  BoundedPointEstimator bounded;
+  bounded.model = &c.model;
+  bounded.scene = &c.scene;
+  Rng r1(7);
+  Rng r2(7);
+  Homography first{};
+  Homography second{};
+  const RansacStats s1 = ransac(plain, options, r1, first);
+  const RansacStats s2 = ransac(bounded, options, r2, second);
+  EXPECT_GT(bounded.stopped, s2.valid_hypotheses / 2);  // most hypotheses lose early
+  EXPECT_EQ(s1.iterations, s2.iterations);
+  EXPECT_EQ(s1.valid_hypotheses, s2.valid_hypotheses);
+  EXPECT_EQ(s1.required_iterations, s2.required_iterations);
+  EXPECT_EQ(s1.best.point_inliers, s2.best.point_inliers);
+  EXPECT_EQ(s1.best.sample_inliers, s2.best.sample_inliers);
+  EXPECT_EQ(s1.best.cost, s2.best.cost);
+  EXPECT_EQ(first, second);
   EXPECT_EQ(r1.next(), r2.next());
 }
 

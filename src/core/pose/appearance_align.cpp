@@ -26,6 +26,9 @@ constexpr double kMinResidualScale = 2.0;  // grey levels: the noise floor of th
 // workers, which costs more than sampling a few hundred pixels).
 constexpr int kChunksPerThread = 4;
 constexpr std::size_t kMinChunkPixels = 256;
+// The normal equations on the workers: each thread then sums a share of the
+// rows over every pixel (a few hundred instructions each).
+constexpr std::size_t kMinNormalPixels = 512;
 
 void multiply(const double a[9], const double b[9], double out[9]) {
   double r[9];
@@ -112,6 +115,72 @@ bool solve8(double a[kParams][kParams], const double b[kParams], double x[kParam
     x[i] = s / a[i][i];
   }
   return true;
+}
+
+// What the normal equations of one Gauss-Newton step sum over: the
+// selected pixels' Tukey-weighted residuals and steepest-descent images.
+struct NormalTerms {
+  const std::uint32_t* selected;
+  std::size_t n;
+  const std::uint8_t* valid;
+  const float* warped;
+  const float* t;
+  const float* steepest;  // n x kParams
+  double gain, mi, mt, cutoff;
+};
+
+// Sums the rows of the normal equations in `Rows` (bit j: row j of the
+// lower triangle of a and b[j]) over every pixel, in pixel order: each
+// entry is the same sum, bit for bit, whichever rows are summed together.
+template <unsigned Rows>
+void normal_rows(const NormalTerms& q, double a[kParams][kParams], double b[kParams]) {
+  double sa[kParams][kParams] = {};
+  double sb[kParams] = {};
+  for (std::size_t k = 0; k < q.n; ++k) {
+    const std::uint32_t i = q.selected[k];
+    if (!q.valid[i]) continue;
+    const double e = q.gain * (q.warped[i] - q.mi) - (q.t[i] - q.mt);
+    if (std::fabs(e) >= q.cutoff) continue;
+    const double r = 1.0 - (e / q.cutoff) * (e / q.cutoff);
+    const double weight = r * r;
+    const float* sd = &q.steepest[k * kParams];
+    for (int j = 0; j < kParams; ++j) {
+      if (!((Rows >> j) & 1u)) continue;
+      sb[j] += weight * sd[j] * e;
+      for (int l = 0; l <= j; ++l) sa[j][l] += weight * static_cast<double>(sd[j]) * sd[l];
+    }
+  }
+  for (int j = 0; j < kParams; ++j) {
+    if (!((Rows >> j) & 1u)) continue;
+    b[j] = sb[j];
+    for (int l = 0; l <= j; ++l) a[j][l] = sa[j][l];
+  }
+}
+
+// The normal equations, their rows split over the workers when there are
+// enough pixels. Rows j and 7 - j hold 11 entries together (j + 1 and
+// 8 - j in the triangle, one each in b), so pairs of them balance the
+// threads; the result does not depend on the split (normal_rows).
+void normal_equations(const NormalTerms& q, WorkerPool* workers, double a[kParams][kParams],
+                      double b[kParams]) {
+  const int threads = workers == nullptr ? 1 : workers->threads();
+  if (threads <= 1 || q.n < kMinNormalPixels) {
+    normal_rows<0xFFu>(q, a, b);
+    return;
+  }
+  const int groups = threads >= 4 ? 4 : 2;
+  auto group = [&](int c, int) {
+    if (groups == 2) {
+      if (c == 0) normal_rows<0xC3u>(q, a, b);  // rows 0, 1, 6, 7
+      if (c == 1) normal_rows<0x3Cu>(q, a, b);  // rows 2 to 5
+      return;
+    }
+    if (c == 0) normal_rows<0x81u>(q, a, b);
+    if (c == 1) normal_rows<0x42u>(q, a, b);
+    if (c == 2) normal_rows<0x24u>(q, a, b);
+    if (c == 3) normal_rows<0x18u>(q, a, b);
+  };
+  workers->run(groups, group);
 }
 
 // The sampling of warp_level(): the level's pixel grid under g.
@@ -326,15 +395,43 @@ int AppearanceAligner::refine_level(const Level& level, ImageView frame, double 
   for (const std::uint32_t i : selected_) t_norm += (t[i] - t_mean) * (t[i] - t_mean);
   if (!(t_norm > 1e-6)) return 0;
   t_norm = std::sqrt(t_norm);
-  for (int j = 0; j < kParams; ++j) {
-    double mean = 0, along = 0;
-    for (std::size_t k = 0; k < n; ++k) mean += steepest_[k * kParams + j];
-    mean /= static_cast<double>(n);
+  // Each parameter's mean and component along the appearance, then every
+  // pixel's images, split over the workers (by parameter, then by pixel:
+  // no two threads write one cache line), the same images for any split.
+  float* steepest = steepest_.data();
+  const std::uint32_t* selected = selected_.data();
+  double mean[kParams], along[kParams];
+  const auto moments = [&](int j) {
+    double m = 0, al = 0;
+    for (std::size_t k = 0; k < n; ++k) m += steepest[k * kParams + j];
+    m /= static_cast<double>(n);
     for (std::size_t k = 0; k < n; ++k)
-      along += (steepest_[k * kParams + j] - mean) * (t[selected_[k]] - t_mean) / t_norm;
-    for (std::size_t k = 0; k < n; ++k)
-      steepest_[k * kParams + j] = static_cast<float>(steepest_[k * kParams + j] - mean -
-                                                      along * (t[selected_[k]] - t_mean) / t_norm);
+      al += (steepest[k * kParams + j] - m) * (t[selected[k]] - t_mean) / t_norm;
+    mean[j] = m;
+    along[j] = al;
+  };
+  const auto project_out = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k)
+      for (int j = 0; j < kParams; ++j)
+        steepest[k * kParams + j] = static_cast<float>(
+            steepest[k * kParams + j] - mean[j] - along[j] * (t[selected[k]] - t_mean) / t_norm);
+  };
+  const int groups =
+      workers_ == nullptr || n < kMinNormalPixels ? 1 : std::min(workers_->threads(), kParams);
+  if (groups <= 1) {
+    for (int j = 0; j < kParams; ++j) moments(j);
+    project_out(0, n);
+  } else {
+    auto by_parameter = [&](int c, int) {
+      for (int j = c; j < kParams; j += groups) moments(j);
+    };
+    workers_->run(groups, by_parameter);
+    const auto chunks = static_cast<std::size_t>(groups);
+    auto by_pixel = [&](int c, int) {
+      const auto cc = static_cast<std::size_t>(c);
+      project_out(n * cc / chunks, n * (cc + 1) / chunks);
+    };
+    workers_->run(groups, by_pixel);
   }
   int iterations = 0;
   for (; iterations < kMaxIterations; ++iterations) {
@@ -367,19 +464,17 @@ int AppearanceAligner::refine_level(const Level& level, ImageView frame, double 
     const double cutoff = kTukey * sigma;
     double b[kParams] = {};
     double a[kParams][kParams] = {};
-    for (std::size_t k = 0; k < n; ++k) {
-      const std::uint32_t i = selected_[k];
-      if (!valid_[i]) continue;
-      const double e = gain * (warped_[i] - mi) - (t[i] - mt);
-      if (std::fabs(e) >= cutoff) continue;
-      const double r = 1.0 - (e / cutoff) * (e / cutoff);
-      const double weight = r * r;
-      const float* sd = &steepest_[k * kParams];
-      for (int j = 0; j < kParams; ++j) {
-        b[j] += weight * sd[j] * e;
-        for (int l = 0; l <= j; ++l) a[j][l] += weight * static_cast<double>(sd[j]) * sd[l];
-      }
-    }
+    const NormalTerms terms{selected_.data(),
+                            n,
+                            valid_.data(),
+                            warped_.data(),
+                            t,
+                            steepest_.data(),
+                            gain,
+                            mi,
+                            mt,
+                            cutoff};
+    normal_equations(terms, workers_, a, b);
     for (int j = 0; j < kParams; ++j)
       for (int l = j + 1; l < kParams; ++l) a[j][l] = a[l][j];
     double dp[kParams];

@@ -5,49 +5,18 @@
 // pose.cpp, over the PoseEstimator's buffers.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
 #include "core/keygraphs/keygraph.h"
 #include "core/pose/homography.h"
+#include "core/pose/local_affine.h"
 #include "core/pose/pose.h"
 #include "core/pose/ransac.h"
 #include "keygraph/params.h"
 
 namespace kg {
-
-// Tolerance of the pre-test below: localisation noise plus a fraction of
-// the distance over which a local affine map is extrapolated (perspective
-// bends it), both in scene pixels.
-inline constexpr float kPretestPixels = 3.f;
-inline constexpr float kPretestFraction = 0.25f;
-
-// Whether the affine map through the three correspondences (m0, s0)
-// predicts the scene points s1 of the model points m1 (n of them) within
-// the pre-test tolerance. Degenerate triangles fail.
-inline bool affine_predicts(const Point2f* m0, const Point2f* s0, const Point2f* m1,
-                            const Point2f* s1, int n) {
-  const float m00 = m0[1].x - m0[0].x, m01 = m0[2].x - m0[0].x, m10 = m0[1].y - m0[0].y,
-              m11 = m0[2].y - m0[0].y;
-  const float det = m00 * m11 - m01 * m10;
-  if (!(std::fabs(det) > 1e-3f)) return false;
-  const float inv = 1.f / det;
-  const float s00 = s0[1].x - s0[0].x, s01 = s0[2].x - s0[0].x, s10 = s0[1].y - s0[0].y,
-              s11 = s0[2].y - s0[0].y;
-  // A = S M^-1 maps model offsets from m0[0] to scene offsets from s0[0].
-  const float a = (s00 * m11 - s01 * m10) * inv, b = (-s00 * m01 + s01 * m00) * inv;
-  const float c = (s10 * m11 - s11 * m10) * inv, d = (-s10 * m01 + s11 * m00) * inv;
-  const float cx = (s0[0].x + s0[1].x + s0[2].x) / 3.f, cy = (s0[0].y + s0[1].y + s0[2].y) / 3.f;
-  for (int i = 0; i < n; ++i) {
-    const float dx = m1[i].x - m0[0].x, dy = m1[i].y - m0[0].y;
-    const float px = s0[0].x + a * dx + b * dy, py = s0[0].y + c * dx + d * dy;
-    const float ex = px - s1[i].x, ey = py - s1[i].y;
-    const float fx = s1[i].x - cx, fy = s1[i].y - cy;
-    const float tol = kPretestPixels + kPretestFraction * std::sqrt(fx * fx + fy * fy);
-    if (ex * ex + ey * ey > tol * tol) return false;
-  }
-  return true;
-}
 
 // RANSAC estimator over the active keygraph correspondences.
 struct KeygraphEstimator {
@@ -67,19 +36,10 @@ struct KeygraphEstimator {
     // Two circuits: each one's local affine map must predict the other's
     // points before the homography is fitted and scored. Rejects most
     // unrelated pairs for a few multiplications.
-    if (h == 2 && k >= 3) {
-      Point2f m[2][kMaxVertices], sc[2][kMaxVertices];
-      for (int i = 0; i < 2; ++i) {
-        const std::uint32_t* pairs =
-            &s.match_pairs_[static_cast<std::size_t>(s.active_[sample[i]]) * k];
-        for (int j = 0; j < k; ++j) {
-          m[i][j] = s.pair_model_[pairs[j]];
-          sc[i][j] = s.pair_scene_[pairs[j]];
-        }
-      }
-      if (!affine_predicts(m[0], sc[0], m[1], sc[1], k) ||
-          !affine_predicts(m[1], sc[1], m[0], sc[0], k))
-        return false;
+    if (h == 2 && k == 3) {
+      const LocalAffine& p = s.match_affine_[static_cast<std::size_t>(s.active_[sample[0]])];
+      const LocalAffine& q = s.match_affine_[static_cast<std::size_t>(s.active_[sample[1]])];
+      if (!affine_predicts(p, q) || !affine_predicts(q, p)) return false;
     }
     Point2f model[kMaxVertices * 4];
     Point2f scene[kMaxVertices * 4];
@@ -142,7 +102,32 @@ struct KeygraphEstimator {
 
   RansacScore score(const Homography& hom) {
     RansacScore r;
+    score_pairs(hom, s.pairs_.size(), r);
+    count_sample_inliers(r);
+    return r;
+  }
+
+  // The score when it beats `best` (ransac.h); otherwise some score that
+  // does not, the flags then left undefined. Most hypotheses lose: their
+  // scoring stops once too few pairs are left to reach best's inliers, and
+  // the samples are counted only for a winner.
+  RansacScore score_if_better(const Homography& hom, const RansacScore& best) {
+    RansacScore r;
+    // More outliers than this leave fewer inliers than best's.
     const std::size_t pairs = s.pairs_.size();
+    const std::size_t most_outliers =
+        pairs - std::min(pairs, static_cast<std::size_t>(std::max(0, best.point_inliers)));
+    // Stopped early, r's inliers are already below best's.
+    if (!score_pairs(hom, most_outliers, r) || !better_score(r, best)) return r;
+    count_sample_inliers(r);
+    return r;
+  }
+
+  // Scores the pairs into r (point_inliers, cost) and their flags; false,
+  // r partial, once more than most_outliers pairs are outliers.
+  bool score_pairs(const Homography& hom, std::size_t most_outliers, RansacScore& r) {
+    const std::size_t pairs = s.pairs_.size();
+    std::size_t outliers = 0;
     for (std::size_t i = 0; i < pairs; ++i) {
       const Point2f p = kg::apply(hom, s.pair_model_[i]);
       const double dx = p.x - s.pair_scene_[i].x, dy = p.y - s.pair_scene_[i].y;
@@ -151,19 +136,25 @@ struct KeygraphEstimator {
       s.pair_inlier_[i] = in ? 1 : 0;
       r.point_inliers += in ? 1 : 0;
       r.cost += in ? e2 : threshold2;
+      outliers += in ? 0 : 1;
+      if (outliers > most_outliers) return false;
     }
+    return true;
+  }
+
+  void count_sample_inliers(RansacScore& r) const {
     for (int m : s.active_) {
       const std::uint32_t* ids = &s.match_pairs_[static_cast<std::size_t>(m) * k];
       bool all = true;
       for (int j = 0; j < k && all; ++j) all = s.pair_inlier_[ids[j]] != 0;
       r.sample_inliers += all ? 1 : 0;
     }
-    return r;
   }
 };
 
 // The RANSAC loop's local optimisation needs fit_within (ransac.h); without
 // it the loop would silently skip it.
 static_assert(has_fit_within<KeygraphEstimator>::value);
+static_assert(has_score_if_better<KeygraphEstimator>::value);
 
 }  // namespace kg

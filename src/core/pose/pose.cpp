@@ -45,6 +45,7 @@ PoseEstimator::PoseEstimator(std::pmr::memory_resource* memory)
       pair_votes_(memory),
       match_quality_(memory),
       active_(memory),
+      match_affine_(memory),
       inlier_model_(memory),
       inlier_scene_(memory),
       guided_model_(memory),
@@ -65,6 +66,7 @@ void PoseEstimator::reserve(int max_matches, int k, std::uint32_t max_model_keyp
   pair_votes_.reserve(pairs);
   match_quality_.reserve(n);
   active_.reserve(n);
+  match_affine_.reserve(n);
   inlier_model_.reserve(pairs);
   inlier_scene_.reserve(pairs);
   guided_model_.reserve(max_model_keypoints);
@@ -153,6 +155,20 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
     }
   }
   match_active_.assign(static_cast<std::size_t>(n), 1);
+  // Two-match hypotheses of triangles are pre-tested with each match's
+  // local affine map (core/pose/local_affine.h).
+  match_affine_.clear();
+  if (h == 2 && k == 3) {
+    for (int i = 0; i < n; ++i) {
+      Point2f m[3], sc[3];
+      for (int j = 0; j < 3; ++j) {
+        const std::uint32_t p = match_pairs_[static_cast<std::size_t>(i) * 3 + j];
+        m[j] = pair_model_[p];
+        sc[j] = pair_scene_[p];
+      }
+      match_affine_.push_back(local_affine(m, sc));
+    }
+  }
   // ransac.progressive_sampling (format 6.4; 0, as in older files: uniform draws).
   const bool progressive = rp.progressive_sampling != 0;
   if (progressive) {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/pose/appearance_align.h"
+#include "core/pose/local_affine.h"
 #include "core/pose/overlap.h"
 #include "core/pose/point_grid.h"
 #include "core/pose/verification.h"
@@ -66,9 +67,10 @@ class PoseEstimator {
   WorkVector<std::uint8_t> pair_inlier_;
   WorkVector<std::uint8_t> pair_dead_;  // explained by an instance already found
   WorkVector<std::uint8_t> match_active_;
-  WorkVector<int> pair_votes_;     // matches that imply each pair
-  WorkVector<int> match_quality_;  // per match: other matches sharing its pairs
-  WorkVector<int> active_;         // indices of matches still in play
+  WorkVector<int> pair_votes_;            // matches that imply each pair
+  WorkVector<int> match_quality_;         // per match: other matches sharing its pairs
+  WorkVector<int> active_;                // indices of matches still in play
+  WorkVector<LocalAffine> match_affine_;  // per match: its pre-test map (two-match samples)
 
   WorkVector<Point2f> inlier_model_;
   WorkVector<Point2f> inlier_scene_;

@@ -239,6 +239,18 @@ struct has_sample_inlier<
     E, std::void_t<decltype(std::declval<const E&>().sample_inlier(std::declval<int>()))>>
     : std::true_type {};
 
+// An estimator may score a hypothesis against the best so far:
+// `RansacScore score_if_better(const Model&, const RansacScore& best)`, the
+// score (and flags) of score() when better_score() says it beats best, any
+// score that does not otherwise (it may stop early: most hypotheses lose).
+template <class E, class = void>
+struct has_score_if_better : std::false_type {};
+template <class E>
+struct has_score_if_better<
+    E, std::void_t<decltype(std::declval<E&>().score_if_better(
+           std::declval<const typename E::Model&>(), std::declval<const RansacScore&>()))>>
+    : std::true_type {};
+
 inline constexpr int kRefineRounds = 4;
 // LO-RANSAC's iterated least squares: kLocalSteps fits, the first with
 // kLocalWidest times the inlier threshold (the paper's values).
@@ -357,7 +369,12 @@ RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
     }
     if (!estimator.hypothesis(sample, model)) continue;
     ++stats.valid_hypotheses;
-    RansacScore s = estimator.score(model);
+    RansacScore s;
+    if constexpr (has_score_if_better<Estimator>::value) {
+      s = have_best ? estimator.score_if_better(model, stats.best) : estimator.score(model);
+    } else {
+      s = estimator.score(model);
+    }
     if (have_best && !better_score(s, stats.best)) continue;
     if constexpr (has_fit_within<Estimator>::value) {
       for (int round = 0; round < kRefineRounds; ++round) {
