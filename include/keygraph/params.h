@@ -230,7 +230,7 @@ struct DescriptorParams {
   // finds every similar arc (docs/RESULTS.md, "Why each default").
   int max_search_leaves = 8;
   // The budget above holds for an index of up to this many models and grows
-  // with the square root of the models beyond it (at most 8-fold), so the
+  // with the square root of the models beyond it (at most 3-fold), so the
   // search keeps finding a sign's arcs as other models crowd the descriptor
   // space (the budget is per query, not per model). >= 0, 0 keeps the
   // budget fixed, as indexes before format 6.3 do; default 10. Not in the

@@ -127,12 +127,13 @@ class SearchRecall : public ::testing::TestWithParam<int> {
     // The detector's search uses the grown budget.
     EXPECT_EQ(ArcSearch(index.index).max_leaves(),
               ArcSearch::leaves_for(params.descriptor, models.size()));
-    // Defaults: 8 x sqrt(models / 10): 18 leaves at 52 models, 36 at 202.
+    // Defaults: 8 x sqrt(models / 10), at most 3x: 18 leaves at 52
+    // models, 24 at 202.
     if (GetParam() == 0 && models.size() == 52) {
       EXPECT_EQ(ArcSearch(index.index).max_leaves(), 18);
     }
     if (GetParam() == 0 && models.size() == 202) {
-      EXPECT_EQ(ArcSearch(index.index).max_leaves(), 36);
+      EXPECT_EQ(ArcSearch(index.index).max_leaves(), 24);
     }
     DesktopDetector detector(index.index);
     for (std::size_t t = 0; t < std::size(kTargets); ++t) {

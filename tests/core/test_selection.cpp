@@ -489,8 +489,9 @@ TEST(ArcSearchBudget, GrowsWithTheSquareRootOfTheModelsBeyondTheReference) {
   EXPECT_EQ(ArcSearch::leaves_for(p, 10), 20);
   EXPECT_EQ(ArcSearch::leaves_for(p, 40), 40);  // 4x the models: 2x the leaves
   EXPECT_EQ(ArcSearch::leaves_for(p, 50), 45);
-  EXPECT_EQ(ArcSearch::leaves_for(p, 202), 90);
-  EXPECT_EQ(ArcSearch::leaves_for(p, 1'000'000), 20 * ArcSearch::kMaxLeavesGrowth);
+  EXPECT_EQ(ArcSearch::leaves_for(p, 89), 60);   // 2.98x: just below the cap
+  EXPECT_EQ(ArcSearch::leaves_for(p, 202), 60);  // capped at 3x
+  EXPECT_EQ(ArcSearch::leaves_for(p, 1'000'000), 60);
   p.max_search_leaves = 2'000'000'000;  // no overflow at the cap
   EXPECT_EQ(ArcSearch::leaves_for(p, 1'000'000), std::numeric_limits<int>::max());
   p.max_search_leaves = 20;

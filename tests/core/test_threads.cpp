@@ -136,6 +136,14 @@ TEST(Threads, SameWhenTheArcPoolOverflows) {
   DetectionList found;
   ASSERT_TRUE(detector.detect(test::view(f.scenes[0]), found));
   EXPECT_TRUE(detector.stats().truncated_arc_matches);
+  // The arcs after the one that filled the pool are not searched (their
+  // lists would be empty), so fewer model arcs are found than with room.
+  Limits roomy = Limits{}.for_frame(800, 640);
+  roomy.threads = 2;
+  Detector unbounded(f.built.index, roomy);
+  ASSERT_TRUE(unbounded.detect(test::view(f.scenes[0]), found));
+  EXPECT_FALSE(unbounded.stats().truncated_arc_matches);
+  EXPECT_LT(detector.stats().arc_matches, unbounded.stats().arc_matches / 2);
 }
 
 // The box twice and the graf1 crop: two models with an instance in

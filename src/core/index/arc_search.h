@@ -32,7 +32,12 @@ class ArcSearch {
   // max_search_leaves, grown with the square root of models over
   // search_reference_models (at most kMaxLeavesGrowth-fold); 0: exact.
   static int leaves_for(const DescriptorParams& params, std::uint64_t models);
-  static constexpr int kMaxLeavesGrowth = 8;
+  // 3-fold (reached at 9 times the reference's models): 18 leaves of 8 at
+  // 50 signs keep the sign benchmark's recall (14 lost 2.5 points), 24 at
+  // 200 models keep the pose's support (test_search_recall) for about
+  // twice the 10-model frame's cost, where 36 cost 3x (docs/RESULTS.md,
+  // "The search budget at 200 models").
+  static constexpr double kMaxLeavesGrowth = 3.0;
   int max_leaves() const { return max_leaves_; }
   // Changes the leaf budget (a detector's options); 0: exact.
   void set_max_leaves(int max_leaves) { max_leaves_ = max_leaves < 0 ? 0 : max_leaves; }

@@ -295,56 +295,33 @@ void Selector::search_chosen(const SelectionInput& in, const Limits& limits, Det
   const int n = static_cast<int>(in.arcs->chosen_order().size());
   const auto cap = static_cast<std::uint32_t>(std::max(0, limits.max_arc_matches));
   if (pool_.size() < pool_limit_) pool_.resize(pool_limit_);  // reserved: no allocation
-  // Every thread searches a share of the chosen arcs and takes its room in
-  // the pool as it goes. Lists are read by (begin, count), so where each
-  // lands does not matter; only a frame whose arcs overflow the pool
-  // depends on the order, and is searched again on one thread, in order,
-  // as the look-ups on demand would have filled it.
-  std::atomic<std::size_t> next{0};
-  std::atomic<bool> overflow{false};
   constexpr int kBlock = 16;
-  auto search_block = [&](int block, int worker) {
-    if (in.deadline != nullptr && std::chrono::steady_clock::now() > *in.deadline) {
-      out_of_time_.store(true, std::memory_order_relaxed);
-      return;
-    }
-    JoinScratch& s = scratch_[static_cast<std::size_t>(worker)];
-    const int end = std::min(n, (block + 1) * kBlock);
-    for (int i = block * kBlock; i < end; ++i) {
-      const int e = order[i];
-      state_[e] = kLooked;
-      count_[e] = 0;
-      total_[e] = 0;
-      if (!in.arcs->described(e) || overflow.load(std::memory_order_relaxed)) continue;
-      std::uint32_t total = 0;
-      const std::uint32_t found = search_into(in, e, s, s.sort_scratch.data(), cap, total);
-      const std::size_t at = next.fetch_add(found, std::memory_order_relaxed);
-      if (at + found > pool_limit_) {
-        overflow.store(true, std::memory_order_relaxed);
-        continue;
-      }
-      std::copy_n(s.sort_scratch.data(), found, pool_.data() + at);
-      begin_[e] = static_cast<std::uint32_t>(at);
-      count_[e] = found;
-      total_[e] = total;
-    }
+  auto past_deadline = [&]() {
+    if (in.deadline == nullptr || std::chrono::steady_clock::now() <= *in.deadline) return false;
+    out_of_time_.store(true, std::memory_order_relaxed);
+    return true;
   };
-  const int blocks = (n + kBlock - 1) / kBlock;
-  if (in.workers != nullptr) {
-    in.workers->run(blocks, search_block);
-  } else {
-    for (int b = 0; b < blocks; ++b) search_block(b, 0);
-  }
-  if (overflow.load()) {
-    // In order, each arc's list cut to the pool's room left.
-    pool_used_ = 0;
+  // The lists as one thread finds them: in order, each written straight
+  // into the pool and cut to its room. Once the pool is full the arcs left
+  // are not searched (their lists would be empty: a frame of a large index
+  // searched them all again only to count what they would have found).
+  auto search_in_order = [&]() {
     JoinScratch& s = scratch_[0];
+    pool_used_ = 0;
+    bool stopped = false;
     for (int i = 0; i < n; ++i) {
       const int e = order[i];
       begin_[e] = static_cast<std::uint32_t>(pool_used_);
       count_[e] = total_[e] = 0;
+      if (!stopped && i % kBlock == 0) stopped = past_deadline();
+      if (stopped) continue;  // unsearched, as the parallel blocks leave them
+      state_[e] = kLooked;
       if (!in.arcs->described(e)) continue;
       const std::size_t room = pool_limit_ - pool_used_;
+      if (room == 0) {
+        stats.truncated_arc_matches = true;
+        continue;
+      }
       std::uint32_t total = 0;
       const std::uint32_t found =
           search_into(in, e, s, pool_.data() + pool_used_,
@@ -353,11 +330,52 @@ void Selector::search_chosen(const SelectionInput& in, const Limits& limits, Det
       total_[e] = total;
       pool_used_ += found;
     }
+  };
+  if (in.workers == nullptr || in.workers->threads() <= 1) {
+    search_in_order();
   } else {
-    pool_used_ = next.load();
+    // Every thread searches a share of the chosen arcs and takes its room
+    // in the pool as it goes. Lists are read by (begin, count), so where
+    // each lands does not matter; only a frame whose arcs overflow the pool
+    // depends on the order, and is searched again in order, as one thread
+    // finds them.
+    std::atomic<std::size_t> next{0};
+    std::atomic<bool> overflow{false};
+    auto search_block = [&](int block, int worker) {
+      if (past_deadline()) return;
+      JoinScratch& s = scratch_[static_cast<std::size_t>(worker)];
+      const int end = std::min(n, (block + 1) * kBlock);
+      for (int i = block * kBlock; i < end; ++i) {
+        const int e = order[i];
+        state_[e] = kLooked;
+        count_[e] = 0;
+        total_[e] = 0;
+        if (!in.arcs->described(e) || overflow.load(std::memory_order_relaxed)) continue;
+        std::uint32_t total = 0;
+        const std::uint32_t found = search_into(in, e, s, s.sort_scratch.data(), cap, total);
+        const std::size_t at = next.fetch_add(found, std::memory_order_relaxed);
+        if (at + found > pool_limit_) {
+          overflow.store(true, std::memory_order_relaxed);
+          continue;
+        }
+        std::copy_n(s.sort_scratch.data(), found, pool_.data() + at);
+        begin_[e] = static_cast<std::uint32_t>(at);
+        count_[e] = found;
+        total_[e] = total;
+      }
+    };
+    const int blocks = (n + kBlock - 1) / kBlock;
+    in.workers->run(blocks, search_block);
+    if (overflow.load()) {
+      std::fill(state_.begin(), state_.end(), kUnseen);
+      search_in_order();
+    } else {
+      pool_used_ = next.load();
+    }
   }
   for (int i = 0; i < n; ++i) {
     const int e = order[i];
+    if (state_[e] != kLooked) continue;  // left unsearched by the time budget
     stats.arc_matches += total_[e];
     if (count_[e] < total_[e]) stats.truncated_arc_matches = true;
   }
