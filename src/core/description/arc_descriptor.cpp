@@ -191,6 +191,88 @@ void resample_linear(const float* in, int n, float* out, int length) {
   }
 }
 
+namespace {
+
+// Sub-pixel positions are integers in 1/16 pixel; a position farther out
+// than this is refused before any conversion (no overflow below).
+constexpr int kSubpixel = 16;
+constexpr float kMaxSubpixelCoordinate = 1e6f;
+
+// floor(num / den) for den > 0.
+std::int64_t floor_div(std::int64_t num, std::int64_t den) {
+  const std::int64_t q = num / den;
+  return (num % den != 0 && num < 0) ? q - 1 : q;
+}
+
+// round(num / den), halves away from zero, for den > 0: the same for -num
+// as for num (the reversed arc's samples mirror the forward ones).
+std::int64_t round_div(std::int64_t num, std::int64_t den) {
+  const std::int64_t q = (2 * (num < 0 ? -num : num) + den) / (2 * den);
+  return num < 0 ? -q : q;
+}
+
+// 256 times the bilinear sample at (x, y) in 1/16 pixel; false outside.
+bool bilinear16(ImageView image, std::int64_t x, std::int64_t y, std::int32_t& out) {
+  const std::int64_t px = floor_div(x, kSubpixel), py = floor_div(y, kSubpixel);
+  if (px < 0 || py < 0 || px + 1 >= image.width || py + 1 >= image.height) return false;
+  const auto u = static_cast<std::int32_t>(x - px * kSubpixel);
+  const auto v = static_cast<std::int32_t>(y - py * kSubpixel);
+  const std::uint8_t* r0 = image.row(static_cast<int>(py)) + px;
+  const std::uint8_t* r1 = image.row(static_cast<int>(py) + 1) + px;
+  out = (kSubpixel - v) * ((kSubpixel - u) * r0[0] + u * r0[1]) +
+        v * ((kSubpixel - u) * r1[0] + u * r1[1]);
+  return true;
+}
+
+bool to_subpixel(float v, std::int64_t& out) {
+  if (!(std::fabs(v) < kMaxSubpixelCoordinate)) return false;  // also NaN
+  out = std::lround(static_cast<double>(v) * kSubpixel);
+  return true;
+}
+
+}  // namespace
+
+bool subpixel_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset, int length,
+                      std::int32_t* out) {
+  std::int64_t ax, ay, bx, by;
+  if (blurred.empty() || length < 2 || !to_subpixel(a.x, ax) || !to_subpixel(a.y, ay) ||
+      !to_subpixel(b.x, bx) || !to_subpixel(b.y, by))
+    return false;
+  const std::int64_t dx = bx - ax, dy = by - ay;
+  if (dx == 0 && dy == 0) return false;
+  // The perpendicular offset, rounded once per arc; each operation is a
+  // single correctly rounded one on exact integers, so no core differs.
+  const double norm = std::sqrt(static_cast<double>(dx * dx + dy * dy));
+  const double offset = static_cast<double>(std::abs(parallel_offset) * kSubpixel);
+  const std::int64_t ox = std::lround(static_cast<double>(-dy) * offset / norm);
+  const std::int64_t oy = std::lround(static_cast<double>(dx) * offset / norm);
+  const std::int64_t last = length - 1;
+  for (std::int64_t i = 0; i <= last; ++i) {
+    // a + (b - a) i / last, rounded: the same numerator from either end.
+    const std::int64_t x = round_div(ax * last + dx * i, last);
+    const std::int64_t y = round_div(ay * last + dy * i, last);
+    std::int32_t centre, left, right;
+    if (!bilinear16(blurred, x, y, centre) || !bilinear16(blurred, x + ox, y + oy, left) ||
+        !bilinear16(blurred, x - ox, y - oy, right))
+      return false;
+    out[i] = centre + left + right;
+  }
+  return true;
+}
+
+bool subpixel_arc_descriptor(ImageView blurred, Point2f a, Point2f b,
+                             const DescriptorParams& params, ArcDescriptor& out) {
+  out.fill(0.f);
+  const int length = params.profile_length;
+  if (length < 2 || length > kMaxProfileLength) return false;
+  std::int32_t sums[kMaxProfileLength];
+  if (!subpixel_profile(blurred, a, b, params.parallel_offset, length, sums)) return false;
+  float profile[kMaxProfileLength];
+  constexpr float kToMean = 1.f / (3.f * kSubpixel * kSubpixel);
+  for (int i = 0; i < length; ++i) profile[i] = static_cast<float>(sums[i]) * kToMean;
+  return descriptor_from_profile(profile, length, params.coefficients, out);
+}
+
 bool descriptor_from_profile(const float* profile, int length, int coefficients,
                              ArcDescriptor& out) {
   out.fill(0.f);
@@ -281,8 +363,9 @@ bool descriptor_from_samples(const float* samples, int n, const DescriptorParams
 namespace {
 
 // cos and sin of 2 pi k / 30 in Q28: mean deviations have at most 20 bits
-// (30 * 29 * 765), so 30 terms stay below 2^54, and the table's rounding
-// (2^-29) is far below an int16 step (2^-15).
+// (30 * 29 * 765), 23 for sub-pixel profiles (30 * 256 * 765), so 30 terms
+// stay below 2^56, and the table's rounding (2^-29) is far below an int16
+// step (2^-15).
 constexpr double kQ = 268435456.0;  // 2^28
 struct FixedTable {
   std::int32_t cos[kMaxCoefficients][kTableLength];
