@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <type_traits>
 
 namespace kg {
 namespace {
@@ -198,30 +199,45 @@ namespace {
 constexpr int kSubpixel = 16;
 constexpr float kMaxSubpixelCoordinate = 1e6f;
 
-// floor(num / den) for den > 0.
-std::int64_t floor_div(std::int64_t num, std::int64_t den) {
-  const std::int64_t q = num / den;
-  return (num % den != 0 && num < 0) ? q - 1 : q;
-}
-
-// round(num / den), halves away from zero, for den > 0: the same for -num
-// as for num (the reversed arc's samples mirror the forward ones).
-std::int64_t round_div(std::int64_t num, std::int64_t den) {
-  const std::int64_t q = (2 * (num < 0 ? -num : num) + den) / (2 * den);
-  return num < 0 ? -q : q;
-}
-
-// 256 times the bilinear sample at (x, y) in 1/16 pixel; false outside.
-bool bilinear16(ImageView image, std::int64_t x, std::int64_t y, std::int32_t& out) {
-  const std::int64_t px = floor_div(x, kSubpixel), py = floor_div(y, kSubpixel);
-  if (px < 0 || py < 0 || px + 1 >= image.width || py + 1 >= image.height) return false;
+// 256 times the bilinear sample at (x, y) in 1/16 pixel, inside the image
+// with its right and lower neighbours (checked by the caller).
+std::int32_t bilinear16(ImageView image, std::int64_t x, std::int64_t y) {
+  const std::int64_t px = x / kSubpixel, py = y / kSubpixel;
   const auto u = static_cast<std::int32_t>(x - px * kSubpixel);
   const auto v = static_cast<std::int32_t>(y - py * kSubpixel);
   const std::uint8_t* r0 = image.row(static_cast<int>(py)) + px;
   const std::uint8_t* r1 = image.row(static_cast<int>(py) + 1) + px;
-  out = (kSubpixel - v) * ((kSubpixel - u) * r0[0] + u * r0[1]) +
-        v * ((kSubpixel - u) * r1[0] + u * r1[1]);
-  return true;
+  return (kSubpixel - v) * ((kSubpixel - u) * r0[0] + u * r0[1]) +
+         v * ((kSubpixel - u) * r1[0] + u * r1[1]);
+}
+
+// The samples a + (b - a) i / last, i = 0..last, rounded half up (every
+// coordinate is >= 0 here), so b -> a rounds the same numerators: its
+// profile is this one reversed. Last is a compile-time constant for the
+// paper's length, which turns the divisions into multiplications.
+template <class Last>
+void sample_profile(ImageView image, std::int64_t ax, std::int64_t ay, std::int64_t dx,
+                    std::int64_t dy, std::int64_t ox, std::int64_t oy, Last last,
+                    std::int32_t* out) {
+  const std::int64_t n = last;
+  for (std::int64_t i = 0; i <= n; ++i) {
+    const std::int64_t x = (2 * (ax * n + dx * i) + n) / (2 * n);
+    const std::int64_t y = (2 * (ay * n + dy * i) + n) / (2 * n);
+    out[i] = bilinear16(image, x, y) + bilinear16(image, x + ox, y + oy) +
+             bilinear16(image, x - ox, y - oy);
+  }
+}
+
+// Whether every sample of the three lines is inside: they lie in the box
+// of the four ends, a and b each moved by +-(ox, oy), as a rounded point
+// between two integers lies between them.
+bool profile_inside(ImageView image, std::int64_t ax, std::int64_t ay, std::int64_t bx,
+                    std::int64_t by, std::int64_t ox, std::int64_t oy) {
+  const std::int64_t aox = std::abs(ox), aoy = std::abs(oy);
+  const std::int64_t right = static_cast<std::int64_t>(image.width - 1) * kSubpixel;
+  const std::int64_t bottom = static_cast<std::int64_t>(image.height - 1) * kSubpixel;
+  return std::min(ax, bx) - aox >= 0 && std::min(ay, by) - aoy >= 0 &&
+         std::max(ax, bx) + aox < right && std::max(ay, by) + aoy < bottom;
 }
 
 bool to_subpixel(float v, std::int64_t& out) {
@@ -246,16 +262,12 @@ bool subpixel_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offs
   const double offset = static_cast<double>(std::abs(parallel_offset) * kSubpixel);
   const std::int64_t ox = std::lround(static_cast<double>(-dy) * offset / norm);
   const std::int64_t oy = std::lround(static_cast<double>(dx) * offset / norm);
-  const std::int64_t last = length - 1;
-  for (std::int64_t i = 0; i <= last; ++i) {
-    // a + (b - a) i / last, rounded: the same numerator from either end.
-    const std::int64_t x = round_div(ax * last + dx * i, last);
-    const std::int64_t y = round_div(ay * last + dy * i, last);
-    std::int32_t centre, left, right;
-    if (!bilinear16(blurred, x, y, centre) || !bilinear16(blurred, x + ox, y + oy, left) ||
-        !bilinear16(blurred, x - ox, y - oy, right))
-      return false;
-    out[i] = centre + left + right;
+  if (!profile_inside(blurred, ax, ay, bx, by, ox, oy)) return false;
+  if (length == 30) {
+    sample_profile(blurred, ax, ay, dx, dy, ox, oy, std::integral_constant<std::int64_t, 29>{},
+                   out);
+  } else {
+    sample_profile(blurred, ax, ay, dx, dy, ox, oy, std::int64_t{length - 1}, out);
   }
   return true;
 }
