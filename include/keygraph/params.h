@@ -204,6 +204,14 @@ struct DescriptorParams {
   int profile_length = 30;  // l: mean profile resampled to this length
   int coefficients = 3;     // m: DFT coefficients 1..m kept (<= kMaxCoefficients)
   int parallel_offset = 1;  // pixels between the three parallel profiles
+  // 1: each profile sample taken at its exact place on the segment between
+  // the keypoints' sub-pixel positions (bilinear, at 1/16 pixel, the
+  // parallel profiles +-parallel_offset pixels perpendicular to the arc),
+  // profile_length samples; 0: the paper's Bresenham lines between the
+  // rounded endpoints. On an arc a few pixels long the rounding moves an
+  // end by up to a tenth of the arc. Default 0 (off; older files hold 0);
+  // docs/RESULTS.md "Short blurred arcs (issue 38)". Not in the paper.
+  int subpixel_profiles = 0;
   // Euclidean distance under which two arc descriptors (unit vectors) are
   // similar: (0, 2], default 0.3; paper 0.5, which with dense keypoints lets
   // too many unrelated arcs through (docs/RESULTS.md, "Why each default").

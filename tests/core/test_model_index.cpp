@@ -1856,6 +1856,24 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
     EXPECT_EQ(index.params().keypoints.hessian_fine_levels, 3);
     EXPECT_EQ(index.params().keypoints.hessian_fine_threshold, 0.0048f);
   }
+  // descriptor.subpixel_profiles (issue 38): 0 or 1, read back as written.
+  for (const int sub : {-1, 2}) {
+    p = paper_params();
+    p.descriptor.subpixel_profiles = sub;
+    b = bytes();
+    put_params(b, p);
+    EXPECT_TRUE(rejected(b, "parameter descriptor.subpixel_profiles must be 0 or 1")) << sub;
+  }
+  {
+    p = paper_params();
+    p.descriptor.subpixel_profiles = 1;
+    b = bytes();
+    put_params(b, p);
+    AlignedBytes buffer(b);
+    ModelIndex index;
+    ASSERT_TRUE(ModelIndex::view(buffer.data(), buffer.size(), index));
+    EXPECT_EQ(index.params().descriptor.subpixel_profiles, 1);
+  }
   p = paper_params();
   p.descriptor.search_reference_models = -1;
   b = bytes();

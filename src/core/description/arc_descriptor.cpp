@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <type_traits>
 
 namespace kg {
 namespace {
@@ -191,6 +192,99 @@ void resample_linear(const float* in, int n, float* out, int length) {
   }
 }
 
+namespace {
+
+// Sub-pixel positions are integers in 1/16 pixel; a position farther out
+// than this is refused before any conversion (no overflow below).
+constexpr int kSubpixel = 16;
+constexpr float kMaxSubpixelCoordinate = 1e6f;
+
+// 256 times the bilinear sample at (x, y) in 1/16 pixel, inside the image
+// with its right and lower neighbours (checked by the caller).
+std::int32_t bilinear16(ImageView image, std::int64_t x, std::int64_t y) {
+  const std::int64_t px = x / kSubpixel, py = y / kSubpixel;
+  const auto u = static_cast<std::int32_t>(x - px * kSubpixel);
+  const auto v = static_cast<std::int32_t>(y - py * kSubpixel);
+  const std::uint8_t* r0 = image.row(static_cast<int>(py)) + px;
+  const std::uint8_t* r1 = image.row(static_cast<int>(py) + 1) + px;
+  return (kSubpixel - v) * ((kSubpixel - u) * r0[0] + u * r0[1]) +
+         v * ((kSubpixel - u) * r1[0] + u * r1[1]);
+}
+
+// The samples a + (b - a) i / last, i = 0..last, rounded half up (every
+// coordinate is >= 0 here), so b -> a rounds the same numerators: its
+// profile is this one reversed. Last is a compile-time constant for the
+// paper's length, which turns the divisions into multiplications.
+template <class Last>
+void sample_profile(ImageView image, std::int64_t ax, std::int64_t ay, std::int64_t dx,
+                    std::int64_t dy, std::int64_t ox, std::int64_t oy, Last last,
+                    std::int32_t* out) {
+  const std::int64_t n = last;
+  for (std::int64_t i = 0; i <= n; ++i) {
+    const std::int64_t x = (2 * (ax * n + dx * i) + n) / (2 * n);
+    const std::int64_t y = (2 * (ay * n + dy * i) + n) / (2 * n);
+    out[i] = bilinear16(image, x, y) + bilinear16(image, x + ox, y + oy) +
+             bilinear16(image, x - ox, y - oy);
+  }
+}
+
+// Whether every sample of the three lines is inside: they lie in the box
+// of the four ends, a and b each moved by +-(ox, oy), as a rounded point
+// between two integers lies between them.
+bool profile_inside(ImageView image, std::int64_t ax, std::int64_t ay, std::int64_t bx,
+                    std::int64_t by, std::int64_t ox, std::int64_t oy) {
+  const std::int64_t aox = std::abs(ox), aoy = std::abs(oy);
+  const std::int64_t right = static_cast<std::int64_t>(image.width - 1) * kSubpixel;
+  const std::int64_t bottom = static_cast<std::int64_t>(image.height - 1) * kSubpixel;
+  return std::min(ax, bx) - aox >= 0 && std::min(ay, by) - aoy >= 0 &&
+         std::max(ax, bx) + aox < right && std::max(ay, by) + aoy < bottom;
+}
+
+bool to_subpixel(float v, std::int64_t& out) {
+  if (!(std::fabs(v) < kMaxSubpixelCoordinate)) return false;  // also NaN
+  out = std::lround(static_cast<double>(v) * kSubpixel);
+  return true;
+}
+
+}  // namespace
+
+bool subpixel_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset, int length,
+                      std::int32_t* out) {
+  std::int64_t ax, ay, bx, by;
+  if (blurred.empty() || length < 2 || !to_subpixel(a.x, ax) || !to_subpixel(a.y, ay) ||
+      !to_subpixel(b.x, bx) || !to_subpixel(b.y, by))
+    return false;
+  const std::int64_t dx = bx - ax, dy = by - ay;
+  if (dx == 0 && dy == 0) return false;
+  // The perpendicular offset, rounded once per arc; each operation is a
+  // single correctly rounded one on exact integers, so no core differs.
+  const double norm = std::sqrt(static_cast<double>(dx * dx + dy * dy));
+  const double offset = static_cast<double>(std::abs(parallel_offset) * kSubpixel);
+  const std::int64_t ox = std::lround(static_cast<double>(-dy) * offset / norm);
+  const std::int64_t oy = std::lround(static_cast<double>(dx) * offset / norm);
+  if (!profile_inside(blurred, ax, ay, bx, by, ox, oy)) return false;
+  if (length == 30) {
+    sample_profile(blurred, ax, ay, dx, dy, ox, oy, std::integral_constant<std::int64_t, 29>{},
+                   out);
+  } else {
+    sample_profile(blurred, ax, ay, dx, dy, ox, oy, std::int64_t{length - 1}, out);
+  }
+  return true;
+}
+
+bool subpixel_arc_descriptor(ImageView blurred, Point2f a, Point2f b,
+                             const DescriptorParams& params, ArcDescriptor& out) {
+  out.fill(0.f);
+  const int length = params.profile_length;
+  if (length < 2 || length > kMaxProfileLength) return false;
+  std::int32_t sums[kMaxProfileLength];
+  if (!subpixel_profile(blurred, a, b, params.parallel_offset, length, sums)) return false;
+  float profile[kMaxProfileLength];
+  constexpr float kToMean = 1.f / (3.f * kSubpixel * kSubpixel);
+  for (int i = 0; i < length; ++i) profile[i] = static_cast<float>(sums[i]) * kToMean;
+  return descriptor_from_profile(profile, length, params.coefficients, out);
+}
+
 bool descriptor_from_profile(const float* profile, int length, int coefficients,
                              ArcDescriptor& out) {
   out.fill(0.f);
@@ -281,8 +375,9 @@ bool descriptor_from_samples(const float* samples, int n, const DescriptorParams
 namespace {
 
 // cos and sin of 2 pi k / 30 in Q28: mean deviations have at most 20 bits
-// (30 * 29 * 765), so 30 terms stay below 2^54, and the table's rounding
-// (2^-29) is far below an int16 step (2^-15).
+// (30 * 29 * 765), 23 for sub-pixel profiles (30 * 256 * 765), so 30 terms
+// stay below 2^56, and the table's rounding (2^-29) is far below an int16
+// step (2^-15).
 constexpr double kQ = 268435456.0;  // 2^28
 struct FixedTable {
   std::int32_t cos[kMaxCoefficients][kTableLength];

@@ -46,6 +46,16 @@ bool mean_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset, 
 // first and last coincide with in's first and last.
 void resample_linear(const float* in, int n, float* out, int length);
 
+// DescriptorParams::subpixel_profiles: `length` (>= 2) samples evenly
+// spaced from a to b, both ends included, each the sum of three bilinear
+// samples, on the segment and +-parallel_offset pixels perpendicular to it.
+// Positions and weights are integers in 1/16 pixel (a and b rounded to
+// that), so out (256 times the three pixels' sum) is exact on any core, and
+// b -> a gives the reversed profile. False (out unspecified) when a sample
+// needs a pixel outside the image or a and b round to one point.
+bool subpixel_profile(ImageView blurred, Point2f a, Point2f b, int parallel_offset, int length,
+                      std::int32_t* out);
+
 // Descriptor from an already resampled profile of `length` samples. Returns
 // false if the profile is flat (all kept coefficients zero).
 bool descriptor_from_profile(const float* profile, int length, int coefficients,
@@ -59,10 +69,13 @@ bool descriptor_from_samples(const float* samples, int n, const DescriptorParams
 // Full descriptor of the arc a -> b. Returns false when the arc leaves the
 // image, is degenerate or its profile is flat. `scratch` is reused storage
 // for the profile (a std::vector or WorkVector).
+bool subpixel_arc_descriptor(ImageView blurred, Point2f a, Point2f b,
+                             const DescriptorParams& params, ArcDescriptor& out);
 template <class Vector>
 bool arc_descriptor(ImageView blurred, Point2f a, Point2f b, const DescriptorParams& params,
                     Vector& scratch, ArcDescriptor& out) {
   out.fill(0.f);
+  if (params.subpixel_profiles != 0) return subpixel_arc_descriptor(blurred, a, b, params, out);
   if (!mean_profile(blurred, a, b, params.parallel_offset, scratch)) return false;
   return descriptor_from_samples(scratch.data(), static_cast<int>(scratch.size()), params, out);
 }
@@ -96,8 +109,14 @@ template <class Vector>
 bool arc_descriptor_fixed(ImageView blurred, Point2f a, Point2f b, const DescriptorParams& params,
                           std::int32_t scale, Vector& scratch, std::int32_t* out) {
   for (int i = 0; i < kDescriptorSize; ++i) out[i] = 0;
+  if (params.profile_length != 30) return false;
+  if (params.subpixel_profiles != 0) {
+    scratch.resize(30);
+    return subpixel_profile(blurred, a, b, params.parallel_offset, 30, scratch.data()) &&
+           fixed_descriptor(scratch.data(), 30, params.coefficients, scale, out);
+  }
   const int n = profile_samples(blurred, a, b, params.parallel_offset);
-  if (n < 2 || params.profile_length != 30) return false;
+  if (n < 2) return false;
   scratch.resize(static_cast<std::size_t>(n) + 30);
   if (!profile_sums(blurred, a, b, params.parallel_offset, scratch.data())) return false;
   std::int32_t* resampled = scratch.data() + n;

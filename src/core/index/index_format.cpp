@@ -175,6 +175,8 @@ Status validate_params(const Params& p) {
     return bad("descriptor.coefficients", "must be in 1.." + std::to_string(kMaxCoefficients));
   if (p.descriptor.parallel_offset < 0 || p.descriptor.parallel_offset > 8)
     return bad("descriptor.parallel_offset", "must be in 0..8");
+  if (p.descriptor.subpixel_profiles < 0 || p.descriptor.subpixel_profiles > 1)
+    return bad("descriptor.subpixel_profiles", "must be 0 or 1");
   if (!finite_positive(p.descriptor.similarity_threshold) ||
       p.descriptor.similarity_threshold > 2.f)
     return bad("descriptor.similarity_threshold", "must be in (0, 2]");

@@ -246,6 +246,7 @@ void visit_params(P& p, F&& f) {
   f("views.max_scale", p.views.max_scale);                    // 6.7; 0 in older files: read as 1
   f("keypoints.hessian_fine_levels", p.keypoints.hessian_fine_levels);        // 6.8; 0: off
   f("keypoints.hessian_fine_threshold", p.keypoints.hessian_fine_threshold);  // 0: the threshold
+  f("descriptor.subpixel_profiles", p.descriptor.subpixel_profiles);          // 0: Bresenham
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }
