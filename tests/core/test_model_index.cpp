@@ -1219,6 +1219,8 @@ TEST(Golden, EveryGoldenLoadsAndDetects) {
     EXPECT_EQ(index.params().views.max_scale, 1.f);
     // Fine Hessian levels (6.8): one by default; older files' zero is none.
     EXPECT_EQ(index.params().keypoints.hessian_fine_levels, index.version_minor() >= 8 ? 1 : 0);
+    // Sub-pixel arc profiles (6.9) are opt-in: every golden file holds 0.
+    EXPECT_EQ(index.params().descriptor.subpixel_profiles, 0);
     if (index.version_minor() >= 2) {
       ASSERT_TRUE(index.has_appearance());
       const ModelAppearance look = index.appearance(0);

@@ -43,7 +43,10 @@ inline constexpr std::uint16_t kVersionMajor = 6;
 // 6.8: keypoints.hessian_fine_levels and hessian_fine_threshold (Hessian
 // levels below the first octave's, issue 38); older files read them as 0,
 // no fine levels, as they were built.
-inline constexpr std::uint16_t kVersionMinor = 8;
+// 6.9: descriptor.subpixel_profiles (arc profiles sampled at the keypoints'
+// sub-pixel positions, opt-in, issue 38); older files read it as 0, the
+// Bresenham profiles they were built with.
+inline constexpr std::uint16_t kVersionMinor = 9;
 inline constexpr std::size_t kAlignment = 64;
 
 inline constexpr std::size_t kHeaderSize = 64;
@@ -246,7 +249,7 @@ void visit_params(P& p, F&& f) {
   f("views.max_scale", p.views.max_scale);                    // 6.7; 0 in older files: read as 1
   f("keypoints.hessian_fine_levels", p.keypoints.hessian_fine_levels);        // 6.8; 0: off
   f("keypoints.hessian_fine_threshold", p.keypoints.hessian_fine_threshold);  // 0: the threshold
-  f("descriptor.subpixel_profiles", p.descriptor.subpixel_profiles);          // 0: Bresenham
+  f("descriptor.subpixel_profiles", p.descriptor.subpixel_profiles);          // 6.9; 0: Bresenham
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }
