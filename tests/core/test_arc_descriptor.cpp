@@ -18,6 +18,7 @@
 #include "core/description/arc_types.h"
 #include "core/image/blur.h"
 #include "core/image/plane.h"
+#include "support/descriptor_blur.h"
 #include "support/test_data.h"
 
 namespace kg {
@@ -29,17 +30,6 @@ struct Arc {
   Point2f a;
   Point2f b;
 };
-
-// Blur as the pipeline does before descriptors (sigma from DescriptorParams).
-cv::Mat blur(const cv::Mat& img) {
-  Plane<std::uint8_t> dst;
-  Plane<float> scratch;
-  gaussian_blur(test::view(img), DescriptorParams{}.blur_sigma, dst, scratch);
-  cv::Mat out(dst.height(), dst.width(), CV_8U);
-  for (int y = 0; y < dst.height(); ++y)
-    std::copy(dst.row(y), dst.row(y) + dst.width(), out.ptr<std::uint8_t>(y));
-  return out;
-}
 
 cv::Mat load(const char* name) {
   cv::Mat img = test::load_gray(test::opencv_data(name));
@@ -145,7 +135,7 @@ std::vector<cv::Point> reference_line(cv::Point a, cv::Point b) {
 // Sampling contract.
 
 TEST(MeanProfile, MatchesReferenceBresenhamAndParallelShift) {
-  const cv::Mat img = blur(load("graf1.png"));
+  const cv::Mat img = test::descriptor_blurred(load("graf1.png"));
   ASSERT_FALSE(img.empty());
   std::vector<Arc> arcs = random_arcs(img.cols, img.rows, 500, 3, 11);
   // Arcs with ties away from and at the midpoint, in every direction.
@@ -180,7 +170,7 @@ TEST(MeanProfile, MatchesReferenceBresenhamAndParallelShift) {
 TEST(MeanProfile, AgreesWithOpenCvLineIteratorAwayFromTies) {
   // cv::LineIterator is an independent Bresenham; off exact half-way ties
   // every Bresenham visits the same pixels.
-  const cv::Mat img = blur(load("box.png"));
+  const cv::Mat img = test::descriptor_blurred(load("box.png"));
   ASSERT_FALSE(img.empty());
   int compared = 0;
   std::vector<float> central;
@@ -203,7 +193,7 @@ TEST(MeanProfile, AgreesWithOpenCvLineIteratorAwayFromTies) {
 }
 
 TEST(MeanProfile, RoundsEndpointsToNearestPixel) {
-  const cv::Mat img = blur(load("box.png"));
+  const cv::Mat img = test::descriptor_blurred(load("box.png"));
   ASSERT_FALSE(img.empty());
   std::vector<float> p, q;
   ASSERT_TRUE(mean_profile(test::view(img), {40.4f, 50.6f}, {90.49f, 71.2f}, 1, p));
@@ -212,7 +202,7 @@ TEST(MeanProfile, RoundsEndpointsToNearestPixel) {
 }
 
 TEST(MeanProfile, RejectsOutsideAndDegenerateArcs) {
-  const cv::Mat img = blur(load("box.png"));
+  const cv::Mat img = test::descriptor_blurred(load("box.png"));
   ASSERT_FALSE(img.empty());
   const ImageView v = test::view(img);
   const float w = static_cast<float>(img.cols), h = static_cast<float>(img.rows);
@@ -287,7 +277,7 @@ TEST(DescriptorFromProfile, CosineHasEnergyOnlyInItsCoefficient) {
 }
 
 TEST(DescriptorFromProfile, UnitNormAndUnusedComponentsZero) {
-  const cv::Mat img = blur(load("graf1.png"));
+  const cv::Mat img = test::descriptor_blurred(load("graf1.png"));
   ASSERT_FALSE(img.empty());
   std::vector<float> scratch;
   for (int m = 1; m <= kMaxCoefficients; ++m) {
@@ -341,7 +331,7 @@ TEST(DescriptorFromProfile, RejectsBadSizes) {
   EXPECT_TRUE(descriptor_from_profile(f.data(), 256, 3, d));
   EXPECT_TRUE(descriptor_from_profile(f.data(), 2, 1, d));
 
-  const cv::Mat img = blur(load("box.png"));
+  const cv::Mat img = test::descriptor_blurred(load("box.png"));
   ASSERT_FALSE(img.empty());
   std::vector<float> scratch;
   DescriptorParams params;
@@ -352,7 +342,7 @@ TEST(DescriptorFromProfile, RejectsBadSizes) {
 }
 
 TEST(ArcDescriptor, ScratchStopsReallocating) {
-  const cv::Mat img = blur(load("graf1.png"));
+  const cv::Mat img = test::descriptor_blurred(load("graf1.png"));
   ASSERT_FALSE(img.empty());
   std::vector<float> scratch;
   ArcDescriptor d;
@@ -368,7 +358,7 @@ TEST(ArcDescriptor, ScratchStopsReallocating) {
 // Reversal.
 
 TEST(ArcDescriptor, ReversedArcIsReversedProfile) {
-  const cv::Mat img = blur(load("graf1.png"));
+  const cv::Mat img = test::descriptor_blurred(load("graf1.png"));
   ASSERT_FALSE(img.empty());
   const DescriptorParams params;
   const int l = params.profile_length;
@@ -424,7 +414,7 @@ TEST(ArcDescriptor, InvariantToBrightnessOffset) {
     ASSERT_FALSE(raw.empty());
     cv::Mat scaled;
     raw.convertTo(scaled, CV_8U, 170.0 / 255.0, 30.0);  // [30, 200]
-    const cv::Mat img = blur(scaled);
+    const cv::Mat img = test::descriptor_blurred(scaled);
     cv::Mat brighter;
     img.convertTo(brighter, CV_8U, 1.0, 20.0);
     double lo, hi;
@@ -452,7 +442,7 @@ TEST(ArcDescriptor, InvariantToContrastUpToRounding) {
     ASSERT_FALSE(raw.empty());
     cv::Mat scaled;
     raw.convertTo(scaled, CV_8U, 130.0 / 255.0, 30.0);  // [30, 160]
-    const cv::Mat img = blur(scaled);
+    const cv::Mat img = test::descriptor_blurred(scaled);
     cv::Mat stronger;
     img.convertTo(stronger, CV_8U, 1.5, 0.0);  // rounds to 8 bits
     double lo, hi;
@@ -496,7 +486,7 @@ Point2f rotate_point(int code, Point2f p, int w, int h) {
 
 TEST(ArcDescriptor, RightAngleRotationsAreExactOffTies) {
   for (const char* name : {"box.png", "graf1.png"}) {
-    const cv::Mat img = blur(load(name));
+    const cv::Mat img = test::descriptor_blurred(load(name));
     ASSERT_FALSE(img.empty());
     const std::vector<Arc> arcs = random_arcs(img.cols, img.rows, 1000, 2, 18);
     for (const Rotation rot :
@@ -562,8 +552,8 @@ TEST(ArcDescriptor, ArbitraryRotationKeepsArcsSimilar) {
         raw, warped, m,
         cv::Size(static_cast<int>(std::ceil(box.width)), static_cast<int>(std::ceil(box.height))),
         cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
-    const cv::Mat img = blur(raw);
-    const cv::Mat rotated = blur(warped);
+    const cv::Mat img = test::descriptor_blurred(raw);
+    const cv::Mat rotated = test::descriptor_blurred(warped);
     auto map = [&](Point2f p) {
       return Point2f{static_cast<float>(m.at<double>(0, 0) * p.x + m.at<double>(0, 1) * p.y +
                                         m.at<double>(0, 2)),
@@ -605,7 +595,7 @@ TEST(ArcDescriptor, ArbitraryRotationKeepsArcsSimilar) {
 // differs from quantise(float descriptor) by at most one step (int8 and
 // int16), and almost all are equal.
 TEST(FixedPointDescriptor, AgreesWithQuantisedFloat) {
-  const cv::Mat img = blur(load("graf1.png"));
+  const cv::Mat img = test::descriptor_blurred(load("graf1.png"));
   const ImageView v = test::view(img);
   const std::vector<Arc> arcs = random_arcs(img.cols, img.rows, 4000, 4, 21);
   DescriptorParams params;

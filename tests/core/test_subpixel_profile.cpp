@@ -21,20 +21,11 @@
 #include "core/description/arc_types.h"
 #include "core/image/blur.h"
 #include "core/image/plane.h"
+#include "support/descriptor_blur.h"
 #include "support/test_data.h"
 
 namespace kg {
 namespace {
-
-cv::Mat blurred(const cv::Mat& img) {
-  Plane<std::uint8_t> dst;
-  Plane<float> scratch;
-  gaussian_blur(test::view(img), DescriptorParams{}.blur_sigma, dst, scratch);
-  cv::Mat out(dst.height(), dst.width(), CV_8U);
-  for (int y = 0; y < dst.height(); ++y)
-    std::copy(dst.row(y), dst.row(y) + dst.width(), out.ptr<std::uint8_t>(y));
-  return out;
-}
 
 DescriptorParams subpixel_params() {
   DescriptorParams p;
@@ -70,7 +61,7 @@ TEST(SubpixelProfile, SamplesARampExactlyAtSixteenthsOfAPixel) {
 }
 
 TEST(SubpixelProfile, ReversedArcIsTheReversedProfile) {
-  const cv::Mat img = blurred(test::load_gray(test::opencv_data("graf1.png")));
+  const cv::Mat img = test::descriptor_blurred(test::load_gray(test::opencv_data("graf1.png")));
   ASSERT_FALSE(img.empty());
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> x(4.f, static_cast<float>(img.cols) - 5.f);
@@ -118,7 +109,7 @@ TEST(SubpixelProfile, RefusesArcsOutsideTheImageAndDegenerateOnes) {
 // The integer encodings' descriptor is the float one quantised, as for the
 // Bresenham profiles (FixedPointDescriptor.AgreesWithQuantisedFloat).
 TEST(SubpixelProfile, FixedPointAgreesWithQuantisedFloat) {
-  const cv::Mat img = blurred(test::load_gray(test::opencv_data("box.png")));
+  const cv::Mat img = test::descriptor_blurred(test::load_gray(test::opencv_data("box.png")));
   ASSERT_FALSE(img.empty());
   DescriptorParams params = subpixel_params();
   std::mt19937 rng(9);
@@ -163,7 +154,7 @@ TEST(SubpixelProfile, ShortArcsFollowASubpixelMove) {
     const cv::Matx23d move(1, 0, tx, 0, 1, ty);
     cv::Mat moved;
     cv::warpAffine(raw, moved, move, raw.size(), cv::INTER_CUBIC, cv::BORDER_REPLICATE);
-    const cv::Mat img = blurred(raw), img2 = blurred(moved);
+    const cv::Mat img = test::descriptor_blurred(raw), img2 = test::descriptor_blurred(moved);
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> x(10.f, static_cast<float>(img.cols) - 11.f);
     std::uniform_real_distribution<float> y(10.f, static_cast<float>(img.rows) - 11.f);
