@@ -36,10 +36,20 @@ struct KeygraphEstimator {
     // Two circuits: each one's local affine map must predict the other's
     // points before the homography is fitted and scored. Rejects most
     // unrelated pairs for a few multiplications.
-    if (h == 2 && k == 3) {
-      const LocalAffine& p = s.match_affine_[static_cast<std::size_t>(s.active_[sample[0]])];
-      const LocalAffine& q = s.match_affine_[static_cast<std::size_t>(s.active_[sample[1]])];
+    if (h == 2 && k >= 3) {
+      const auto m0 = static_cast<std::size_t>(s.active_[sample[0]]);
+      const auto m1 = static_cast<std::size_t>(s.active_[sample[1]]);
+      const LocalAffine& p = s.match_affine_[m0];
+      const LocalAffine& q = s.match_affine_[m1];
       if (!affine_predicts(p, q) || !affine_predicts(q, p)) return false;
+      // A 4-vertex circuit's fourth points (the maps are the first three's).
+      for (int j = 3; j < k; ++j) {
+        const std::uint32_t a = s.match_pairs_[m0 * static_cast<std::size_t>(k) + j];
+        const std::uint32_t b = s.match_pairs_[m1 * static_cast<std::size_t>(k) + j];
+        if (!affine_predicts_point(p, s.pair_model_[b], s.pair_scene_[b]) ||
+            !affine_predicts_point(q, s.pair_model_[a], s.pair_scene_[a]))
+          return false;
+      }
     }
     Point2f model[kMaxVertices * 4];
     Point2f scene[kMaxVertices * 4];

@@ -55,18 +55,23 @@ inline LocalAffine local_affine(const Point2f* m0, const Point2f* s0) {
   return f;
 }
 
-// Whether f's map predicts the scene points of g's model points within the
-// pre-test tolerance. Degenerate maps fail.
+// Whether f's (non-degenerate) map predicts `scene` from `model` within the
+// pre-test tolerance.
+inline bool affine_predicts_point(const LocalAffine& f, Point2f model, Point2f scene) {
+  const float dx = model.x - f.model[0].x, dy = model.y - f.model[0].y;
+  const float px = f.scene[0].x + f.a * dx + f.b * dy, py = f.scene[0].y + f.c * dx + f.d * dy;
+  const float ex = px - scene.x, ey = py - scene.y;
+  const float fx = scene.x - f.cx, fy = scene.y - f.cy;
+  const float tol = kPretestPixels + kPretestFraction * std::sqrt(fx * fx + fy * fy);
+  return !(ex * ex + ey * ey > tol * tol);
+}
+
+// Whether f's map predicts the scene points of g's first three model points
+// (a 4-vertex circuit's fourth: affine_predicts_point). Degenerate maps fail.
 inline bool affine_predicts(const LocalAffine& f, const LocalAffine& g) {
   if (std::isnan(f.a)) return false;
-  for (int i = 0; i < 3; ++i) {
-    const float dx = g.model[i].x - f.model[0].x, dy = g.model[i].y - f.model[0].y;
-    const float px = f.scene[0].x + f.a * dx + f.b * dy, py = f.scene[0].y + f.c * dx + f.d * dy;
-    const float ex = px - g.scene[i].x, ey = py - g.scene[i].y;
-    const float fx = g.scene[i].x - f.cx, fy = g.scene[i].y - f.cy;
-    const float tol = kPretestPixels + kPretestFraction * std::sqrt(fx * fx + fy * fy);
-    if (ex * ex + ey * ey > tol * tol) return false;
-  }
+  for (int i = 0; i < 3; ++i)
+    if (!affine_predicts_point(f, g.model[i], g.scene[i])) return false;
   return true;
 }
 

@@ -155,14 +155,14 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
     }
   }
   match_active_.assign(static_cast<std::size_t>(n), 1);
-  // Two-match hypotheses of triangles are pre-tested with each match's
-  // local affine map (core/pose/local_affine.h).
+  // Two-match hypotheses are pre-tested with each match's local affine map
+  // through its first three points (core/pose/local_affine.h).
   match_affine_.clear();
-  if (h == 2 && k == 3) {
+  if (h == 2 && k >= 3) {
     for (int i = 0; i < n; ++i) {
       Point2f m[3], sc[3];
       for (int j = 0; j < 3; ++j) {
-        const std::uint32_t p = match_pairs_[static_cast<std::size_t>(i) * 3 + j];
+        const std::uint32_t p = match_pairs_[static_cast<std::size_t>(i) * k + j];
         m[j] = pair_model_[p];
         sc[j] = pair_scene_[p];
       }
