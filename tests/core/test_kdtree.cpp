@@ -290,6 +290,65 @@ TYPED_TEST(KdTreeTyped, LeafBoundsExactAndApproximateSearch) {
   EXPECT_EQ(allocations.count(), 0);
 }
 
+// The search keeps at most as many pending cells as it has leaves left to
+// visit (up to 64 leaves; a larger budget keeps them all in a heap): the
+// leaves visited, and so the slots found in their order, are the first
+// ones of a search with a larger budget. Given the arcs by slot, the same
+// search writes each slot's arc key instead, in the same order.
+TYPED_TEST(KdTreeTyped, ApproximateSearchOrderAndArcKeys) {
+  using T = TypeParam;
+  using Dist = typename KdTraits<T>::Dist;
+  using Point = KdPoint<T, kSearchDims>;
+  Rng rng(17);
+  const std::uint32_t n = 20000;
+  std::vector<Point> data;
+  for (const ArcDescriptor& d : test::clustered_descriptors(rng, n))
+    data.push_back(with_attributes<T>(rng, d));
+  std::vector<Point> points, bounds;
+  std::vector<std::uint32_t> ids;
+  std::vector<typename KdTraits<T>::Node> nodes;
+  build_kdtree<T, kSearchDims>(data.data(), n, points, ids, nodes, 4.0);
+  const int depth = kdtree_depth(n);
+  kdtree_leaf_bounds<T, kSearchDims>(points.data(), n, bounds);
+  // Slots as ids, as the model index's tree.
+  const BasicKdTreeView<T, kSearchDims> tree(points.data(), nullptr, n, nodes.data(), depth,
+                                             bounds.data());
+  std::vector<std::uint32_t> from(n);
+  std::vector<std::int16_t> to_offset(n);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    from[i] = rng.uniform(1u << 20);
+    to_offset[i] = static_cast<std::int16_t>(static_cast<int>(rng.uniform(60001)) - 30000);
+  }
+  const KdArcKeys keys{from.data(), to_offset.data()};
+  const auto r2 = radius2_of<T>(0.7f);
+  const auto box =
+      static_cast<Dist>(std::is_same_v<T, float> ? 0.2 : 0.2 * encoding_scale(encoding_of<T>()));
+  std::vector<std::uint32_t> all(n), some(n);
+  std::vector<std::uint64_t> arc_keys(n);
+  int prefixes = 0;
+  for (int q = 0; q < 40; ++q) {
+    const Point query = with_attributes<T>(rng, test::clustered_descriptors(rng, 1)[0]);
+    const std::uint32_t total = tree.radius_search_approximate(query, r2, box, 80, all.data(), n);
+    for (int leaves : {1, 8, 24, 64}) {
+      const std::uint32_t found =
+          tree.radius_search_approximate(query, r2, box, leaves, some.data(), n);
+      ASSERT_LE(found, total) << q << " " << leaves;
+      ASSERT_TRUE(std::equal(some.begin(), some.begin() + found, all.begin()))
+          << q << " " << leaves;
+      prefixes += found > 0 && found < total ? 1 : 0;
+      const std::uint32_t cap = found / 2;  // also cut short
+      ASSERT_EQ(tree.radius_search_approximate(query, r2, box, leaves, keys, arc_keys.data(), cap),
+                found);
+      for (std::uint32_t i = 0; i < cap; ++i) {
+        const std::uint32_t slot = some[i];
+        const auto to = static_cast<std::uint32_t>(std::int64_t{from[slot]} + to_offset[slot]);
+        ASSERT_EQ(arc_keys[i], (std::uint64_t{from[slot]} << 32) | to) << q << " " << i;
+      }
+    }
+  }
+  EXPECT_GT(prefixes, 40);  // the smaller budgets found fewer, not only all or none
+}
+
 // A walk over every leaf of a deep tree with a radius that keeps every far
 // child needs more pending cells than the search holds (512): the surplus
 // is dropped, never written past the cells, and what is found stays a

@@ -38,6 +38,7 @@ ArcSearch::ArcSearch(const ModelIndex& index, int max_leaves) {
   radius2_ = radius * radius;
   box_ = attribute_box(params.graph);
   max_leaves_ = max_leaves;
+  keys_ = IndexInternals::arc_keys(index);
   const std::uint32_t n = index.arc_count();
   const int depth = index.tree_depth();
   switch (encoding_) {
@@ -129,6 +130,29 @@ std::uint32_t ArcSearch::search(const Query& q, std::uint32_t* out, std::uint32_
       return search_encoded(encoded<std::int16_t>(q), q.box, out, capacity);
     case DescriptorEncoding::kInt8:
       return search_encoded(encoded<std::int8_t>(q), q.box, out, capacity);
+  }
+  return 0;
+}
+
+std::uint32_t ArcSearch::search_keys(const Query& q, std::uint64_t* out,
+                                     std::uint32_t capacity) const {
+  switch (encoding_) {
+    case DescriptorEncoding::kFloat32: {
+      const float b = q.box ? static_cast<float>(box_) : std::numeric_limits<float>::max();
+      return f32_.radius_search_approximate(q.point, radius2_, b, max_leaves_, keys_, out,
+                                            capacity);
+    }
+    case DescriptorEncoding::kInt16: {
+      const std::int64_t b = q.box ? box_ : std::numeric_limits<std::int64_t>::max();
+      return i16_.radius_search_approximate(encoded<std::int16_t>(q), radius2_scaled_, b,
+                                            max_leaves_, keys_, out, capacity);
+    }
+    case DescriptorEncoding::kInt8: {
+      const std::int32_t b = q.box ? box_ : std::numeric_limits<std::int32_t>::max();
+      return i8_.radius_search_approximate(encoded<std::int8_t>(q),
+                                           static_cast<ArcTreeView8::Dist>(radius2_scaled_), b,
+                                           max_leaves_, keys_, out, capacity);
+    }
   }
   return 0;
 }

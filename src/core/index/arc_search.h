@@ -65,6 +65,13 @@ class ArcSearch {
   Query query(const ArcDescriptor& q, const float* attributes) const;
   Query query_quantised(const std::int32_t* q, const float* attributes) const;
   std::uint32_t search(const Query& q, std::uint32_t* out, std::uint32_t capacity) const;
+  // Whether search_keys() can be used: an approximate search (max_leaves()
+  // > 0) of an index given at construction.
+  bool writes_keys() const { return max_leaves_ > 0 && keys_.from != nullptr; }
+  // The same search, writing the found arcs' keys (from << 32 | to:
+  // ModelIndex::arc() of each slot search() would write) instead of their
+  // slots; only when writes_keys().
+  std::uint32_t search_keys(const Query& q, std::uint64_t* out, std::uint32_t capacity) const;
   // Whether the model arc in tree slot `slot` is within the similarity
   // radius and scale box of q: what search() tests, for one arc.
   bool matches(const Query& q, std::uint32_t slot) const;
@@ -90,6 +97,7 @@ class ArcSearch {
   std::int64_t radius2_scaled_ = 0;  // int16, int8
   std::int32_t box_ = 0;             // attribute box, grid steps (0: none)
   int max_leaves_ = 0;               // approximate search (0: exact)
+  KdArcKeys keys_{};                 // the index's arcs by slot
 };
 
 }  // namespace kg

@@ -28,6 +28,10 @@ struct IndexInternals {
   static const KdNode* tree_nodes_f32(const ModelIndex& index);
   static const KdNodeInt* tree_nodes_int(const ModelIndex& index);
 
+  // The arcs by tree slot, as ModelIndex::arc() reads them.
+  static KdArcKeys arc_keys(const ModelIndex& index) {
+    return {index.arc_from_, index.arc_to_offset_};
+  }
   // Asks the cache for arc(slot)'s memory: a hint, no effect on results. A
   // look-up converts its slots after requesting them all, so the misses of
   // these random reads overlap.

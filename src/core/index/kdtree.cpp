@@ -338,9 +338,63 @@ inline Frame<T> root_frame(std::uint32_t n) {
 
 }  // namespace
 
+namespace {
+
+// What a search writes for a point found: its id.
+struct IdOut {
+  std::uint32_t* out;
+  void put(std::uint32_t i, std::uint32_t id) const { out[i] = id; }
+  // A whole leaf's hits (positions in slots [begin, begin + n)) from out[at]
+  // on, in a loop the compiler widens.
+  void put_leaf(std::uint32_t at, std::uint32_t begin, std::uint32_t, const std::uint16_t* hits,
+                std::uint32_t count) const {
+    std::uint32_t* const to = out + at;
+    for (std::uint32_t h = 0; h < count; ++h) to[h] = begin + hits[h];
+  }
+  void prefetch(std::uint32_t, std::uint32_t) const {}
+};
+
+// The arc key of the point with that id (the model index's slot).
+struct ArcKeyOut {
+  std::uint64_t* out;
+  KdArcKeys keys;
+  void put(std::uint32_t i, std::uint32_t id) const {
+    const std::uint32_t from = keys.from[id];
+    const auto to =
+        static_cast<std::uint32_t>(static_cast<std::int64_t>(from) + keys.to_offset[id]);
+    out[i] = (static_cast<std::uint64_t>(from) << 32) | to;
+  }
+  // A whole leaf's hits: one look-up each (the keys of the whole leaf in a
+  // widened loop, then picked, cost more).
+  void put_leaf(std::uint32_t at, std::uint32_t begin, std::uint32_t, const std::uint16_t* hits,
+                std::uint32_t count) const {
+    std::uint64_t* const to = out + at;
+    for (std::uint32_t h = 0; h < count; ++h) {
+      const std::uint32_t slot = begin + hits[h];
+      const std::uint32_t from = keys.from[slot];
+      to[h] = (static_cast<std::uint64_t>(from) << 32) |
+              (from + static_cast<std::uint32_t>(keys.to_offset[slot]));  // mod 2^32, as arc()
+    }
+  }
+  // Asks the cache for the arcs of slots [begin, end), as the leaf's points.
+  void prefetch(std::uint32_t begin, std::uint32_t end) const {
+    prefetch_range(keys.from + begin, keys.from + end);
+    prefetch_range(keys.to_offset + begin, keys.to_offset + end);
+  }
+  template <class P>
+  static void prefetch_range(const P* first, const P* last) {
+    const char* p = reinterpret_cast<const char*>(first);
+    const char* end = reinterpret_cast<const char*>(last);
+    for (; p < end; p += 64) __builtin_prefetch(p);
+  }
+};
+
+}  // namespace
+
 template <class T, std::size_t D>
+template <class Out>
 void BasicKdTreeView<T, D>::scan_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end,
-                                      const Point& q, Dist radius2, Dist box, std::uint32_t* out,
+                                      const Point& q, Dist radius2, Dist box, const Out& out,
                                       std::uint32_t capacity, std::uint32_t& found) const {
   const Point* bounds =
       bounds_ != nullptr ? bounds_ + 2 * (node - ((std::uint32_t{1} << depth_) - 1)) : nullptr;
@@ -355,20 +409,19 @@ void BasicKdTreeView<T, D>::scan_leaf(std::uint32_t node, std::uint32_t begin, s
       // The model index's case (slots are ids) with room for the whole
       // leaf: no test per hit, and the compiler widens the hits in vectors
       // (the per-hit loop below was a tenth of the search).
-      std::uint32_t* const to = out + found;
-      for (std::uint32_t h = 0; h < count; ++h) to[h] = begin + hits[h];
+      out.put_leaf(found, begin, end - begin, hits, count);
       found += count;
       return;
     }
     for (int h = 0; h < n; ++h) {
-      if (found < capacity) out[found] = id(begin + hits[h]);
+      if (found < capacity) out.put(found, id(begin + hits[h]));
       ++found;
     }
   } else {
     if (bounds != nullptr && !box_can_match(bounds, q, radius2, box)) return;
     for (std::uint32_t i = begin; i < end; ++i) {
       if (kd_distance2(points_[i], q) < radius2 && within_box(points_[i], q, box)) {
-        if (found < capacity) out[found] = id(i);
+        if (found < capacity) out.put(found, id(i));
         ++found;
       }
     }
@@ -406,7 +459,7 @@ std::uint32_t BasicKdTreeView<T, D>::radius_search(const Point& q, Dist radius2,
     Frame<T> f = stack[--top];
     if (f.bound >= radius2) continue;
     while (f.level < depth_) descend_near<T, D>(f, nodes_[f.node], q, radius2, box, stack, top);
-    scan_leaf(f.node, f.begin, f.end, q, radius2, box, out, capacity, found);
+    scan_leaf(f.node, f.begin, f.end, q, radius2, box, IdOut{out}, capacity, found);
   }
   return found;
 }
@@ -416,6 +469,23 @@ std::uint32_t BasicKdTreeView<T, D>::radius_search_approximate(const Point& q, D
                                                                Dist box, int max_leaves,
                                                                std::uint32_t* out,
                                                                std::uint32_t capacity) const {
+  return approximate(q, radius2, box, max_leaves, IdOut{out}, capacity);
+}
+
+template <class T, std::size_t D>
+std::uint32_t BasicKdTreeView<T, D>::radius_search_approximate(const Point& q, Dist radius2,
+                                                               Dist box, int max_leaves,
+                                                               const KdArcKeys& keys,
+                                                               std::uint64_t* out,
+                                                               std::uint32_t capacity) const {
+  return approximate(q, radius2, box, max_leaves, ArcKeyOut{out, keys}, capacity);
+}
+
+template <class T, std::size_t D>
+template <class Out>
+std::uint32_t BasicKdTreeView<T, D>::approximate(const Point& q, Dist radius2, Dist box,
+                                                 int max_leaves, const Out& out,
+                                                 std::uint32_t capacity) const {
   std::uint32_t found = 0;
   if (n_ == 0 || max_leaves <= 0) return 0;
   // Pending far children live in `cells`; the min-heap orders small
@@ -433,8 +503,33 @@ std::uint32_t BasicKdTreeView<T, D>::radius_search_approximate(const Point& q, D
                                                        : static_cast<double>(box) + 1.0;
   // Priority per unit of squared offset: descriptor, then attribute.
   const double cost[2] = {1.0, static_cast<double>(radius2) / (box_width * box_width)};
+  // After `leaves` leaves at most max_leaves - leaves more cells are
+  // popped, so a cell ranked below that many pending ones never is. With a
+  // budget of up to kBoundedLeaves the queue keeps only those, sorted, the
+  // best at heap[head] (pops are then reads, and most far children are
+  // dropped with one compare), and frees the others' cells; the cells
+  // visited are the heap's (cells never run out at these budgets).
+  constexpr int kBoundedLeaves = 64;
+  const bool bounded = max_leaves <= kBoundedLeaves;
+  int head = 0;  // bounded: heap[head..size), keys ascending
+  auto push = [&](PendingCell x, int remaining) {
+    if (!bounded) {
+      push_pending(heap, size, x);
+      return;
+    }
+    if (size - head >= remaining) {
+      if (remaining <= 0 || x.key > heap[size - 1].key) {
+        free_cells[n_free++] = x.cell;
+        return;
+      }
+      free_cells[n_free++] = heap[--size].cell;
+    }
+    int i = size++;
+    for (; i > head && heap[i - 1].key > x.key; --i) heap[i] = heap[i - 1];
+    heap[i] = x;
+  };
   cells[n_used] = root_frame<T>(n_);
-  push_pending(heap, size, {pending_key(0.0, pushed++), n_used++});
+  push({pending_key(0.0, pushed++), n_used++}, max_leaves);
   int leaves = 0;
   constexpr int kBatch = 8;
   struct Leaf {
@@ -442,8 +537,8 @@ std::uint32_t BasicKdTreeView<T, D>::radius_search_approximate(const Point& q, D
   };
   Leaf batch[kBatch];
   int n_batch = 0;
-  while (size > 0 && leaves < max_leaves) {
-    const int cell = pop_pending(heap, size).cell;
+  while (size > head && leaves < max_leaves) {
+    const int cell = bounded ? heap[head++].cell : pop_pending(heap, size).cell;
     const Frame<T> f = cells[cell];  // a copy: the cell is free for the first far child
     free_cells[n_free++] = cell;
     Walk w{f.node, f.begin, f.end, f.level};
@@ -466,13 +561,14 @@ std::uint32_t BasicKdTreeView<T, D>::radius_search_approximate(const Point& q, D
       n_free -= keep & reuse;
       n_used += keep & (1 - reuse);
     }
-    for (int k = 0; k < n_kept; ++k) push_pending(heap, size, kept[k]);
     ++leaves;
+    for (int k = 0; k < n_kept; ++k) push(kept[k], max_leaves - leaves);
     // The walk never depends on what the leaves hold, so leaves are scanned
     // in batches after their memory has been requested: the misses of a
     // batch overlap instead of stalling one after another.
     batch[n_batch++] = {w.node, w.begin, w.end};
     prefetch_leaf(w.node, w.begin, w.end);
+    out.prefetch(w.begin, w.end);
     if (n_batch == kBatch) {
       for (int b = 0; b < n_batch; ++b)
         scan_leaf(batch[b].node, batch[b].begin, batch[b].end, q, radius2, box, out, capacity,

@@ -105,6 +105,16 @@ void build_kdtree(const KdPoint<T, D>* source, std::uint32_t n, std::vector<KdPo
                   std::vector<std::uint32_t>& ids, std::vector<typename KdTraits<T>::Node>& nodes,
                   double attribute_weight = 1.0);
 
+// The model index's arcs by tree slot (ModelIndex::arc(): from, and to as
+// an offset from it): given these, an approximate search writes each hit's
+// arc key (from << 32 | to) where it would write its slot, so a look-up
+// reads the arcs of a leaf while the leaf is in the cache instead of
+// storing slots and converting them one by one afterwards.
+struct KdArcKeys {
+  const std::uint32_t* from = nullptr;
+  const std::int16_t* to_offset = nullptr;
+};
+
 template <class T, std::size_t D = kDescriptorSize>
 class BasicKdTreeView {
  public:
@@ -137,6 +147,11 @@ class BasicKdTreeView {
   // answer, the points in the leaves nearest the query first.
   std::uint32_t radius_search_approximate(const Point& q, Dist radius2, Dist box, int max_leaves,
                                           std::uint32_t* out, std::uint32_t capacity) const;
+  // The same, writing the arc keys of the hits (`keys` by slot) instead of
+  // their slots: out[i] = from << 32 | to of the i-th slot found.
+  std::uint32_t radius_search_approximate(const Point& q, Dist radius2, Dist box, int max_leaves,
+                                          const KdArcKeys& keys, std::uint64_t* out,
+                                          std::uint32_t capacity) const;
 
   // The k (<= 64) nearest points by descriptor distance (attributes are not
   // compared), closest first (ties: smaller id first): ids and squared
@@ -150,10 +165,15 @@ class BasicKdTreeView {
   void prefetch_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end) const;
   // Appends to out (up to capacity; `found` counts all) the points of the
   // leaf `node`, slots [begin, end), within radius2 and box of q; skips the
-  // leaf when its bounds rule it out.
+  // leaf when its bounds rule it out. `Out` (kdtree.cpp) turns a slot into
+  // what is written: its id, or its arc key.
+  template <class Out>
   void scan_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end, const Point& q,
-                 Dist radius2, Dist box, std::uint32_t* out, std::uint32_t capacity,
+                 Dist radius2, Dist box, const Out& out, std::uint32_t capacity,
                  std::uint32_t& found) const;
+  template <class Out>
+  std::uint32_t approximate(const Point& q, Dist radius2, Dist box, int max_leaves, const Out& out,
+                            std::uint32_t capacity) const;
 
   const Point* points_ = nullptr;
   const std::uint32_t* ids_ = nullptr;

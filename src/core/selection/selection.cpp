@@ -239,6 +239,12 @@ std::uint32_t Selector::search_into(const SelectionInput& in, int e, JoinScratch
                                     std::uint32_t& total) const {
   const ArcSearch::Query& query = in.arcs->query(e);
   const auto cap = static_cast<std::uint32_t>(s.found.size());
+  if (in.search->writes_keys()) {
+    // The tree writes the keys as it scans each leaf (the same keys, in
+    // the same order, as the conversion of its slots below).
+    total = in.search->search_keys(query, at, std::min(cap, capacity));
+    return std::min({total, cap, capacity});
+  }
   total = in.search->search(query, s.found.data(), cap);
   const std::uint32_t n = std::min({total, cap, capacity});
   const std::uint32_t* slots = s.found.data();
