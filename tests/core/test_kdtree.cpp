@@ -227,6 +227,27 @@ TYPED_TEST(KdTreeTyped, RadiusAndBoxSearchEqualsBruteForce) {
   }
 }
 
+// A tree over n clustered descriptors with random attributes (tree order,
+// ids, nodes) and its leaf bounds.
+template <class T>
+struct AttributedTree {
+  std::vector<KdPoint<T, kSearchDims>> points, bounds;
+  std::vector<std::uint32_t> ids;
+  std::vector<typename KdTraits<T>::Node> nodes;
+  int depth = 0;
+};
+template <class T>
+AttributedTree<T> attributed_tree(Rng& rng, std::uint32_t n) {
+  std::vector<KdPoint<T, kSearchDims>> data;
+  for (const ArcDescriptor& d : test::clustered_descriptors(rng, n))
+    data.push_back(with_attributes<T>(rng, d));
+  AttributedTree<T> t;
+  build_kdtree<T, kSearchDims>(data.data(), n, t.points, t.ids, t.nodes, 4.0);
+  t.depth = kdtree_depth(n);
+  kdtree_leaf_bounds<T, kSearchDims>(t.points.data(), n, t.bounds);
+  return t;
+}
+
 // Leaf bounds only skip leaves that cannot match (exact answers unchanged);
 // the best-bin-first search returns a subset of the exact answer, all of it
 // when it may visit every leaf, and most of it within 32 leaves.
@@ -237,18 +258,13 @@ TYPED_TEST(KdTreeTyped, LeafBoundsExactAndApproximateSearch) {
   Rng rng(9);
   auto attributed = [&](const ArcDescriptor& d) { return with_attributes<T>(rng, d); };
   const std::uint32_t n = 20000;
-  std::vector<Point> data;
-  for (const ArcDescriptor& d : test::clustered_descriptors(rng, n)) data.push_back(attributed(d));
-  std::vector<Point> points, bounds;
-  std::vector<std::uint32_t> ids;
-  std::vector<typename KdTraits<T>::Node> nodes;
-  build_kdtree<T, kSearchDims>(data.data(), n, points, ids, nodes, 4.0);
-  const int depth = kdtree_depth(n);
-  kdtree_leaf_bounds<T, kSearchDims>(points.data(), n, bounds);
-  ASSERT_EQ(bounds.size(), 2u << depth);
-  const BasicKdTreeView<T, kSearchDims> plain(points.data(), ids.data(), n, nodes.data(), depth);
-  const BasicKdTreeView<T, kSearchDims> bounded(points.data(), ids.data(), n, nodes.data(), depth,
-                                                bounds.data());
+  const AttributedTree<T> t = attributed_tree<T>(rng, n);
+  const int depth = t.depth;
+  ASSERT_EQ(t.bounds.size(), 2u << depth);
+  const BasicKdTreeView<T, kSearchDims> plain(t.points.data(), t.ids.data(), n, t.nodes.data(),
+                                              depth);
+  const BasicKdTreeView<T, kSearchDims> bounded(t.points.data(), t.ids.data(), n, t.nodes.data(),
+                                                depth, t.bounds.data());
   const auto r2 = radius2_of<T>(0.7f);
   const auto box =
       static_cast<Dist>(std::is_same_v<T, float> ? 0.2 : 0.2 * encoding_scale(encoding_of<T>()));
@@ -301,18 +317,10 @@ TYPED_TEST(KdTreeTyped, ApproximateSearchOrderAndArcKeys) {
   using Point = KdPoint<T, kSearchDims>;
   Rng rng(17);
   const std::uint32_t n = 20000;
-  std::vector<Point> data;
-  for (const ArcDescriptor& d : test::clustered_descriptors(rng, n))
-    data.push_back(with_attributes<T>(rng, d));
-  std::vector<Point> points, bounds;
-  std::vector<std::uint32_t> ids;
-  std::vector<typename KdTraits<T>::Node> nodes;
-  build_kdtree<T, kSearchDims>(data.data(), n, points, ids, nodes, 4.0);
-  const int depth = kdtree_depth(n);
-  kdtree_leaf_bounds<T, kSearchDims>(points.data(), n, bounds);
+  const AttributedTree<T> t = attributed_tree<T>(rng, n);
   // Slots as ids, as the model index's tree.
-  const BasicKdTreeView<T, kSearchDims> tree(points.data(), nullptr, n, nodes.data(), depth,
-                                             bounds.data());
+  const BasicKdTreeView<T, kSearchDims> tree(t.points.data(), nullptr, n, t.nodes.data(), t.depth,
+                                             t.bounds.data());
   std::vector<std::uint32_t> from(n);
   std::vector<std::int16_t> to_offset(n);
   for (std::uint32_t i = 0; i < n; ++i) {
