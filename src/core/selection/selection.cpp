@@ -121,6 +121,21 @@ void Selector::JoinScratch::clear_counts() {
   truncated_completion = false;
 }
 
+void Selector::KeyStorage::reserve(std::size_t n) {
+  if (n <= capacity_) return;
+  release();
+  keys_ = static_cast<std::uint64_t*>(
+      memory_->allocate(n * sizeof(std::uint64_t), alignof(std::uint64_t)));
+  capacity_ = n;
+}
+
+void Selector::KeyStorage::release() {
+  if (keys_ != nullptr)
+    memory_->deallocate(keys_, capacity_ * sizeof(std::uint64_t), alignof(std::uint64_t));
+  keys_ = nullptr;
+  capacity_ = 0;
+}
+
 Selector::Selector(std::pmr::memory_resource* memory)
     : memory_(memory),
       state_(memory),
@@ -275,9 +290,7 @@ Selector::ArcList Selector::lookup(const SelectionInput& in, int e, const Limits
   if (!arcs.described(e)) return {begin_[e], 0, false};
   const std::size_t room = pool_limit_ - std::min(pool_limit_, pool_used_);
   const auto cap = static_cast<std::uint32_t>(std::max(0, limits.max_arc_matches));
-  // Within the reserved pool (room), so the resize never allocates.
-  const std::size_t most = std::min<std::size_t>(cap, room);
-  if (pool_.size() < pool_used_ + most) pool_.resize(pool_used_ + most);
+  const std::size_t most = std::min<std::size_t>(cap, room);  // within the reserved pool
   std::uint32_t total = 0;
   const std::uint32_t n =
       search_into(in, e, s, pool_.data() + pool_used_, static_cast<std::uint32_t>(most), total);
@@ -292,7 +305,6 @@ void Selector::search_chosen(const SelectionInput& in, const Limits& limits, Det
   const int* order = in.arcs->chosen_order().data();
   const int n = static_cast<int>(in.arcs->chosen_order().size());
   const auto cap = static_cast<std::uint32_t>(std::max(0, limits.max_arc_matches));
-  if (pool_.size() < pool_limit_) pool_.resize(pool_limit_);  // reserved: no allocation
   constexpr int kBlock = 16;
   auto past_deadline = [&]() {
     if (in.deadline == nullptr || std::chrono::steady_clock::now() <= *in.deadline) return false;
