@@ -68,23 +68,31 @@ inline void mark_ends(const std::uint64_t* keys, std::uint32_t n, End end_of, st
 }
 
 // Copies to `out` the keys of keys[0..n) whose end_of() carries `mark`, in
-// order; returns how many. Four keys a round, a branch per key: about 5 %
-// are kept, so the branches are mostly predicted, and the branch-free copy
-// (a store and an add per key) cost half again the instructions
-// (docs/RESULTS.md, "Selection cost (issue 35), 2026-12-06 fifth session").
+// order; returns how many. Branch-free (few are kept), four keys a round,
+// each round's marks read before its stores (a byte store may alias them).
 template <class End>
 inline std::uint32_t keep_marked(const std::uint64_t* keys, std::uint32_t n, End end_of,
                                  const std::uint8_t* marks, std::uint8_t mark, std::uint64_t* out) {
   std::uint32_t kept = 0, x = 0;
   for (; x + 4 <= n; x += 4) {
     const std::uint64_t k0 = keys[x], k1 = keys[x + 1], k2 = keys[x + 2], k3 = keys[x + 3];
-    if (marks[end_of(k0)] == mark) out[kept++] = k0;
-    if (marks[end_of(k1)] == mark) out[kept++] = k1;
-    if (marks[end_of(k2)] == mark) out[kept++] = k2;
-    if (marks[end_of(k3)] == mark) out[kept++] = k3;
+    const auto t0 = static_cast<std::uint32_t>(marks[end_of(k0)] == mark);
+    const auto t1 = static_cast<std::uint32_t>(marks[end_of(k1)] == mark);
+    const auto t2 = static_cast<std::uint32_t>(marks[end_of(k2)] == mark);
+    const auto t3 = static_cast<std::uint32_t>(marks[end_of(k3)] == mark);
+    out[kept] = k0;
+    kept += t0;
+    out[kept] = k1;
+    kept += t1;
+    out[kept] = k2;
+    kept += t2;
+    out[kept] = k3;
+    kept += t3;
   }
-  for (; x < n; ++x)
-    if (marks[end_of(keys[x])] == mark) out[kept++] = keys[x];
+  for (; x < n; ++x) {
+    out[kept] = keys[x];
+    kept += static_cast<std::uint32_t>(marks[end_of(keys[x])] == mark);
+  }
   return kept;
 }
 
