@@ -22,6 +22,11 @@ namespace {
 // alignment z does not change (docs/RESULTS.md, "Frame cost cut").
 constexpr double kAlignZShare = 0.5;
 
+// A cluster only the small rule could accept is refined and verified when
+// its RANSAC pose's longest side is within this factor of
+// ransac.small_max_size (the refinement moves a pose's corners by pixels).
+constexpr float kSmallPoseMargin = 1.5f;
+
 // Whether an instance with these corners repeats one of `model_id` already
 // in `out`. A second RANSAC attempt on the left-over correspondences of one
 // instance finds the same sign again, slightly shifted.
@@ -260,6 +265,18 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
         stats.best.sample_inliers < rp.min_inlier_keygraphs)
       break;
     small_only = small_only || stats.best.point_inliers < large_least;
+    if (small_only) {
+      // Only the small rule could accept it: a pose far larger than a small
+      // instance is passed over before its refinement and verification,
+      // which cost more than its RANSAC on a frame of many weak clusters.
+      Point2f found[4];
+      for (int c = 0; c < 4; ++c) found[c] = kg::apply(best, info.outline[c]);
+      if (!(longest_side(found) <= kSmallPoseMargin * rp.small_max_size)) {
+        estimator.score(best);  // its inlier flags
+        explain_cluster(k);
+        continue;
+      }
+    }
 
     // Refine on the inliers, re-selecting them with the refined pose.
     Homography refined = best;
@@ -383,23 +400,27 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
     }
     // Accepted or not, this cluster of correspondences is explained (by an
     // instance or as a false cluster); the next attempt looks elsewhere.
-    // Remove every correspondence that touches this instance's inliers.
-    for (int i : active_) {
-      const std::uint32_t* ids = &match_pairs_[static_cast<std::size_t>(i) * k];
-      for (int j = 0; j < k; ++j) {
-        if (pair_inlier_[ids[j]]) {
-          match_active_[i] = 0;
-          break;
-        }
-      }
-    }
-    // Its keypoint correspondences no longer count for later instances.
-    for (std::size_t i = 0; i < pair_count; ++i) {
-      if (pair_inlier_[i]) pair_dead_[i] = 1;
-      pair_inlier_[i] = 0;
-    }
+    explain_cluster(k);
   }
   return iterations;
+}
+
+void PoseEstimator::explain_cluster(int k) {
+  // Remove every correspondence that touches the cluster's inliers.
+  for (int i : active_) {
+    const std::uint32_t* ids = &match_pairs_[static_cast<std::size_t>(i) * k];
+    for (int j = 0; j < k; ++j) {
+      if (pair_inlier_[ids[j]]) {
+        match_active_[i] = 0;
+        break;
+      }
+    }
+  }
+  // Its keypoint correspondences no longer count for later instances.
+  for (std::size_t i = 0; i < pair_inlier_.size(); ++i) {
+    if (pair_inlier_[i]) pair_dead_[i] = 1;
+    pair_inlier_[i] = 0;
+  }
 }
 
 }  // namespace kg
