@@ -126,7 +126,7 @@ kg_status kg_index_from_memory(const void* data, size_t size, kg_index** out);
  * detector made from it must be destroyed first. */
 void kg_index_destroy(kg_index* index);
 
-/* The index's format version (6 and 9 for a format 6.9 file); KG_INVALID_ARGUMENT
+/* The index's format version (6 and 10 for a format 6.10 file); KG_INVALID_ARGUMENT
  * for a NULL argument. */
 kg_status kg_index_version(const kg_index* index, int* major, int* minor);
 /* The number of models; 0 for NULL. */

@@ -311,6 +311,20 @@ struct RansacParams {
   // Not in the paper (docs/RESULTS.md, "Local optimisation, and progressive
   // sampling by default").
   int progressive_sampling = 1;
+  // A small instance, whose found outline's longest side is at most
+  // small_max_size frame pixels, is also kept with as few as
+  // small_min_inliers distinct inliers (fewer than min_inliers and
+  // confirmed_min_inliers ask) when its appearance correlates at least
+  // small_min_appearance and its verification z reaches min_verification_z:
+  // a 40-150 px sign gives a pose 5 to 10 keypoints, and its few inliers
+  // need the appearance as independent evidence. small_max_size: [0,
+  // 100000], 0 is off; default 150. small_min_inliers: 0 (off) or 4..100000,
+  // default 6. small_min_appearance: [-1, 1], default 0.75. Format 6.10;
+  // 0 (off) in older files. Not in the paper (docs/RESULTS.md,
+  // "Small-instance verification (issue 38), 2026-12-06 fifth session").
+  float small_max_size = 150.f;
+  int small_min_inliers = 6;
+  float small_min_appearance = 0.75f;
 };
 
 // Not in the paper: simulated views of each model, rendered by the builder

@@ -1221,6 +1221,11 @@ TEST(Golden, EveryGoldenLoadsAndDetects) {
     EXPECT_EQ(index.params().keypoints.hessian_fine_levels, index.version_minor() >= 8 ? 1 : 0);
     // Sub-pixel arc profiles (6.9) are opt-in: every golden file holds 0.
     EXPECT_EQ(index.params().descriptor.subpixel_profiles, 0);
+    // The small-instance rule (6.10): on by default; older files' zeros are off.
+    EXPECT_EQ(index.params().ransac.small_max_size, index.version_minor() >= 10 ? 150.f : 0.f);
+    EXPECT_EQ(index.params().ransac.small_min_inliers, index.version_minor() >= 10 ? 6 : 0);
+    EXPECT_EQ(index.params().ransac.small_min_appearance,
+              index.version_minor() >= 10 ? 0.75f : 0.f);
     if (index.version_minor() >= 2) {
       ASSERT_TRUE(index.has_appearance());
       const ModelAppearance look = index.appearance(0);
@@ -1875,6 +1880,39 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
     ModelIndex index;
     ASSERT_TRUE(ModelIndex::view(buffer.data(), buffer.size(), index));
     EXPECT_EQ(index.params().descriptor.subpixel_profiles, 1);
+  }
+  // ransac.small_* (issue 38, 6.10): ranges, 0 is off, read back as written.
+  {
+    p = paper_params();
+    p.ransac.small_max_size = -1.f;
+    b = bytes();
+    put_params(b, p);
+    EXPECT_TRUE(rejected(b, "parameter ransac.small_max_size must be in [0, 100000]"));
+    for (const int n : {-1, 3, 100001}) {
+      p = paper_params();
+      p.ransac.small_min_inliers = n;
+      b = bytes();
+      put_params(b, p);
+      EXPECT_TRUE(rejected(b, "parameter ransac.small_min_inliers must be 0 (off) or in 4..100000"))
+          << n;
+    }
+    p = paper_params();
+    p.ransac.small_min_appearance = 1.5f;
+    b = bytes();
+    put_params(b, p);
+    EXPECT_TRUE(rejected(b, "parameter ransac.small_min_appearance must be in [-1, 1]"));
+    p = paper_params();
+    p.ransac.small_max_size = 90.f;
+    p.ransac.small_min_inliers = 5;
+    p.ransac.small_min_appearance = 0.85f;
+    b = bytes();
+    put_params(b, p);
+    AlignedBytes buffer(b);
+    ModelIndex index;
+    ASSERT_TRUE(ModelIndex::view(buffer.data(), buffer.size(), index));
+    EXPECT_EQ(index.params().ransac.small_max_size, 90.f);
+    EXPECT_EQ(index.params().ransac.small_min_inliers, 5);
+    EXPECT_EQ(index.params().ransac.small_min_appearance, 0.85f);
   }
   p = paper_params();
   p.descriptor.search_reference_models = -1;

@@ -259,6 +259,15 @@ Status validate_params(const Params& p) {
   if (!(std::isfinite(p.ransac.confirmed_min_appearance) &&
         p.ransac.confirmed_min_appearance >= -1.f && p.ransac.confirmed_min_appearance <= 1.f))
     return bad("ransac.confirmed_min_appearance", "must be in [-1, 1]");
+  if (!(std::isfinite(p.ransac.small_max_size) && p.ransac.small_max_size >= 0.f &&
+        p.ransac.small_max_size <= 100000.f))
+    return bad("ransac.small_max_size", "must be in [0, 100000] (0: off)");
+  if (p.ransac.small_min_inliers != 0 &&
+      (p.ransac.small_min_inliers < 4 || p.ransac.small_min_inliers > 100000))
+    return bad("ransac.small_min_inliers", "must be 0 (off) or in 4..100000");
+  if (!(std::isfinite(p.ransac.small_min_appearance) && p.ransac.small_min_appearance >= -1.f &&
+        p.ransac.small_min_appearance <= 1.f))
+    return bad("ransac.small_min_appearance", "must be in [-1, 1]");
   return Status::ok();
 }
 

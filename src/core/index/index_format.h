@@ -46,7 +46,10 @@ inline constexpr std::uint16_t kVersionMajor = 6;
 // 6.9: descriptor.subpixel_profiles (arc profiles sampled at the keypoints'
 // sub-pixel positions, opt-in, issue 38); older files read it as 0, the
 // Bresenham profiles they were built with.
-inline constexpr std::uint16_t kVersionMinor = 9;
+// 6.10: ransac.small_max_size, small_min_inliers and small_min_appearance
+// (poses of small instances kept with fewer inliers when their appearance
+// confirms them, issue 38); older files read them as 0, off.
+inline constexpr std::uint16_t kVersionMinor = 10;
 inline constexpr std::size_t kAlignment = 64;
 
 inline constexpr std::size_t kHeaderSize = 64;
@@ -250,6 +253,9 @@ void visit_params(P& p, F&& f) {
   f("keypoints.hessian_fine_levels", p.keypoints.hessian_fine_levels);        // 6.8; 0: off
   f("keypoints.hessian_fine_threshold", p.keypoints.hessian_fine_threshold);  // 0: the threshold
   f("descriptor.subpixel_profiles", p.descriptor.subpixel_profiles);          // 6.9; 0: Bresenham
+  f("ransac.small_max_size", p.ransac.small_max_size);                        // 6.10; 0: off
+  f("ransac.small_min_inliers", p.ransac.small_min_inliers);                  // 6.10; 0: off
+  f("ransac.small_min_appearance", p.ransac.small_min_appearance);            // 6.10
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them.
 }

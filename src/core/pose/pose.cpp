@@ -22,6 +22,11 @@ namespace {
 // alignment z does not change (docs/RESULTS.md, "Frame cost cut").
 constexpr double kAlignZShare = 0.5;
 
+// A cluster only the small rule could accept is refined and verified when
+// its RANSAC pose's longest side is within this factor of
+// ransac.small_max_size (the refinement moves a pose's corners by pixels).
+constexpr float kSmallPoseMargin = 1.5f;
+
 // Whether an instance with these corners repeats one of `model_id` already
 // in `out`. A second RANSAC attempt on the left-over correspondences of one
 // instance finds the same sign again, slightly shifted.
@@ -30,6 +35,16 @@ bool repeats_instance(const DetectionList& out, int model_id, const Point2f* cor
     if (d.model_id == model_id && outlines_overlap(d.corners, corners)) return true;
   }
   return false;
+}
+
+// The longest side of an outline, in frame pixels.
+float longest_side(const Point2f* corners) {
+  float longest = 0.f;
+  for (int c = 0; c < 4; ++c) {
+    const Point2f a = corners[c], b = corners[(c + 1) % 4];
+    longest = std::max(longest, std::hypot(a.x - b.x, a.y - b.y));
+  }
+  return longest;
 }
 
 }  // namespace
@@ -209,9 +224,15 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
   // poses it confirms may have less keypoint support.
   const ModelAppearance stored = index.appearance(model_id);
   const bool can_align = !stored.empty() && !frame.image.empty();
-  const int least_inliers = can_align && rp.confirmed_min_inliers > 0
-                                ? std::min(rp.min_inliers, rp.confirmed_min_inliers)
-                                : rp.min_inliers;
+  // Small instances' poses (ransac.small_*) need their appearance too.
+  const bool small_rule = can_align && rp.small_max_size > 0.f && rp.small_min_inliers > 0;
+  const int large_least = can_align && rp.confirmed_min_inliers > 0
+                              ? std::min(rp.min_inliers, rp.confirmed_min_inliers)
+                              : rp.min_inliers;
+  const int least_inliers = small_rule ? std::min(large_least, rp.small_min_inliers) : large_least;
+  // Once the best cluster left is too weak for a large instance, only the
+  // small rule may accept (without it the search ended there).
+  bool small_only = false;
   // Clusters below this verification z are not aligned (below): a share
   // of the lowest z a detection can have; none when the verification is off.
   const double lowest_z =
@@ -243,6 +264,19 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
     if (stats.best.point_inliers < least_inliers ||
         stats.best.sample_inliers < rp.min_inlier_keygraphs)
       break;
+    small_only = small_only || stats.best.point_inliers < large_least;
+    if (small_only) {
+      // Only the small rule could accept it: a pose far larger than a small
+      // instance is passed over before its refinement and verification,
+      // which cost more than its RANSAC on a frame of many weak clusters.
+      Point2f found[4];
+      for (int c = 0; c < 4; ++c) found[c] = kg::apply(best, info.outline[c]);
+      if (!(longest_side(found) <= kSmallPoseMargin * rp.small_max_size)) {
+        estimator.score(best);  // its inlier flags
+        explain_cluster(k);
+        continue;
+      }
+    }
 
     // Refine on the inliers, re-selecting them with the refined pose.
     Homography refined = best;
@@ -283,7 +317,12 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
     // detection needs is not aligned: it is rejected either way (z decides
     // without an appearance), and an alignment costs more than the rest of
     // the model's pose estimation (docs/RESULTS.md, "Frame cost cut").
-    if (can_align && z >= align_min_z) {
+    // A cluster only the small rule could accept is aligned only when its
+    // pose is small: an alignment is most of a model's pose cost.
+    Point2f corners[4];
+    for (int c = 0; c < 4; ++c) corners[c] = kg::apply(refined, info.outline[c]);
+    const bool worth_aligning = !small_only || longest_side(corners) <= rp.small_max_size;
+    if (can_align && z >= align_min_z && worth_aligning) {
       Homography aligned = refined;
       const AppearanceFit fit =
           aligner_.align({stored.pixels, stored.width, stored.height, stored.scale, stored.scale},
@@ -319,7 +358,6 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
           ++distinct;
       }
     }
-    Point2f corners[4];
     for (int c = 0; c < 4; ++c) corners[c] = kg::apply(refined, info.outline[c]);
     // Enough keypoint support, and an appearance that does not contradict
     // it; or less support that the appearance confirms.
@@ -329,8 +367,14 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
     const bool confirmed =
         measured && rp.confirmed_min_inliers > 0 && distinct >= rp.confirmed_min_inliers &&
         z >= rp.confirmed_min_verification_z && appearance >= rp.confirmed_min_appearance;
+    // A small instance with fewer inliers still: its keypoints confirm it
+    // as a large one's do (z), its appearance confirms it independently.
+    const bool small = small_rule && measured && distinct >= rp.small_min_inliers &&
+                       z >= rp.min_verification_z && appearance >= rp.small_min_appearance &&
+                       longest_side(corners) <= rp.small_max_size;
     const bool accepted =
-        (supported || confirmed) && final_score.sample_inliers >= rp.min_inlier_keygraphs &&
+        (small || (!small_only && (supported || confirmed))) &&
+        final_score.sample_inliers >= rp.min_inlier_keygraphs &&
         is_plausible_pose(refined, info.width, info.height, rp, estimator.min_area) &&
         !repeats_instance(out, model_id, corners);
     if (accepted && static_cast<int>(out.size()) >= max_out) {
@@ -356,23 +400,27 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
     }
     // Accepted or not, this cluster of correspondences is explained (by an
     // instance or as a false cluster); the next attempt looks elsewhere.
-    // Remove every correspondence that touches this instance's inliers.
-    for (int i : active_) {
-      const std::uint32_t* ids = &match_pairs_[static_cast<std::size_t>(i) * k];
-      for (int j = 0; j < k; ++j) {
-        if (pair_inlier_[ids[j]]) {
-          match_active_[i] = 0;
-          break;
-        }
-      }
-    }
-    // Its keypoint correspondences no longer count for later instances.
-    for (std::size_t i = 0; i < pair_count; ++i) {
-      if (pair_inlier_[i]) pair_dead_[i] = 1;
-      pair_inlier_[i] = 0;
-    }
+    explain_cluster(k);
   }
   return iterations;
+}
+
+void PoseEstimator::explain_cluster(int k) {
+  // Remove every correspondence that touches the cluster's inliers.
+  for (int i : active_) {
+    const std::uint32_t* ids = &match_pairs_[static_cast<std::size_t>(i) * k];
+    for (int j = 0; j < k; ++j) {
+      if (pair_inlier_[ids[j]]) {
+        match_active_[i] = 0;
+        break;
+      }
+    }
+  }
+  // Its keypoint correspondences no longer count for later instances.
+  for (std::size_t i = 0; i < pair_inlier_.size(); ++i) {
+    if (pair_inlier_[i]) pair_dead_[i] = 1;
+    pair_inlier_[i] = 0;
+  }
 }
 
 }  // namespace kg

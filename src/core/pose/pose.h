@@ -59,6 +59,9 @@ class PoseEstimator {
   // Refines h on guided pairs and measures the support of the final pose.
   Support guided_refine(const ModelIndex& index, const Params& params, const ModelInfo& info,
                         const FrameKeypoints& frame, Homography& h);
+  // Removes the matches touching the inlier pairs (pair_inlier_) of the
+  // cluster just judged and marks those pairs explained.
+  void explain_cluster(int k);
   // Distinct keypoint correspondences and, per keygraph match, its k indices into them.
   WorkVector<std::uint64_t> pairs_;
   WorkVector<Point2f> pair_model_;
