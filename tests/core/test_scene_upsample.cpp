@@ -75,29 +75,6 @@ TEST(SceneUpsampleParam, RangeAndOlderFiles) {
   EXPECT_EQ(read.keypoints.scene_upsample, 2);
 }
 
-// box_in_scene.png resized by `scale` (area averaging), and the SIFT
-// reference pose of box.png in the full-size scene mapped into it.
-struct SmallScene {
-  cv::Mat image;
-  Homography truth{};
-};
-SmallScene small_box_scene(const cv::Mat& box, double scale) {
-  const cv::Mat full = test::load_gray(test::opencv_data("box_in_scene.png"));
-  SmallScene out;
-  if (full.empty()) return out;
-  cv::resize(full, out.image, cv::Size(), scale, scale, cv::INTER_AREA);
-  const Homography h = test::sift_reference(box, full);
-  // Pixel centres: x' = (x + 0.5) s - 0.5, taken exactly per axis.
-  const double sx = static_cast<double>(out.image.cols) / full.cols;
-  const double sy = static_cast<double>(out.image.rows) / full.rows;
-  for (int c = 0; c < 3; ++c) {
-    out.truth[c] = sx * h[c] + (0.5 * sx - 0.5) * h[6 + c];
-    out.truth[3 + c] = sy * h[3 + c] + (0.5 * sy - 0.5) * h[6 + c];
-    out.truth[6 + c] = h[6 + c];
-  }
-  return out;
-}
-
 class SceneUpsample : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -147,7 +124,7 @@ TEST_F(SceneUpsample, ParameterIsStored) {
 // At 0.35 of its size the box is about 70 px wide in a 179x134 frame: too
 // few keypoints at the frame's own resolution, found on the upsampled one.
 TEST_F(SceneUpsample, SmallBoxFoundOnlyUpsampled) {
-  const SmallScene scene = small_box_scene(*box_, 0.35);
+  const test::ScaledScene scene = test::scaled_box_scene(*box_, 0.35);
   ASSERT_FALSE(scene.image.empty());
   DetectionList off, on;
   DesktopDetector plain(off_->index), upsampled(on_->index);
@@ -164,7 +141,7 @@ TEST_F(SceneUpsample, SmallBoxFoundOnlyUpsampled) {
 // Where both find the box, the poses agree: the map back to frame pixels
 // has no offset.
 TEST_F(SceneUpsample, SamePoseAsWithoutWhereBothFind) {
-  const SmallScene scene = small_box_scene(*box_, 0.6);
+  const test::ScaledScene scene = test::scaled_box_scene(*box_, 0.6);
   ASSERT_FALSE(scene.image.empty());
   DetectionList off, on;
   DesktopDetector plain(off_->index), upsampled(on_->index);
@@ -195,7 +172,7 @@ TEST_F(SceneUpsample, SamePoseAsWithoutWhereBothFind) {
 // Caller keypoints (in frame pixels) go through the same map: the box
 // found from keypoints the core's own Hessian found in the frame.
 TEST_F(SceneUpsample, CallerKeypointsAreMappedToo) {
-  const SmallScene scene = small_box_scene(*box_, 0.6);
+  const test::ScaledScene scene = test::scaled_box_scene(*box_, 0.6);
   ASSERT_FALSE(scene.image.empty());
   Detector core(on_->index);
   DetectionList found;
@@ -214,7 +191,7 @@ TEST_F(SceneUpsample, CallerKeypointsAreMappedToo) {
 // passes find the box, one detection of it.
 TEST_F(SceneUpsample, BothPassesKeepOneDetectionPerInstance) {
   for (const double scale : {0.35, 0.6}) {
-    const SmallScene scene = small_box_scene(*box_, scale);
+    const test::ScaledScene scene = test::scaled_box_scene(*box_, scale);
     ASSERT_FALSE(scene.image.empty());
     DetectionList found;
     DesktopDetector detector(both_->index);
@@ -228,7 +205,7 @@ TEST_F(SceneUpsample, BothPassesKeepOneDetectionPerInstance) {
 // Both passes together keep to Limits::max_detections: two boxes side by
 // side are both found with the default limits, one with max_detections 1.
 TEST_F(SceneUpsample, BothPassesKeepToMaxDetections) {
-  const SmallScene scene = small_box_scene(*box_, 0.6);
+  const test::ScaledScene scene = test::scaled_box_scene(*box_, 0.6);
   ASSERT_FALSE(scene.image.empty());
   cv::Mat two;
   cv::hconcat(scene.image, scene.image, two);
@@ -280,7 +257,7 @@ TEST_F(SceneUpsample, WindowModeReservesTheWindowNotTheFrame) {
 // correspondences cluster more densely elsewhere and the window misses it:
 // the vote's weakness, docs/RESULTS.md, "Small signs (issue 38)".)
 TEST_F(SceneUpsample, SmallBoxFoundInAnUpsampledWindow) {
-  const SmallScene small = small_box_scene(*box_, 0.35);
+  const test::ScaledScene small = test::scaled_box_scene(*box_, 0.35);
   ASSERT_FALSE(small.image.empty());
   const cv::Mat photo = test::load_gray(test::opencv_data("apple.jpg"));
   ASSERT_FALSE(photo.empty());

@@ -17,28 +17,6 @@
 namespace kg {
 namespace {
 
-// box_in_scene.png resized by `scale` (area averaging), and the SIFT
-// reference pose of box.png in the full-size scene mapped into it.
-struct ScaledScene {
-  cv::Mat image;
-  Homography truth{};
-};
-ScaledScene scaled_box_scene(const cv::Mat& box, double scale) {
-  const cv::Mat full = test::load_gray(test::opencv_data("box_in_scene.png"));
-  ScaledScene out;
-  if (full.empty()) return out;
-  cv::resize(full, out.image, cv::Size(), scale, scale, cv::INTER_AREA);
-  const Homography h = test::sift_reference(box, full);
-  const double sx = static_cast<double>(out.image.cols) / full.cols;
-  const double sy = static_cast<double>(out.image.rows) / full.rows;
-  for (int c = 0; c < 3; ++c) {
-    out.truth[c] = sx * h[c] + (0.5 * sx - 0.5) * h[6 + c];
-    out.truth[3 + c] = sy * h[3 + c] + (0.5 * sy - 0.5) * h[6 + c];
-    out.truth[6 + c] = h[6 + c];
-  }
-  return out;
-}
-
 class SmallInstances : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -69,7 +47,7 @@ test::InMemoryIndex* SmallInstances::off_ = nullptr;
 // min_inliers (12), so only the small rule keeps it, at its reference pose.
 TEST_F(SmallInstances, SmallBoxFoundOnlyByTheRule) {
   for (const double scale : {0.28, 0.35, 0.37}) {
-    const ScaledScene scene = scaled_box_scene(*box_, scale);
+    const test::ScaledScene scene = test::scaled_box_scene(*box_, scale);
     ASSERT_FALSE(scene.image.empty());
     DetectionList on, off;
     DesktopDetector with(on_->index), without(off_->index);
@@ -91,7 +69,7 @@ TEST_F(SmallInstances, SmallBoxFoundOnlyByTheRule) {
 // nothing: the same pose with and without it.
 TEST_F(SmallInstances, LargerBoxAsWithoutTheRule) {
   for (const double scale : {0.4, 0.6, 1.0}) {
-    const ScaledScene scene = scaled_box_scene(*box_, scale);
+    const test::ScaledScene scene = test::scaled_box_scene(*box_, scale);
     ASSERT_FALSE(scene.image.empty());
     DetectionList on, off;
     DesktopDetector with(on_->index), without(off_->index);

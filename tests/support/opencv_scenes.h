@@ -20,6 +20,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "builder/in_memory_index.h"
 #include "builder/index_writer.h"
@@ -101,6 +102,30 @@ struct InMemoryIndex {
   std::size_t bytes = 0;
   ModelIndex index;
 };
+
+// box_in_scene.png resized by `scale` (area averaging), and the SIFT
+// reference pose of box.png (`box`) in the full-size scene mapped into it;
+// an empty image when the scene cannot be read.
+struct ScaledScene {
+  cv::Mat image;
+  Homography truth{};
+};
+inline ScaledScene scaled_box_scene(const cv::Mat& box, double scale) {
+  const cv::Mat full = load_gray(opencv_data("box_in_scene.png"));
+  ScaledScene out;
+  if (full.empty()) return out;
+  cv::resize(full, out.image, cv::Size(), scale, scale, cv::INTER_AREA);
+  const Homography h = sift_reference(box, full);
+  // Pixel centres: x' = (x + 0.5) s - 0.5, taken exactly per axis.
+  const double sx = static_cast<double>(out.image.cols) / full.cols;
+  const double sy = static_cast<double>(out.image.rows) / full.rows;
+  for (int c = 0; c < 3; ++c) {
+    out.truth[c] = sx * h[c] + (0.5 * sx - 0.5) * h[6 + c];
+    out.truth[3 + c] = sy * h[3 + c] + (0.5 * sy - 0.5) * h[6 + c];
+    out.truth[6 + c] = h[6 + c];
+  }
+  return out;
+}
 
 inline Status view_in_memory(const std::vector<BuiltModel>& models, const Params& params,
                              InMemoryIndex& out) {
