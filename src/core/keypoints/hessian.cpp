@@ -13,6 +13,9 @@
 #if defined(KG_NEON_FLOAT)
 #include <arm_neon.h>
 #endif
+#if defined(KG_DISPATCH_AVX2)
+#include <immintrin.h>
+#endif
 
 namespace kg {
 namespace {
@@ -59,6 +62,33 @@ void to_unit_float(ImageView image, Plane<float>& dst, int y0, int y1) {
   }
 }
 
+// Pixel x of row m1 (rows m0, m2 around it) is above the threshold and
+// its 8 neighbours in the level: strictly above those before it in scan
+// order, at least equal to those after. Branch-free so it vectorises.
+KG_ALWAYS_INLINE bool level_maximum(const float* m0, const float* m1, const float* m2, int x,
+                                    float thr) {
+  const float v = m1[x];
+  return (v > thr) & (v > m1[x - 1]) & (v >= m1[x + 1]) & (v > m0[x - 1]) & (v > m0[x]) &
+         (v > m0[x + 1]) & (v >= m2[x - 1]) & (v >= m2[x]) & (v >= m2[x + 1]);
+}
+
+// Appends (x, y) to `cand` when pixel x of row m1 is above its 9
+// neighbours in the level below (rows l0, l1, l2); false when that would
+// pass `limit` ints (nothing appended then).
+KG_ALWAYS_INLINE bool offer_candidate(const float* m1, const float* l0, const float* l1,
+                                      const float* l2, int x, int y, WorkVector<std::int32_t>& cand,
+                                      std::size_t limit) {
+  const float v = m1[x];
+  const bool below = (v > l0[x - 1]) & (v > l0[x]) & (v > l0[x + 1]) & (v > l1[x - 1]) &
+                     (v > l1[x]) & (v > l1[x + 1]) & (v > l2[x - 1]) & (v > l2[x]) &
+                     (v > l2[x + 1]);
+  if (!below) return true;
+  if (cand.size() + 2 > limit) return false;
+  cand.push_back(x);
+  cand.push_back(y);
+  return true;
+}
+
 // Appends (x, y) of the pixels of row y (rows m0, m1, m2 around it) that
 // are above the threshold, above their 8 neighbours in the level and, with
 // the level below (rows l0, l1, l2 of its response), above the 9 there:
@@ -103,12 +133,8 @@ KG_ALWAYS_INLINE bool collect_candidates(const float* m0, const float* m1, const
     }
   }
 #endif
-  for (; x < w - kBorder; ++x) {
-    const float v = m1[x];
-    mask[x] = static_cast<std::uint8_t>((v > thr) & (v > m1[x - 1]) & (v >= m1[x + 1]) &
-                                        (v > m0[x - 1]) & (v > m0[x]) & (v > m0[x + 1]) &
-                                        (v >= m2[x - 1]) & (v >= m2[x]) & (v >= m2[x + 1]));
-  }
+  for (; x < w - kBorder; ++x)
+    mask[x] = static_cast<std::uint8_t>(level_maximum(m0, m1, m2, x, thr));
   std::fill(mask + std::max(w - kBorder, 0), mask + w + 8, std::uint8_t{0});
   for (x = kBorder; x < w - kBorder; ++x) {
     if ((x & 7) == 0) {  // skip 8 empty bytes at once
@@ -119,19 +145,49 @@ KG_ALWAYS_INLINE bool collect_candidates(const float* m0, const float* m1, const
         continue;
       }
     }
-    if (!mask[x]) continue;
-    const float v = m1[x];
-    const bool below = (v > l0[x - 1]) & (v > l0[x]) & (v > l0[x + 1]) & (v > l1[x - 1]) &
-                       (v > l1[x]) & (v > l1[x + 1]) & (v > l2[x - 1]) & (v > l2[x]) &
-                       (v > l2[x + 1]);
-    if (below) {
-      if (cand.size() + 2 > limit) return false;
-      cand.push_back(x);
-      cand.push_back(y);
-    }
+    if (mask[x] && !offer_candidate(m1, l0, l1, l2, x, y, cand, limit)) return false;
   }
   return true;
 }
+
+#if defined(KG_DISPATCH_AVX2)
+// v > p[0..7], v >= p[0..7]: masks for collect_candidates_avx2 (helpers,
+// not lambdas: those would not be compiled for AVX2).
+KG_TARGET_AVX2 KG_ALWAYS_INLINE __m256 gt8(__m256 v, const float* p) {
+  return _mm256_cmp_ps(v, _mm256_loadu_ps(p), _CMP_GT_OQ);
+}
+KG_TARGET_AVX2 KG_ALWAYS_INLINE __m256 ge8(__m256 v, const float* p) {
+  return _mm256_cmp_ps(v, _mm256_loadu_ps(p), _CMP_GE_OQ);
+}
+
+// collect_candidates' values with AVX2 intrinsics: the level test 8 pixels
+// at a time, skipping the pixels under the threshold (most of them) after
+// one comparison, and its bits read straight from the comparison mask, so
+// no mask row is written and scanned. The same candidates in the same order.
+KG_TARGET_AVX2 inline bool collect_candidates_avx2(const float* m0, const float* m1,
+                                                   const float* m2, const float* l0,
+                                                   const float* l1, const float* l2, int y, int w,
+                                                   float thr, WorkVector<std::int32_t>& cand,
+                                                   std::size_t limit) {
+  const __m256 t = _mm256_set1_ps(thr);
+  int x = kBorder;
+  for (; x + 8 <= w - kBorder; x += 8) {
+    const __m256 v = _mm256_loadu_ps(m1 + x);
+    const __m256 over = _mm256_cmp_ps(v, t, _CMP_GT_OQ);
+    if (_mm256_testz_ps(over, over)) continue;
+    __m256 m = _mm256_and_ps(over, _mm256_and_ps(gt8(v, m1 + x - 1), ge8(v, m1 + x + 1)));
+    m = _mm256_and_ps(m, _mm256_and_ps(gt8(v, m0 + x - 1), gt8(v, m0 + x)));
+    m = _mm256_and_ps(m, _mm256_and_ps(gt8(v, m0 + x + 1), ge8(v, m2 + x - 1)));
+    m = _mm256_and_ps(m, _mm256_and_ps(ge8(v, m2 + x), ge8(v, m2 + x + 1)));
+    for (auto bits = static_cast<unsigned>(_mm256_movemask_ps(m)); bits != 0; bits &= bits - 1)
+      if (!offer_candidate(m1, l0, l1, l2, x + __builtin_ctz(bits), y, cand, limit)) return false;
+  }
+  for (; x < w - kBorder; ++x)
+    if (level_maximum(m0, m1, m2, x, thr) && !offer_candidate(m1, l0, l1, l2, x, y, cand, limit))
+      return false;
+  return true;
+}
+#endif
 
 // Scale-normalised sigma^4 (Lxx Lyy - Lxy^2) of row y by central
 // differences, for every pixel with both horizontal neighbours.
@@ -172,7 +228,8 @@ KG_ALWAYS_INLINE void response_row(const Plane<float>& L, int y, float norm, flo
 // response of the level below. With `halo` (bands but the only one), two
 // rows for the responses of rows y0 - 1 and y1, which the candidate test
 // and the scan of the level below read and the neighbouring bands write.
-template <bool kNeon>
+// kAvx2: the candidates by collect_candidates_avx2 (x86-64 only).
+template <bool kNeon, bool kAvx2 = false>
 KG_ALWAYS_INLINE bool hessian_band_rows(const Plane<float>& L, float norm, float threshold,
                                         Plane<float>& R, int y0, int y1, const Plane<float>* below,
                                         std::uint8_t* mask, float* halo,
@@ -191,6 +248,16 @@ KG_ALWAYS_INLINE bool hessian_band_rows(const Plane<float>& L, float norm, float
   const auto response = [&](int y) -> const float* {
     return y < y0 ? above : y >= y1 ? after : R.row(y);
   };
+  // The candidates of row c, with the response rows around it.
+  const auto candidates = [&](const float* m0, const float* m1, const float* m2, int c) {
+#if defined(KG_DISPATCH_AVX2)
+    if constexpr (kAvx2)
+      return collect_candidates_avx2(m0, m1, m2, below->row(c - 1), below->row(c),
+                                     below->row(c + 1), c, w, threshold, *cand, limit);
+#endif
+    return collect_candidates<kNeon>(m0, m1, m2, below->row(c - 1), below->row(c),
+                                     below->row(c + 1), c, w, threshold, mask, *cand, limit);
+  };
   if (halos && c0 - 1 < y0) response_row<kNeon>(L, c0 - 1, norm, above);
   bool complete = true;
   for (int y = r0; y < r1; ++y) {
@@ -198,17 +265,13 @@ KG_ALWAYS_INLINE bool hessian_band_rows(const Plane<float>& L, float norm, float
     // Row y - 1 has both response neighbours now.
     const int c = y - 1;
     if (collect && complete && c >= c0 && c < c1)
-      complete = collect_candidates<kNeon>(response(c - 1), R.row(c), R.row(y), below->row(c - 1),
-                                           below->row(c), below->row(c + 1), c, w, threshold, mask,
-                                           *cand, limit);
+      complete = candidates(response(c - 1), R.row(c), R.row(y), c);
   }
   // The band's last candidate row, when its row below is the next band's.
   if (halos && c1 >= r1) {
     response_row<kNeon>(L, c1, norm, after);
     if (collect && complete)
-      complete = collect_candidates<kNeon>(response(c1 - 2), response(c1 - 1), after,
-                                           below->row(c1 - 2), below->row(c1 - 1), below->row(c1),
-                                           c1 - 1, w, threshold, mask, *cand, limit);
+      complete = candidates(response(c1 - 2), response(c1 - 1), after, c1 - 1);
   }
   return complete;
 }
@@ -225,7 +288,8 @@ KG_TARGET_AVX2 bool hessian_band_avx2(const Plane<float>& L, float norm, float t
                                       Plane<float>& R, int y0, int y1, const Plane<float>* below,
                                       std::uint8_t* mask, float* halo,
                                       WorkVector<std::int32_t>* cand, std::size_t limit) {
-  return hessian_band_rows<false>(L, norm, threshold, R, y0, y1, below, mask, halo, cand, limit);
+  return hessian_band_rows<false, true>(L, norm, threshold, R, y0, y1, below, mask, halo, cand,
+                                        limit);
 }
 #endif
 #if defined(KG_NEON_FLOAT)
