@@ -36,14 +36,8 @@ bool stronger(const Keypoint& a, const Keypoint& b) {
 
 // With kNeon the loops below have NEON versions (AArch64): the same
 // operations in the same order on 4 pixels at a time, so the same values.
-#if defined(KG_NEON_FLOAT)
-constexpr bool kHaveNeon = true;
-#else
-constexpr bool kHaveNeon = false;
-#endif
-
 template <bool kNeon>
-void to_unit_float(ImageView image, Plane<float>& dst, int y0, int y1) {
+KG_ALWAYS_INLINE void to_unit_float(ImageView image, Plane<float>& dst, int y0, int y1) {
   constexpr float kScale = 1.f / 255.f;
   for (int y = y0; y < y1; ++y) {
     const std::uint8_t* s = image.row(y);
@@ -321,7 +315,7 @@ bool hessian_band(const Plane<float>& L, float norm, float threshold, Plane<floa
 // pixels, which the caller accounts for. The source level has twice the
 // octave's first sigma, so this does not alias.
 template <bool kNeon>
-void halve_rows(const Plane<float>& src, Plane<float>& dst, int y0, int y1) {
+KG_ALWAYS_INLINE void halve_rows(const Plane<float>& src, Plane<float>& dst, int y0, int y1) {
   const int w = dst.width();
   for (int y = y0; y < y1; ++y) {
     const float* a = src.row(2 * y);
@@ -341,6 +335,39 @@ void halve_rows(const Plane<float>& src, Plane<float>& dst, int y0, int y1) {
 #endif
     for (; x < w; ++x) d[x] = 0.25f * ((a[2 * x] + a[2 * x + 1]) + (b[2 * x] + b[2 * x + 1]));
   }
+}
+
+// to_unit_float and halve_rows at the best level: the portable loops for
+// the baseline and (x86-64) AVX2, or the NEON ones.
+void to_unit_float_baseline(ImageView image, Plane<float>& dst, int y0, int y1) {
+  to_unit_float<false>(image, dst, y0, y1);
+}
+void halve_rows_baseline(const Plane<float>& src, Plane<float>& dst, int y0, int y1) {
+  halve_rows<false>(src, dst, y0, y1);
+}
+#if defined(KG_DISPATCH_AVX2)
+KG_TARGET_AVX2 void to_unit_float_avx2(ImageView image, Plane<float>& dst, int y0, int y1) {
+  to_unit_float<false>(image, dst, y0, y1);
+}
+KG_TARGET_AVX2 void halve_rows_avx2(const Plane<float>& src, Plane<float>& dst, int y0, int y1) {
+  halve_rows<false>(src, dst, y0, y1);
+}
+#endif
+void to_unit_float_rows(ImageView image, Plane<float>& dst, int y0, int y1) {
+#if defined(KG_DISPATCH_AVX2)
+  if (simd_level() == SimdLevel::kAvx2) return to_unit_float_avx2(image, dst, y0, y1);
+#elif defined(KG_NEON_FLOAT)
+  if (simd_level() != SimdLevel::kScalar) return to_unit_float<true>(image, dst, y0, y1);
+#endif
+  to_unit_float_baseline(image, dst, y0, y1);
+}
+void halve(const Plane<float>& src, Plane<float>& dst, int y0, int y1) {
+#if defined(KG_DISPATCH_AVX2)
+  if (simd_level() == SimdLevel::kAvx2) return halve_rows_avx2(src, dst, y0, y1);
+#elif defined(KG_NEON_FLOAT)
+  if (simd_level() != SimdLevel::kScalar) return halve_rows<true>(src, dst, y0, y1);
+#endif
+  halve_rows_baseline(src, dst, y0, y1);
 }
 
 // Band `band` of `bands` over `rows` rows: [begin, end).
@@ -536,16 +563,11 @@ void HessianDetector::run_level(const Level& level, int bands) {
   if (level.R) level.R->resize(w, h);
   if (level.blurred) level.blurred->resize(w, h);
   if (level.halved) level.halved->resize(w / 2, h / 2);
-  const bool neon = kHaveNeon && simd_level() != SimdLevel::kScalar;
   auto task = [&](int b, int /*worker*/) {
     Band& band = bands_[static_cast<std::size_t>(b)];
     const Rows rows = band_rows(h, b, bands);
     if (level.L == nullptr) {
-      if (neon) {
-        to_unit_float<kHaveNeon>(level.image, *level.unit, rows.begin, rows.end);
-      } else {
-        to_unit_float<false>(level.image, *level.unit, rows.begin, rows.end);
-      }
+      to_unit_float_rows(level.image, *level.unit, rows.begin, rows.end);
       return;
     }
     if (level.R) {
@@ -580,11 +602,7 @@ void HessianDetector::run_level(const Level& level, int bands) {
       gaussian_blur_rows(L, level.blur_sigma, *level.blurred, rows.begin, rows.end, band.scratch);
     if (level.halved) {
       const Rows half = band_rows(h / 2, b, bands);
-      if (neon) {
-        halve_rows<kHaveNeon>(L, *level.halved, half.begin, half.end);
-      } else {
-        halve_rows<false>(L, *level.halved, half.begin, half.end);
-      }
+      halve(L, *level.halved, half.begin, half.end);
     }
   };
   if (bands > 1) {
