@@ -119,16 +119,17 @@ TEST(KeypointBands, NothingAllocatedPerFrameWithWorkers) {
 
 // Both blurs of a frame, every pixel as float (the 8-bit one's values
 // widened), and the float blur split into bands.
-std::vector<float> blurred(ImageView image, int bands) {
+std::vector<float> blurred(ImageView image, int bands, float u8_sigma = 1.3f,
+                           float float_sigma = 2.45f) {
   Plane<std::uint8_t> u8;
   Plane<float> f, g, scratch;
-  gaussian_blur(image, 1.3f, u8, scratch);
+  gaussian_blur(image, u8_sigma, u8, scratch);
   f.resize(image.width, image.height);
   for (int y = 0; y < image.height; ++y)
     for (int x = 0; x < image.width; ++x) f.row(y)[x] = static_cast<float>(image.row(y)[x]);
   g.resize(image.width, image.height);
   for (int b = 0; b < bands; ++b)
-    gaussian_blur_rows(f, 2.45f, g, image.height * b / bands, image.height * (b + 1) / bands,
+    gaussian_blur_rows(f, float_sigma, g, image.height * b / bands, image.height * (b + 1) / bands,
                        scratch);
   std::vector<float> out;
   for (int y = 0; y < image.height; ++y) {
@@ -182,6 +183,37 @@ TEST(KeypointSimd, VectorLoopsEqualPortableLoops) {
     EXPECT_TRUE(same_bytes(vector_keypoints, portable_keypoints))
         << image.width << "x" << image.height << ": " << vector_keypoints.size() << " against "
         << portable_keypoints.size();
+  }
+}
+
+// The blurs of every radius with a vector copy of its own (1 to 10) and two
+// beyond (any radius), on the frames and on crops narrower than a vector
+// and than two, where the tails do all or half of a row.
+TEST(KeypointSimd, VectorBlurEqualsPortableAtEveryRadius) {
+  if (cpu_lacks_vector_loops()) GTEST_SKIP() << "needs a CPU with AVX2 (the x86-64 vector loops)";
+  const ImageView scene = frames().scene.view();
+  std::vector<ImageView> images = frames().views();
+  images.emplace_back(scene.row(100) + 201, 5, 60, scene.stride);
+  images.emplace_back(scene.row(40) + 17, 13, 90, scene.stride);
+  for (const float sigma :
+       {0.3f, 0.6f, 0.95f, 1.2f, 1.6f, 1.95f, 2.3f, 2.6f, 2.95f, 3.3f, 3.6f, 5.f}) {
+    for (const ImageView image : images) {
+      std::vector<float> vector_blur, portable_blur;
+      {
+        const test::SimdScope best(best_simd_level());
+        vector_blur = blurred(image, 1, sigma, sigma);
+      }
+      {
+        const test::SimdScope scalar(SimdLevel::kScalar);
+        portable_blur = blurred(image, 1, sigma, sigma);
+      }
+      ASSERT_EQ(vector_blur.size(), portable_blur.size());
+      EXPECT_EQ(
+          std::memcmp(vector_blur.data(), portable_blur.data(), vector_blur.size() * sizeof(float)),
+          0)
+          << "sigma " << sigma << " (radius " << blur_radius(sigma) << "), " << image.width << "x"
+          << image.height;
+    }
   }
 }
 

@@ -11,6 +11,9 @@
 #if defined(KG_NEON_FLOAT)
 #include <arm_neon.h>
 #endif
+#if defined(KG_DISPATCH_AVX2)
+#include <immintrin.h>
+#endif
 
 namespace kg {
 namespace {
@@ -113,19 +116,57 @@ KG_ALWAYS_INLINE void horizontal_row(const float* in, int w, const Kernel& k, fl
   }
 }
 
+// Rounds the 8-bit blur's row of w values to pixels.
+void round_row(const float* in, int w, std::uint8_t* d) {
+  for (int x = 0; x < w; ++x) {
+    // Normalised weights keep the sum within [0, 255] up to rounding.
+    const int v = static_cast<int>(in[x] + 0.5f);
+    d[x] = static_cast<std::uint8_t>(std::clamp(v, 0, 255));
+  }
+}
+
 // Replicates the end pixels of the row [0, w) into its `radius` padding.
 KG_ALWAYS_INLINE void pad_row(float* row, int w, int radius) {
   std::fill(row - radius, row, row[0]);
   std::fill(row + w, row + w + radius, row[w - 1]);
 }
 
-#if defined(KG_NEON_FLOAT)
-// The passes with NEON intrinsics, 4 pixels at a time: each pixel's sum in
-// a register over all taps (the portable loops add each group of taps into
-// memory), in the portable loops' order, so the same values bit for bit.
-// The radii of the frame's blurs (4 to 8) get their own copies, with the
-// taps unrolled and the rows and weights in registers.
+// The vector passes below (NEON, AVX2) sum each pixel over all taps in a
+// register (the portable loops add each group of taps into memory), in the
+// portable loops' order, so the same values bit for bit. The radii of the
+// frame's blurs (3 to 8) get their own copies, with the taps unrolled and
+// the rows and weights in registers.
 constexpr int kMaxFixedRadius = 10;
+
+// Calls f(std::integral_constant<int, R>) for radius R when R is at most
+// kMaxFixedRadius, else f(std::integral_constant<int, 0>): any radius.
+template <int R = 1, class F>
+KG_ALWAYS_INLINE void with_radius(int radius, F f) {
+  if constexpr (R <= kMaxFixedRadius) {
+    if (radius == R) return f(std::integral_constant<int, R>{});
+    with_radius<R + 1>(radius, f);
+  } else {
+    f(std::integral_constant<int, 0>{});
+  }
+}
+
+// The sum over the taps of `radius` as the portable loops compute it, for
+// one pixel (V = float) or a vector of them: `at(offset)` loads the pixels
+// `offset` taps away on one side (-) or the other (+); w[i] is the weight
+// of taps +-i.
+template <class V, class Load>
+KG_ALWAYS_INLINE V taps(Load at, const float* w, int radius) {
+  V v = w[0] * at(0);
+  const auto pair = [&](int i) { return w[i] * (at(-i) + at(i)); };
+  int i = 1;
+  for (; i + 3 <= radius; i += 4) v += (pair(i) + pair(i + 1)) + (pair(i + 2) + pair(i + 3));
+  for (; i + 1 <= radius; i += 2) v += pair(i) + pair(i + 1);
+  if (i <= radius) v += pair(i);
+  return v;
+}
+
+#if defined(KG_NEON_FLOAT)
+// The passes with NEON intrinsics, 4 pixels at a time.
 
 inline float32x4_t load4(const float* p) {
   return vld1q_f32(p);
@@ -141,9 +182,7 @@ inline float32x4_t tap(const float32x4_t& a, const float32x4_t& b, float k) {
   return vmulq_n_f32(vaddq_f32(a, b), k);
 }
 
-// Sum over the taps of `radius` for 4 pixels: `at(offset)` loads the
-// pixels `offset` taps away on one side (-) or the other (+); w[i] is the
-// weight of taps +-i.
+// taps() for 4 pixels.
 template <class Load>
 KG_ALWAYS_INLINE float32x4_t taps4(Load at, const float* w, int radius) {
   float32x4_t acc = vmulq_n_f32(at(0), w[0]);
@@ -161,113 +200,196 @@ KG_ALWAYS_INLINE float32x4_t taps4(Load at, const float* w, int radius) {
   return acc;
 }
 
-// The same sum for one pixel, as the portable loops compute it.
-template <class Load>
-KG_ALWAYS_INLINE float taps1(Load at, const float* w, int radius) {
-  float v = w[0] * at(0);
-  const auto pair = [&](int i) { return w[i] * (at(-i) + at(i)); };
+// The vector steps of the passes for vector_blur_u8/_float below.
+struct Neon {
+  // vertical_row's values. centre[i], i in [-radius, radius]: the clamped
+  // source row of tap i.
+  template <int R, class T>
+  static void vertical(const T* const* centre, int w, const Kernel& k, float* out) {
+    const int radius = R > 0 ? R : k.radius;
+    // Local copies (registers when R is fixed): stores to `out` cannot
+    // change them.
+    const T* rows[2 * (R > 0 ? R : kMaxRadius) + 1];
+    float weights[(R > 0 ? R : kMaxRadius) + 1];
+    for (int i = -radius; i <= radius; ++i) rows[radius + i] = centre[i];
+    for (int i = 0; i <= radius; ++i) weights[i] = k.w[static_cast<std::size_t>(i)];
+    int x = 0;
+    for (; x + 4 <= w; x += 4)
+      vst1q_f32(out + x,
+                taps4([&](int i) { return load4(rows[radius + i] + x); }, weights, radius));
+    for (; x < w; ++x)
+      out[x] = taps<float>([&](int i) { return static_cast<float>(rows[radius + i][x]); }, weights,
+                           radius);
+  }
+
+  // horizontal_row's values, the same way.
+  template <int R>
+  static void horizontal(const float* in, int w, const Kernel& k, float* out) {
+    const int radius = R > 0 ? R : k.radius;
+    float weights[(R > 0 ? R : kMaxRadius) + 1];
+    for (int i = 0; i <= radius; ++i) weights[i] = k.w[static_cast<std::size_t>(i)];
+    int x = 0;
+    for (; x + 4 <= w; x += 4)
+      vst1q_f32(out + x, taps4([&](int i) { return vld1q_f32(in + x + i); }, weights, radius));
+    for (; x < w; ++x) out[x] = taps<float>([&](int i) { return in[x + i]; }, weights, radius);
+  }
+
+  // The 8-bit blur's rounding of one row (round_row's values); the
+  // saturating narrowings are the clamp.
+  static void round(const float* in, int w, std::uint8_t* d) {
+    int x = 0;
+    for (; x + 8 <= w; x += 8) {
+      const float32x4_t half = vdupq_n_f32(0.5f);
+      const int32x4_t lo = vcvtq_s32_f32(vaddq_f32(vld1q_f32(in + x), half));
+      const int32x4_t hi = vcvtq_s32_f32(vaddq_f32(vld1q_f32(in + x + 4), half));
+      vst1_u8(d + x, vqmovn_u16(vcombine_u16(vqmovun_s32(lo), vqmovun_s32(hi))));
+    }
+    round_row(in + x, w - x, d + x);
+  }
+};
+#endif
+
+#if defined(KG_DISPATCH_AVX2)
+// The passes for AVX2, 8 pixels at a time, written with GCC/Clang vectors
+// (the same type as __m256): one ymm register in these functions, all
+// compiled for AVX2 (no lambdas: those would not be, and could not inline
+// the loads).
+typedef float Float8 __attribute__((vector_size(32)));
+
+KG_TARGET_AVX2 KG_ALWAYS_INLINE Float8 load8(const float* p) {
+  Float8 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+// Widened with intrinsics: __builtin_convertvector of 8 bytes to floats
+// compiles to one conversion per byte.
+KG_TARGET_AVX2 KG_ALWAYS_INLINE Float8 load8(const std::uint8_t* p) {
+  std::int64_t eight;
+  std::memcpy(&eight, p, sizeof eight);
+  return _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_cvtsi64_si128(eight)));
+}
+
+// The pixels of a tap: rows[i] + x (vertical pass) or in[i] (horizontal).
+template <class T>
+struct TapRows {
+  const T* const* rows;
+  int x;
+  KG_TARGET_AVX2 KG_ALWAYS_INLINE Float8 at(int i) const { return load8(rows[i] + x); }
+};
+struct TapShifts {
+  const float* in;
+  KG_TARGET_AVX2 KG_ALWAYS_INLINE Float8 at(int i) const { return load8(in + i); }
+};
+
+// taps() for 8 pixels, the same operations in the same order.
+template <class Source>
+KG_TARGET_AVX2 KG_ALWAYS_INLINE Float8 taps8(const Source& s, const float* w, int radius) {
+  Float8 v = w[0] * s.at(0);
   int i = 1;
-  for (; i + 3 <= radius; i += 4) v += (pair(i) + pair(i + 1)) + (pair(i + 2) + pair(i + 3));
-  for (; i + 1 <= radius; i += 2) v += pair(i) + pair(i + 1);
-  if (i <= radius) v += pair(i);
+  for (; i + 3 <= radius; i += 4)
+    v += (w[i] * (s.at(-i) + s.at(i)) + w[i + 1] * (s.at(-i - 1) + s.at(i + 1))) +
+         (w[i + 2] * (s.at(-i - 2) + s.at(i + 2)) + w[i + 3] * (s.at(-i - 3) + s.at(i + 3)));
+  for (; i + 1 <= radius; i += 2)
+    v += w[i] * (s.at(-i) + s.at(i)) + w[i + 1] * (s.at(-i - 1) + s.at(i + 1));
+  if (i <= radius) v += w[i] * (s.at(-i) + s.at(i));
   return v;
 }
 
-// Calls f(std::integral_constant<int, R>) for radius R when R is at most
-// kMaxFixedRadius, else f(std::integral_constant<int, 0>): any radius.
-template <int R = 1, class F>
-KG_ALWAYS_INLINE void with_radius(int radius, F f) {
-  if constexpr (R <= kMaxFixedRadius) {
-    if (radius == R) return f(std::integral_constant<int, R>{});
-    with_radius<R + 1>(radius, f);
-  } else {
-    f(std::integral_constant<int, 0>{});
+struct Avx2 {
+  template <int R, class T>
+  KG_TARGET_AVX2 static void vertical(const T* const* centre, int w, const Kernel& k, float* out) {
+    const int radius = R > 0 ? R : k.radius;
+    const T* rows[2 * (R > 0 ? R : kMaxRadius) + 1];
+    float weights[(R > 0 ? R : kMaxRadius) + 1];
+    for (int i = -radius; i <= radius; ++i) rows[radius + i] = centre[i];
+    for (int i = 0; i <= radius; ++i) weights[i] = k.w[static_cast<std::size_t>(i)];
+    int x = 0;
+    for (; x + 8 <= w; x += 8) {
+      const Float8 v = taps8(TapRows<T>{rows + radius, x}, weights, radius);
+      std::memcpy(out + x, &v, sizeof v);
+    }
+    for (; x < w; ++x)
+      out[x] = taps<float>([&](int i) { return static_cast<float>(rows[radius + i][x]); }, weights,
+                           radius);
   }
-}
 
-// vertical_row's values. centre[i], i in [-radius, radius]: the clamped
-// source row of tap i.
-template <int R, class T>
-void vertical_taps(const T* const* centre, int w, const Kernel& k, float* out) {
-  const int radius = R > 0 ? R : k.radius;
-  // Local copies (registers when R is fixed): stores to `out` cannot
-  // change them.
-  const T* rows[2 * (R > 0 ? R : kMaxRadius) + 1];
-  float weights[(R > 0 ? R : kMaxRadius) + 1];
-  for (int i = -radius; i <= radius; ++i) rows[radius + i] = centre[i];
-  for (int i = 0; i <= radius; ++i) weights[i] = k.w[static_cast<std::size_t>(i)];
-  int x = 0;
-  for (; x + 4 <= w; x += 4)
-    vst1q_f32(out + x, taps4([&](int i) { return load4(rows[radius + i] + x); }, weights, radius));
-  for (; x < w; ++x)
-    out[x] = taps1([&](int i) { return static_cast<float>(rows[radius + i][x]); }, weights, radius);
-}
+  template <int R>
+  KG_TARGET_AVX2 static void horizontal(const float* in, int w, const Kernel& k, float* out) {
+    const int radius = R > 0 ? R : k.radius;
+    float weights[(R > 0 ? R : kMaxRadius) + 1];
+    for (int i = 0; i <= radius; ++i) weights[i] = k.w[static_cast<std::size_t>(i)];
+    int x = 0;
+    for (; x + 8 <= w; x += 8) {
+      const Float8 v = taps8(TapShifts{in + x}, weights, radius);
+      std::memcpy(out + x, &v, sizeof v);
+    }
+    for (; x < w; ++x) out[x] = taps<float>([&](int i) { return in[x + i]; }, weights, radius);
+  }
 
-template <class T, class RowFn>
-void vertical_row_neon(RowFn row, int y, int w, int h, const Kernel& k, float* out) {
+  KG_TARGET_AVX2 static void round(const float* in, int w, std::uint8_t* d) {
+    int x = 0;
+    for (; x + 8 <= w; x += 8) {
+      // Truncated toward zero as static_cast<int> does; the saturating
+      // packs are the clamp.
+      const __m256i v = _mm256_cvttps_epi32(load8(in + x) + 0.5f);
+      const __m128i words =
+          _mm_packus_epi32(_mm256_castsi256_si128(v), _mm256_extracti128_si256(v, 1));
+      const std::int64_t eight = _mm_cvtsi128_si64(_mm_packus_epi16(words, words));
+      std::memcpy(d + x, &eight, sizeof eight);
+    }
+    round_row(in + x, w - x, d + x);
+  }
+};
+#endif
+
+#if defined(KG_NEON_FLOAT) || defined(KG_DISPATCH_AVX2)
+// The image loops around the vector steps of `Lanes` (Neon, Avx2).
+template <class Lanes, class T, class RowFn>
+void vector_vertical_row(RowFn row, int y, int w, int h, const Kernel& k, float* out) {
   const T* rows[2 * kMaxRadius + 1];
   const T** centre = rows + k.radius;
   for (int i = -k.radius; i <= k.radius; ++i) centre[i] = row(std::clamp(y + i, 0, h - 1));
-  with_radius(k.radius, [&](auto r) { vertical_taps<decltype(r)::value>(centre, w, k, out); });
+  with_radius(k.radius,
+              [&](auto r) { Lanes::template vertical<decltype(r)::value, T>(centre, w, k, out); });
 }
 
-// horizontal_row's values, the same way.
-template <int R>
-void horizontal_taps(const float* in, int w, const Kernel& k, float* out) {
-  const int radius = R > 0 ? R : k.radius;
-  float weights[(R > 0 ? R : kMaxRadius) + 1];
-  for (int i = 0; i <= radius; ++i) weights[i] = k.w[static_cast<std::size_t>(i)];
-  int x = 0;
-  for (; x + 4 <= w; x += 4)
-    vst1q_f32(out + x, taps4([&](int i) { return vld1q_f32(in + x + i); }, weights, radius));
-  for (; x < w; ++x) out[x] = taps1([&](int i) { return in[x + i]; }, weights, radius);
+template <class Lanes>
+void vector_horizontal_row(const float* in, int w, const Kernel& k, float* out) {
+  with_radius(k.radius,
+              [&](auto r) { Lanes::template horizontal<decltype(r)::value>(in, w, k, out); });
 }
 
-void horizontal_row_neon(const float* in, int w, const Kernel& k, float* out) {
-  with_radius(k.radius, [&](auto r) { horizontal_taps<decltype(r)::value>(in, w, k, out); });
-}
-
-void blur_u8_neon(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst, float* vert,
-                  float* horz) {
+template <class Lanes>
+void vector_blur_u8(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst, float* vert,
+                    float* horz) {
   const int w = src.width;
   const int h = src.height;
   const auto row = [&src](int y) { return src.row(y); };
   for (int y = 0; y < h; ++y) {
-    vertical_row_neon<std::uint8_t>(row, y, w, h, k, vert);
+    vector_vertical_row<Lanes, std::uint8_t>(row, y, w, h, k, vert);
     pad_row(vert, w, k.radius);
-    horizontal_row_neon(vert, w, k, horz);
-    std::uint8_t* d = dst.row(y);
-    int x = 0;
-    // Rounded as below; the saturating narrowings are the clamp.
-    for (; x + 8 <= w; x += 8) {
-      const float32x4_t half = vdupq_n_f32(0.5f);
-      const int32x4_t lo = vcvtq_s32_f32(vaddq_f32(vld1q_f32(horz + x), half));
-      const int32x4_t hi = vcvtq_s32_f32(vaddq_f32(vld1q_f32(horz + x + 4), half));
-      vst1_u8(d + x, vqmovn_u16(vcombine_u16(vqmovun_s32(lo), vqmovun_s32(hi))));
-    }
-    for (; x < w; ++x) {
-      const int v = static_cast<int>(horz[x] + 0.5f);
-      d[x] = static_cast<std::uint8_t>(std::clamp(v, 0, 255));
-    }
+    vector_horizontal_row<Lanes>(vert, w, k, horz);
+    Lanes::round(horz, w, dst.row(y));
   }
 }
 
-void blur_float_neon(const Plane<float>& src, const Kernel& k, Plane<float>& dst, int y0, int y1,
-                     float* vert) {
+template <class Lanes>
+void vector_blur_float(const Plane<float>& src, const Kernel& k, Plane<float>& dst, int y0, int y1,
+                       float* vert) {
   const int w = src.width();
   const int h = src.height();
   const auto row = [&src](int y) { return src.row(y); };
   for (int y = y0; y < y1; ++y) {
-    vertical_row_neon<float>(row, y, w, h, k, vert);
+    vector_vertical_row<Lanes, float>(row, y, w, h, k, vert);
     pad_row(vert, w, k.radius);
-    horizontal_row_neon(vert, w, k, dst.row(y));
+    vector_horizontal_row<Lanes>(vert, w, k, dst.row(y));
   }
 }
 #endif
 
-// The two image loops, compiled below for each dispatch level.
-KG_ALWAYS_INLINE void blur_u8_rows(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst,
-                                   float* vert, float* horz) {
+// The portable image loops: the baseline (SSE2 on x86-64) and the scalar level.
+void blur_u8_portable(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst, float* vert,
+                      float* horz) {
   const int w = src.width;
   const int h = src.height;
   const auto row = [&src](int y) { return src.row(y); };
@@ -275,19 +397,14 @@ KG_ALWAYS_INLINE void blur_u8_rows(ImageView src, const Kernel& k, Plane<std::ui
     vertical_row<std::uint8_t>(row, y, w, h, k, vert);
     pad_row(vert, w, k.radius);
     horizontal_row(vert, w, k, horz);
-    std::uint8_t* d = dst.row(y);
-    for (int x = 0; x < w; ++x) {
-      // Normalised weights keep the sum within [0, 255] up to rounding.
-      const int v = static_cast<int>(horz[x] + 0.5f);
-      d[x] = static_cast<std::uint8_t>(std::clamp(v, 0, 255));
-    }
+    round_row(horz, w, dst.row(y));
   }
 }
 
 // Row by row (vertical into a padded buffer row, then horizontal straight
 // into dst) so the source rows in use stay in cache.
-KG_ALWAYS_INLINE void blur_float_rows(const Plane<float>& src, const Kernel& k, Plane<float>& dst,
-                                      int y0, int y1, float* vert) {
+void blur_float_portable(const Plane<float>& src, const Kernel& k, Plane<float>& dst, int y0,
+                         int y1, float* vert) {
   const int w = src.width();
   const int h = src.height();
   const auto row = [&src](int y) { return src.row(y); };
@@ -298,43 +415,23 @@ KG_ALWAYS_INLINE void blur_float_rows(const Plane<float>& src, const Kernel& k, 
   }
 }
 
-// The two loops for the baseline and (x86-64) AVX2; see core/support/simd_dispatch.h.
-void blur_u8_baseline(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst, float* vert,
-                      float* horz) {
-  blur_u8_rows(src, k, dst, vert, horz);
-}
-void blur_float_baseline(const Plane<float>& src, const Kernel& k, Plane<float>& dst, int y0,
-                         int y1, float* vert) {
-  blur_float_rows(src, k, dst, y0, y1, vert);
-}
-#if defined(KG_DISPATCH_AVX2)
-KG_TARGET_AVX2 void blur_u8_avx2(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst,
-                                 float* vert, float* horz) {
-  blur_u8_rows(src, k, dst, vert, horz);
-}
-KG_TARGET_AVX2 void blur_float_avx2(const Plane<float>& src, const Kernel& k, Plane<float>& dst,
-                                    int y0, int y1, float* vert) {
-  blur_float_rows(src, k, dst, y0, y1, vert);
-}
-#endif
-
 void blur_u8(ImageView src, const Kernel& k, Plane<std::uint8_t>& dst, float* vert, float* horz) {
 #if defined(KG_DISPATCH_AVX2)
-  if (simd_level() == SimdLevel::kAvx2) return blur_u8_avx2(src, k, dst, vert, horz);
+  if (simd_level() == SimdLevel::kAvx2) return vector_blur_u8<Avx2>(src, k, dst, vert, horz);
 #elif defined(KG_NEON_FLOAT)
-  if (simd_level() != SimdLevel::kScalar) return blur_u8_neon(src, k, dst, vert, horz);
+  if (simd_level() != SimdLevel::kScalar) return vector_blur_u8<Neon>(src, k, dst, vert, horz);
 #endif
-  blur_u8_baseline(src, k, dst, vert, horz);
+  blur_u8_portable(src, k, dst, vert, horz);
 }
 
 void blur_float(const Plane<float>& src, const Kernel& k, Plane<float>& dst, int y0, int y1,
                 float* vert) {
 #if defined(KG_DISPATCH_AVX2)
-  if (simd_level() == SimdLevel::kAvx2) return blur_float_avx2(src, k, dst, y0, y1, vert);
+  if (simd_level() == SimdLevel::kAvx2) return vector_blur_float<Avx2>(src, k, dst, y0, y1, vert);
 #elif defined(KG_NEON_FLOAT)
-  if (simd_level() != SimdLevel::kScalar) return blur_float_neon(src, k, dst, y0, y1, vert);
+  if (simd_level() != SimdLevel::kScalar) return vector_blur_float<Neon>(src, k, dst, y0, y1, vert);
 #endif
-  blur_float_baseline(src, k, dst, y0, y1, vert);
+  blur_float_portable(src, k, dst, y0, y1, vert);
 }
 
 }  // namespace

@@ -13,6 +13,9 @@
 #if defined(KG_NEON_FLOAT)
 #include <arm_neon.h>
 #endif
+#if defined(KG_DISPATCH_AVX2)
+#include <immintrin.h>
+#endif
 
 namespace kg {
 namespace {
@@ -33,14 +36,8 @@ bool stronger(const Keypoint& a, const Keypoint& b) {
 
 // With kNeon the loops below have NEON versions (AArch64): the same
 // operations in the same order on 4 pixels at a time, so the same values.
-#if defined(KG_NEON_FLOAT)
-constexpr bool kHaveNeon = true;
-#else
-constexpr bool kHaveNeon = false;
-#endif
-
 template <bool kNeon>
-void to_unit_float(ImageView image, Plane<float>& dst, int y0, int y1) {
+KG_ALWAYS_INLINE void to_unit_float(ImageView image, Plane<float>& dst, int y0, int y1) {
   constexpr float kScale = 1.f / 255.f;
   for (int y = y0; y < y1; ++y) {
     const std::uint8_t* s = image.row(y);
@@ -57,6 +54,33 @@ void to_unit_float(ImageView image, Plane<float>& dst, int y0, int y1) {
 #endif
     for (; x < image.width; ++x) d[x] = kScale * static_cast<float>(s[x]);
   }
+}
+
+// Pixel x of row m1 (rows m0, m2 around it) is above the threshold and
+// its 8 neighbours in the level: strictly above those before it in scan
+// order, at least equal to those after. Branch-free so it vectorises.
+KG_ALWAYS_INLINE bool level_maximum(const float* m0, const float* m1, const float* m2, int x,
+                                    float thr) {
+  const float v = m1[x];
+  return (v > thr) & (v > m1[x - 1]) & (v >= m1[x + 1]) & (v > m0[x - 1]) & (v > m0[x]) &
+         (v > m0[x + 1]) & (v >= m2[x - 1]) & (v >= m2[x]) & (v >= m2[x + 1]);
+}
+
+// Appends (x, y) to `cand` when pixel x of row m1 is above its 9
+// neighbours in the level below (rows l0, l1, l2); false when that would
+// pass `limit` ints (nothing appended then).
+KG_ALWAYS_INLINE bool offer_candidate(const float* m1, const float* l0, const float* l1,
+                                      const float* l2, int x, int y, WorkVector<std::int32_t>& cand,
+                                      std::size_t limit) {
+  const float v = m1[x];
+  const bool below = (v > l0[x - 1]) & (v > l0[x]) & (v > l0[x + 1]) & (v > l1[x - 1]) &
+                     (v > l1[x]) & (v > l1[x + 1]) & (v > l2[x - 1]) & (v > l2[x]) &
+                     (v > l2[x + 1]);
+  if (!below) return true;
+  if (cand.size() + 2 > limit) return false;
+  cand.push_back(x);
+  cand.push_back(y);
+  return true;
 }
 
 // Appends (x, y) of the pixels of row y (rows m0, m1, m2 around it) that
@@ -103,12 +127,8 @@ KG_ALWAYS_INLINE bool collect_candidates(const float* m0, const float* m1, const
     }
   }
 #endif
-  for (; x < w - kBorder; ++x) {
-    const float v = m1[x];
-    mask[x] = static_cast<std::uint8_t>((v > thr) & (v > m1[x - 1]) & (v >= m1[x + 1]) &
-                                        (v > m0[x - 1]) & (v > m0[x]) & (v > m0[x + 1]) &
-                                        (v >= m2[x - 1]) & (v >= m2[x]) & (v >= m2[x + 1]));
-  }
+  for (; x < w - kBorder; ++x)
+    mask[x] = static_cast<std::uint8_t>(level_maximum(m0, m1, m2, x, thr));
   std::fill(mask + std::max(w - kBorder, 0), mask + w + 8, std::uint8_t{0});
   for (x = kBorder; x < w - kBorder; ++x) {
     if ((x & 7) == 0) {  // skip 8 empty bytes at once
@@ -119,19 +139,49 @@ KG_ALWAYS_INLINE bool collect_candidates(const float* m0, const float* m1, const
         continue;
       }
     }
-    if (!mask[x]) continue;
-    const float v = m1[x];
-    const bool below = (v > l0[x - 1]) & (v > l0[x]) & (v > l0[x + 1]) & (v > l1[x - 1]) &
-                       (v > l1[x]) & (v > l1[x + 1]) & (v > l2[x - 1]) & (v > l2[x]) &
-                       (v > l2[x + 1]);
-    if (below) {
-      if (cand.size() + 2 > limit) return false;
-      cand.push_back(x);
-      cand.push_back(y);
-    }
+    if (mask[x] && !offer_candidate(m1, l0, l1, l2, x, y, cand, limit)) return false;
   }
   return true;
 }
+
+#if defined(KG_DISPATCH_AVX2)
+// v > p[0..7], v >= p[0..7]: masks for collect_candidates_avx2 (helpers,
+// not lambdas: those would not be compiled for AVX2).
+KG_TARGET_AVX2 KG_ALWAYS_INLINE __m256 gt8(__m256 v, const float* p) {
+  return _mm256_cmp_ps(v, _mm256_loadu_ps(p), _CMP_GT_OQ);
+}
+KG_TARGET_AVX2 KG_ALWAYS_INLINE __m256 ge8(__m256 v, const float* p) {
+  return _mm256_cmp_ps(v, _mm256_loadu_ps(p), _CMP_GE_OQ);
+}
+
+// collect_candidates' values with AVX2 intrinsics: the level test 8 pixels
+// at a time, skipping the pixels under the threshold (most of them) after
+// one comparison, and its bits read straight from the comparison mask, so
+// no mask row is written and scanned. The same candidates in the same order.
+KG_TARGET_AVX2 inline bool collect_candidates_avx2(const float* m0, const float* m1,
+                                                   const float* m2, const float* l0,
+                                                   const float* l1, const float* l2, int y, int w,
+                                                   float thr, WorkVector<std::int32_t>& cand,
+                                                   std::size_t limit) {
+  const __m256 t = _mm256_set1_ps(thr);
+  int x = kBorder;
+  for (; x + 8 <= w - kBorder; x += 8) {
+    const __m256 v = _mm256_loadu_ps(m1 + x);
+    const __m256 over = _mm256_cmp_ps(v, t, _CMP_GT_OQ);
+    if (_mm256_testz_ps(over, over)) continue;
+    __m256 m = _mm256_and_ps(over, _mm256_and_ps(gt8(v, m1 + x - 1), ge8(v, m1 + x + 1)));
+    m = _mm256_and_ps(m, _mm256_and_ps(gt8(v, m0 + x - 1), gt8(v, m0 + x)));
+    m = _mm256_and_ps(m, _mm256_and_ps(gt8(v, m0 + x + 1), ge8(v, m2 + x - 1)));
+    m = _mm256_and_ps(m, _mm256_and_ps(ge8(v, m2 + x), ge8(v, m2 + x + 1)));
+    for (auto bits = static_cast<unsigned>(_mm256_movemask_ps(m)); bits != 0; bits &= bits - 1)
+      if (!offer_candidate(m1, l0, l1, l2, x + __builtin_ctz(bits), y, cand, limit)) return false;
+  }
+  for (; x < w - kBorder; ++x)
+    if (level_maximum(m0, m1, m2, x, thr) && !offer_candidate(m1, l0, l1, l2, x, y, cand, limit))
+      return false;
+  return true;
+}
+#endif
 
 // Scale-normalised sigma^4 (Lxx Lyy - Lxy^2) of row y by central
 // differences, for every pixel with both horizontal neighbours.
@@ -172,7 +222,8 @@ KG_ALWAYS_INLINE void response_row(const Plane<float>& L, int y, float norm, flo
 // response of the level below. With `halo` (bands but the only one), two
 // rows for the responses of rows y0 - 1 and y1, which the candidate test
 // and the scan of the level below read and the neighbouring bands write.
-template <bool kNeon>
+// kAvx2: the candidates by collect_candidates_avx2 (x86-64 only).
+template <bool kNeon, bool kAvx2 = false>
 KG_ALWAYS_INLINE bool hessian_band_rows(const Plane<float>& L, float norm, float threshold,
                                         Plane<float>& R, int y0, int y1, const Plane<float>* below,
                                         std::uint8_t* mask, float* halo,
@@ -191,6 +242,16 @@ KG_ALWAYS_INLINE bool hessian_band_rows(const Plane<float>& L, float norm, float
   const auto response = [&](int y) -> const float* {
     return y < y0 ? above : y >= y1 ? after : R.row(y);
   };
+  // The candidates of row c, with the response rows around it.
+  const auto candidates = [&](const float* m0, const float* m1, const float* m2, int c) {
+#if defined(KG_DISPATCH_AVX2)
+    if constexpr (kAvx2)
+      return collect_candidates_avx2(m0, m1, m2, below->row(c - 1), below->row(c),
+                                     below->row(c + 1), c, w, threshold, *cand, limit);
+#endif
+    return collect_candidates<kNeon>(m0, m1, m2, below->row(c - 1), below->row(c),
+                                     below->row(c + 1), c, w, threshold, mask, *cand, limit);
+  };
   if (halos && c0 - 1 < y0) response_row<kNeon>(L, c0 - 1, norm, above);
   bool complete = true;
   for (int y = r0; y < r1; ++y) {
@@ -198,17 +259,13 @@ KG_ALWAYS_INLINE bool hessian_band_rows(const Plane<float>& L, float norm, float
     // Row y - 1 has both response neighbours now.
     const int c = y - 1;
     if (collect && complete && c >= c0 && c < c1)
-      complete = collect_candidates<kNeon>(response(c - 1), R.row(c), R.row(y), below->row(c - 1),
-                                           below->row(c), below->row(c + 1), c, w, threshold, mask,
-                                           *cand, limit);
+      complete = candidates(response(c - 1), R.row(c), R.row(y), c);
   }
   // The band's last candidate row, when its row below is the next band's.
   if (halos && c1 >= r1) {
     response_row<kNeon>(L, c1, norm, after);
     if (collect && complete)
-      complete = collect_candidates<kNeon>(response(c1 - 2), response(c1 - 1), after,
-                                           below->row(c1 - 2), below->row(c1 - 1), below->row(c1),
-                                           c1 - 1, w, threshold, mask, *cand, limit);
+      complete = candidates(response(c1 - 2), response(c1 - 1), after, c1 - 1);
   }
   return complete;
 }
@@ -225,7 +282,8 @@ KG_TARGET_AVX2 bool hessian_band_avx2(const Plane<float>& L, float norm, float t
                                       Plane<float>& R, int y0, int y1, const Plane<float>* below,
                                       std::uint8_t* mask, float* halo,
                                       WorkVector<std::int32_t>* cand, std::size_t limit) {
-  return hessian_band_rows<false>(L, norm, threshold, R, y0, y1, below, mask, halo, cand, limit);
+  return hessian_band_rows<false, true>(L, norm, threshold, R, y0, y1, below, mask, halo, cand,
+                                        limit);
 }
 #endif
 #if defined(KG_NEON_FLOAT)
@@ -257,7 +315,7 @@ bool hessian_band(const Plane<float>& L, float norm, float threshold, Plane<floa
 // pixels, which the caller accounts for. The source level has twice the
 // octave's first sigma, so this does not alias.
 template <bool kNeon>
-void halve_rows(const Plane<float>& src, Plane<float>& dst, int y0, int y1) {
+KG_ALWAYS_INLINE void halve_rows(const Plane<float>& src, Plane<float>& dst, int y0, int y1) {
   const int w = dst.width();
   for (int y = y0; y < y1; ++y) {
     const float* a = src.row(2 * y);
@@ -277,6 +335,39 @@ void halve_rows(const Plane<float>& src, Plane<float>& dst, int y0, int y1) {
 #endif
     for (; x < w; ++x) d[x] = 0.25f * ((a[2 * x] + a[2 * x + 1]) + (b[2 * x] + b[2 * x + 1]));
   }
+}
+
+// to_unit_float and halve_rows at the best level: the portable loops for
+// the baseline and (x86-64) AVX2, or the NEON ones.
+void to_unit_float_baseline(ImageView image, Plane<float>& dst, int y0, int y1) {
+  to_unit_float<false>(image, dst, y0, y1);
+}
+void halve_rows_baseline(const Plane<float>& src, Plane<float>& dst, int y0, int y1) {
+  halve_rows<false>(src, dst, y0, y1);
+}
+#if defined(KG_DISPATCH_AVX2)
+KG_TARGET_AVX2 void to_unit_float_avx2(ImageView image, Plane<float>& dst, int y0, int y1) {
+  to_unit_float<false>(image, dst, y0, y1);
+}
+KG_TARGET_AVX2 void halve_rows_avx2(const Plane<float>& src, Plane<float>& dst, int y0, int y1) {
+  halve_rows<false>(src, dst, y0, y1);
+}
+#endif
+void to_unit_float_rows(ImageView image, Plane<float>& dst, int y0, int y1) {
+#if defined(KG_DISPATCH_AVX2)
+  if (simd_level() == SimdLevel::kAvx2) return to_unit_float_avx2(image, dst, y0, y1);
+#elif defined(KG_NEON_FLOAT)
+  if (simd_level() != SimdLevel::kScalar) return to_unit_float<true>(image, dst, y0, y1);
+#endif
+  to_unit_float_baseline(image, dst, y0, y1);
+}
+void halve(const Plane<float>& src, Plane<float>& dst, int y0, int y1) {
+#if defined(KG_DISPATCH_AVX2)
+  if (simd_level() == SimdLevel::kAvx2) return halve_rows_avx2(src, dst, y0, y1);
+#elif defined(KG_NEON_FLOAT)
+  if (simd_level() != SimdLevel::kScalar) return halve_rows<true>(src, dst, y0, y1);
+#endif
+  halve_rows_baseline(src, dst, y0, y1);
 }
 
 // Band `band` of `bands` over `rows` rows: [begin, end).
@@ -472,16 +563,11 @@ void HessianDetector::run_level(const Level& level, int bands) {
   if (level.R) level.R->resize(w, h);
   if (level.blurred) level.blurred->resize(w, h);
   if (level.halved) level.halved->resize(w / 2, h / 2);
-  const bool neon = kHaveNeon && simd_level() != SimdLevel::kScalar;
   auto task = [&](int b, int /*worker*/) {
     Band& band = bands_[static_cast<std::size_t>(b)];
     const Rows rows = band_rows(h, b, bands);
     if (level.L == nullptr) {
-      if (neon) {
-        to_unit_float<kHaveNeon>(level.image, *level.unit, rows.begin, rows.end);
-      } else {
-        to_unit_float<false>(level.image, *level.unit, rows.begin, rows.end);
-      }
+      to_unit_float_rows(level.image, *level.unit, rows.begin, rows.end);
       return;
     }
     if (level.R) {
@@ -516,11 +602,7 @@ void HessianDetector::run_level(const Level& level, int bands) {
       gaussian_blur_rows(L, level.blur_sigma, *level.blurred, rows.begin, rows.end, band.scratch);
     if (level.halved) {
       const Rows half = band_rows(h / 2, b, bands);
-      if (neon) {
-        halve_rows<kHaveNeon>(L, *level.halved, half.begin, half.end);
-      } else {
-        halve_rows<false>(L, *level.halved, half.begin, half.end);
-      }
+      halve(L, *level.halved, half.begin, half.end);
     }
   };
   if (bands > 1) {
