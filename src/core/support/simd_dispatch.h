@@ -3,9 +3,11 @@
 // that one binary runs on every CPU of its architecture. Loops written
 // with baseline intrinsics (the leaf scan; on AArch64 the blur and the
 // Hessian response) are compiled in when the target has them and run unless
-// the level is kScalar; loops worth AVX2 (blur, Hessian response: the same source
-// compiled a second time; the triangle check's sampling: hand-written
-// gathers) get an x86-64 AVX2 twin. Every such loop branches on
+// the level is kScalar; loops worth AVX2 get an x86-64 AVX2 twin (the
+// Hessian response, the float conversion and halving: the same source
+// compiled a second time; the blur's passes: GCC vector types, shared with
+// the NEON passes; the Hessian candidate test and the triangle check's
+// sampling: hand-written intrinsics). Every such loop branches on
 // simd_level() at its entry, so one switch chooses them all. The core is
 // compiled with -ffp-contract=off (AArch64 has FMA, x86-64's baseline not):
 // no multiply-add is fused, so every version computes every value with the
