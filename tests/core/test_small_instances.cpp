@@ -34,6 +34,12 @@ class SmallInstances : public ::testing::Test {
     delete on_;
     delete box_;
   }
+  // The scene's detections with the rule (`on`) and without it (`off`).
+  static void detect_with_and_without(const cv::Mat& scene, DetectionList& on, DetectionList& off) {
+    DesktopDetector with(on_->index), without(off_->index);
+    ASSERT_TRUE(with.detect(scene, on).is_ok());
+    ASSERT_TRUE(without.detect(scene, off).is_ok());
+  }
   static cv::Mat* box_;
   static test::InMemoryIndex* on_;
   static test::InMemoryIndex* off_;
@@ -50,9 +56,7 @@ TEST_F(SmallInstances, SmallBoxFoundOnlyByTheRule) {
     const test::ScaledScene scene = test::scaled_box_scene(*box_, scale);
     ASSERT_FALSE(scene.image.empty());
     DetectionList on, off;
-    DesktopDetector with(on_->index), without(off_->index);
-    ASSERT_TRUE(with.detect(scene.image, on).is_ok());
-    ASSERT_TRUE(without.detect(scene.image, off).is_ok());
+    ASSERT_NO_FATAL_FAILURE(detect_with_and_without(scene.image, on, off));
     EXPECT_TRUE(off.empty()) << "scale " << scale << ": found without the rule, re-measure";
     ASSERT_EQ(on.size(), 1u) << "scale " << scale;
     EXPECT_LT(on[0].inliers, on_->index.params().ransac.confirmed_min_inliers) << scale;
@@ -72,9 +76,7 @@ TEST_F(SmallInstances, LargerBoxAsWithoutTheRule) {
     const test::ScaledScene scene = test::scaled_box_scene(*box_, scale);
     ASSERT_FALSE(scene.image.empty());
     DetectionList on, off;
-    DesktopDetector with(on_->index), without(off_->index);
-    ASSERT_TRUE(with.detect(scene.image, on).is_ok());
-    ASSERT_TRUE(without.detect(scene.image, off).is_ok());
+    ASSERT_NO_FATAL_FAILURE(detect_with_and_without(scene.image, on, off));
     ASSERT_EQ(on.size(), 1u) << "scale " << scale;
     ASSERT_EQ(off.size(), 1u) << "scale " << scale;
     EXPECT_EQ(on[0].inliers, off[0].inliers) << scale;
