@@ -1964,6 +1964,34 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
   EXPECT_TRUE(rejected(b, "parameter block"));
 }
 
+// The block is at least 256 bytes (every reader since 2.0 asks that much)
+// and grows in steps of 64 when the fields outgrow it; a reader takes a
+// longer block than it knows (a later minor version's) by its known fields.
+TEST(ParameterBlock, SizeFollowsTheFieldsAndLongerBlocksReadTheirKnownFields) {
+  static_assert(format::kParamsSize >= format::kMinParamsSize);
+  static_assert(format::kParamsSize % 64 == 0);
+  static_assert(format::params_field_bytes() <= format::kParamsSize);
+  static_assert(format::kParamsSize == format::kMinParamsSize ||
+                format::params_field_bytes() > format::kParamsSize - 64);
+
+  Params written;
+  written.graph.min_distance = 9.f;
+  written.ransac.small_min_inliers = 7;
+  written.descriptor.encoding = DescriptorEncoding::kInt16;
+  // A later writer's block: 128 more bytes, something in them.
+  std::vector<std::uint8_t> longer(format::kParamsSize + 128, 0);
+  format::serialize_params(written, longer.data());
+  for (std::size_t i = format::kParamsSize; i < longer.size(); ++i) longer[i] = 0xA5;
+  Params read;
+  ASSERT_TRUE(format::parse_params(longer.data(), longer.size(), read));
+  expect_same_params(read, written);
+  EXPECT_EQ(read.graph.min_distance, 9.f);
+  EXPECT_EQ(read.ransac.small_min_inliers, 7);
+
+  // Shorter than every reader's minimum: refused.
+  EXPECT_FALSE(format::parse_params(longer.data(), format::kMinParamsSize - 1, read));
+}
+
 TEST_F(ModelIndexTest, RejectsUnalignedOrNullBuffer) {
   for (std::size_t shift : {1u, 4u, 8u, 32u}) {
     AlignedBytes buffer(bytes(), shift);

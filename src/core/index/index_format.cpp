@@ -11,15 +11,6 @@
 namespace kg::format {
 namespace {
 
-template <class T>
-constexpr std::size_t stored_size() {
-  if constexpr (std::is_enum_v<T>) {
-    return 1;
-  } else {
-    return sizeof(T);
-  }
-}
-
 bool finite_positive(double v) {
   return std::isfinite(v) && v > 0.0;
 }
@@ -84,15 +75,13 @@ void serialize_params(const Params& params, std::uint8_t* out) {
 }
 
 Status parse_params(const std::uint8_t* in, std::size_t size, Params& params) {
-  std::size_t needed = 0;
-  visit_params(params, [&](const char*, auto& field) {
-    needed += stored_size<std::decay_t<decltype(field)>>();
-  });
-  if (size < needed) return {StatusCode::kCorruptData, "parameter block too small"};
+  if (size < kMinParamsSize) return {StatusCode::kCorruptData, "parameter block too small"};
   std::size_t at = 0;
   visit_params(params, [&](const char*, auto& field) {
     using T = std::decay_t<decltype(field)>;
-    if constexpr (std::is_enum_v<T>) {
+    if (at + stored_size<T>() > size) {
+      field = T{};  // past an older file's block: what its zero tail would hold
+    } else if constexpr (std::is_enum_v<T>) {
       field = static_cast<T>(in[at]);
     } else {
       field = load<T>(in + at);

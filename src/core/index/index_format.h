@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <type_traits>
 
 #include "core/description/arc_types.h"
 #include "keygraph/params.h"
@@ -65,7 +66,10 @@ inline constexpr std::size_t kOffTableOffset = 32;
 inline constexpr std::size_t kOffSectionCount = 36;
 inline constexpr std::size_t kOffHeaderCrc = 40;  // CRC-32 of [0, table end) with this field 0
 
-inline constexpr std::size_t kParamsSize = 256;  // room for later parameters
+// Every file's parameter block is at least this long (readers since 2.0
+// refuse a shorter one); kParamsSize, the block this writer writes, is
+// below the parameter list.
+inline constexpr std::size_t kMinParamsSize = 256;
 inline constexpr std::size_t kSectionEntrySize = 32;
 // Section table entry fields (byte offsets within an entry).
 inline constexpr std::size_t kEntId = 0;
@@ -194,7 +198,7 @@ inline void store(std::uint8_t* p, T v) {
 // writer, reader and inspector all walk it, so they cannot disagree. Calls
 // f(name, field) per field; P is Params or const Params.
 template <class P, class F>
-void visit_params(P& p, F&& f) {
+constexpr void visit_params(P& p, F&& f) {
   f("keypoints.detector", p.keypoints.detector);
   f("graph.structure", p.graph.structure);
   f("graph.scene_sampling", p.graph.scene_sampling);
@@ -257,8 +261,36 @@ void visit_params(P& p, F&& f) {
   f("ransac.small_min_inliers", p.ransac.small_min_inliers);                  // 6.10; 0: off
   f("ransac.small_min_appearance", p.ransac.small_min_appearance);            // 6.10
   // Later minor versions append here; the block's zero tail is what an
-  // older file holds for them.
+  // older file holds for them, and a field past the end of an older file's
+  // (shorter) block reads as zero too.
 }
+
+// Bytes a field of type T takes in the block: enumerations one, the rest
+// their size.
+template <class T>
+constexpr std::size_t stored_size() {
+  if constexpr (std::is_enum_v<T>) {
+    return 1;
+  } else {
+    return sizeof(T);
+  }
+}
+
+// Bytes of every field, packed.
+constexpr std::size_t params_field_bytes() {
+  const Params defaults{};
+  std::size_t bytes = 0;
+  visit_params(defaults, [&bytes](const char*, const auto& field) {
+    bytes += stored_size<std::decay_t<decltype(field)>>();
+  });
+  return bytes;
+}
+
+// The block this writer writes: the fields and a zero tail, a multiple of
+// 64 bytes and at least kMinParamsSize. The block grows by 64 bytes when the
+// fields outgrow it; the header's size field says how long a file's block is.
+inline constexpr std::size_t kParamsSize =
+    params_field_bytes() <= kMinParamsSize ? kMinParamsSize : (params_field_bytes() + 63) / 64 * 64;
 
 // Parameters block <-> Params. parse_params validates every value.
 void serialize_params(const Params& params, std::uint8_t* out /* kParamsSize bytes */);

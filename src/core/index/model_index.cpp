@@ -268,7 +268,7 @@ Status ModelIndex::validate(const std::uint8_t* d, std::size_t size) {
   const auto params_size = load<std::uint32_t>(d + kOffParamsSize);
   const auto table_offset = load<std::uint32_t>(d + kOffTableOffset);
   const auto section_count = load<std::uint32_t>(d + kOffSectionCount);
-  if (params_offset < kHeaderSize || params_size < kParamsSize || params_size > 4096 ||
+  if (params_offset < kHeaderSize || params_size < kMinParamsSize || params_size > 4096 ||
       static_cast<std::uint64_t>(params_offset) + params_size > size)
     return corrupt("header: parameter block out of bounds");
   if (section_count == 0 || section_count > 64) return corrupt("header: bad section count");
