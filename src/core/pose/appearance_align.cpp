@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/support/simd_dispatch.h"
+
 namespace kg {
 
 namespace {
@@ -73,14 +75,16 @@ void level_to_model(int width, int height, float scale_x, float scale_y, double 
   out[8] = 1.0;
 }
 
-// The frame point of a level's normalised point (x, y) under g.
-void project(const double g[9], double xn, double yn, double& x, double& y) {
+// The frame point of a level's normalised point (x, y) under g. Inlined:
+// warp_pixels() calls it for every sample, and a call passes x and y
+// through memory (the same operations either way, so the same values).
+KG_ALWAYS_INLINE void project(const double g[9], double xn, double yn, double& x, double& y) {
   const double z = 1.0 / (g[6] * xn + g[7] * yn + g[8]);
   x = (g[0] * xn + g[1] * yn + g[2]) * z;
   y = (g[3] * xn + g[4] * yn + g[5]) * z;
 }
 
-float bilinear(ImageView f, double x, double y) {
+KG_ALWAYS_INLINE float bilinear(ImageView f, double x, double y) {
   const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
   const auto fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
   const std::uint8_t* r0 = f.row(y0) + x0;
