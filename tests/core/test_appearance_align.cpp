@@ -138,8 +138,9 @@ TEST(AppearanceAlign, SameFitWithWorkers) {
 }
 
 #if defined(__x86_64__)
-// The frame sampling's AVX2 loop (4 pixels at a time) against the portable
-// loop: the same fit, bit for bit, for a pose several pixels off (several
+// The AVX2 loops (the frame sampling, 4 pixels at a time; the normal
+// equations, 4 entries at a time) against the portable loops: the same
+// fit, bit for bit, for a pose several pixels off (several
 // samples a level pixel), a small instance (one sample), and a pose with
 // a fifth of the model outside the frame (pixels whose samples leave it
 // part of the way through, beside pixels whose samples all stay inside).

@@ -139,11 +139,56 @@ struct NormalTerms {
   double gain, mi, mt, cutoff;
 };
 
+#if defined(KG_DISPATCH_AVX2)
+// normal_rows()'s sums with AVX2: row j's entries (weight sd[j]) sd[l] four
+// at a time (lanes l > j summed too, and left unused), each entry the same
+// operations in the same pixel order, so the same values.
+template <unsigned Rows>
+KG_TARGET_AVX2 void normal_rows_avx2(const NormalTerms& q, double a[kParams][kParams],
+                                     double b[kParams]) {
+  static_assert(kParams == 8, "two 4-lane halves a row");
+  __m256d sa[kParams][2];
+  for (auto& row : sa) row[0] = row[1] = _mm256_setzero_pd();
+  double sb[kParams] = {};
+  for (std::size_t k = 0; k < q.n; ++k) {
+    const std::uint32_t i = q.selected[k];
+    if (!q.valid[i]) continue;
+    const double e = q.gain * (q.warped[i] - q.mi) - (q.t[i] - q.mt);
+    if (std::fabs(e) >= q.cutoff) continue;
+    const double r = 1.0 - (e / q.cutoff) * (e / q.cutoff);
+    const double weight = r * r;
+    const float* sd = &q.steepest[k * kParams];
+    const __m256d low = _mm256_cvtps_pd(_mm_loadu_ps(sd));
+    const __m256d high = _mm256_cvtps_pd(_mm_loadu_ps(sd + 4));
+#pragma GCC unroll 8
+    for (int j = 0; j < kParams; ++j) {
+      if (!((Rows >> j) & 1u)) continue;
+      const double wj = weight * static_cast<double>(sd[j]);
+      sb[j] += wj * e;
+      const __m256d w4 = _mm256_set1_pd(wj);
+      sa[j][0] = _mm256_add_pd(sa[j][0], _mm256_mul_pd(w4, low));
+      if (j >= 4) sa[j][1] = _mm256_add_pd(sa[j][1], _mm256_mul_pd(w4, high));
+    }
+  }
+  for (int j = 0; j < kParams; ++j) {
+    if (!((Rows >> j) & 1u)) continue;
+    b[j] = sb[j];
+    alignas(32) double row[kParams];
+    _mm256_store_pd(row, sa[j][0]);
+    _mm256_store_pd(row + 4, sa[j][1]);
+    for (int l = 0; l <= j; ++l) a[j][l] = row[l];
+  }
+}
+#endif
+
 // Sums the rows of the normal equations in `Rows` (bit j: row j of the
 // lower triangle of a and b[j]) over every pixel, in pixel order: each
 // entry is the same sum, bit for bit, whichever rows are summed together.
 template <unsigned Rows>
 void normal_rows(const NormalTerms& q, double a[kParams][kParams], double b[kParams]) {
+#if defined(KG_DISPATCH_AVX2)
+  if (simd_level() == SimdLevel::kAvx2) return normal_rows_avx2<Rows>(q, a, b);
+#endif
   double sa[kParams][kParams] = {};
   double sb[kParams] = {};
   for (std::size_t k = 0; k < q.n; ++k) {
