@@ -13,7 +13,9 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "core/support/simd_dispatch.h"
 #include "support/alloc_counter.h"
+#include "support/simd_scope.h"
 #include "support/test_data.h"
 
 namespace kg {
@@ -134,6 +136,48 @@ TEST(AppearanceAlign, SameFitWithWorkers) {
     }
   }
 }
+
+#if defined(__x86_64__)
+// The AVX2 loops (the frame sampling, 4 pixels at a time; the normal
+// equations, 4 entries at a time) against the portable loops: the same
+// fit, bit for bit, for a pose several pixels off (several
+// samples a level pixel), a small instance (one sample), and a pose with
+// a fifth of the model outside the frame (pixels whose samples leave it
+// part of the way through, beside pixels whose samples all stay inside).
+TEST(AppearanceAlign, SameFitAtEverySimdLevel) {
+  if (best_simd_level() != SimdLevel::kAvx2) GTEST_SKIP() << "needs a CPU with AVX2";
+  const std::vector<std::vector<cv::Point2f>> poses = {
+      kCorners,
+      {{300.f, 200.f}, {360.f, 206.f}, {358.f, 247.f}, {298.f, 242.f}},
+      {{-50.f, 120.f}, {200.f, 150.f}, {190.f, 330.f}, {-60.f, 310.f}}};
+  int measured = 0;
+  for (const std::vector<cv::Point2f>& corners : poses) {
+    const Scene s = make_scene(corners);
+    ASSERT_FALSE(s.frame.empty());
+    AppearanceAligner aligner;
+    aligner.reserve(kAppearanceSize * kAppearanceSize);
+    Homography vector_h = perturbed(s, corners, kOffsets);
+    Homography portable_h = vector_h;
+    AppearanceFit vector_fit, portable_fit;
+    {
+      const test::SimdScope best(SimdLevel::kAvx2);
+      vector_fit = aligner.align(image_of(s), test::view(s.frame), vector_h);
+    }
+    {
+      const test::SimdScope scalar(SimdLevel::kScalar);
+      portable_fit = aligner.align(image_of(s), test::view(s.frame), portable_h);
+    }
+    EXPECT_EQ(vector_fit.measured, portable_fit.measured);
+    EXPECT_EQ(vector_fit.aligned, portable_fit.aligned);
+    EXPECT_EQ(vector_h, portable_h);
+    EXPECT_EQ(vector_fit.ncc, portable_fit.ncc);
+    EXPECT_EQ(vector_fit.ncc_before, portable_fit.ncc_before);
+    EXPECT_EQ(vector_fit.iterations, portable_fit.iterations);
+    measured += vector_fit.measured ? 1 : 0;
+  }
+  EXPECT_EQ(measured, 3);
+}
+#endif
 
 TEST(AppearanceAlign, IgnoresGainAndBias) {
   Scene s = make_scene(kCorners);

@@ -382,7 +382,19 @@ constexpr double kQ = 268435456.0;  // 2^28
 struct FixedTable {
   std::int32_t cos[kMaxCoefficients][kTableLength];
   std::int32_t sin[kMaxCoefficients][kTableLength];
+  // cos[x][l - y] == cos[x][y], sin[x][l - y] == -sin[x][y] and sin[x][0] ==
+  // sin[x][l / 2] == 0 for every entry (true of the rounded values wherever
+  // the C library's cos and sin are symmetric to within the rounding):
+  // fixed_descriptor() then folds the profile and multiplies half as often,
+  // with the same sums (integer arithmetic is exact in any order).
+  bool symmetric = false;
+  // The folded halves, 64-bit and interleaved by y for one pass over the
+  // profile: half_cos[y][x] = cos[x][y] (y <= l / 2), half_sin[y][x] =
+  // sin[x][y] (0 < y < l / 2).
+  std::int64_t half_cos[kTableLength / 2 + 1][kMaxCoefficients];
+  std::int64_t half_sin[kTableLength / 2][kMaxCoefficients];
 };
+static_assert(kTableLength % 2 == 0, "the fold pairs y with kTableLength - y");
 
 const FixedTable& fixed_table30() {
   static const FixedTable table = [] {
@@ -394,6 +406,16 @@ const FixedTable& fixed_table30() {
         t.sin[x][y] = static_cast<std::int32_t>(
             std::lround(std::sin(kTwoPi * ((x + 1) * y % kTableLength) / kTableLength) * kQ));
       }
+    }
+    constexpr int kHalf = kTableLength / 2;
+    t.symmetric = true;
+    for (int x = 0; x < kMaxCoefficients; ++x) {
+      t.symmetric = t.symmetric && t.sin[x][0] == 0 && t.sin[x][kHalf] == 0;
+      for (int y = 1; y < kHalf; ++y)
+        t.symmetric = t.symmetric && t.cos[x][kTableLength - y] == t.cos[x][y] &&
+                      t.sin[x][kTableLength - y] == -t.sin[x][y];
+      for (int y = 0; y <= kHalf; ++y) t.half_cos[y][x] = t.cos[x][y];
+      for (int y = 0; y < kHalf; ++y) t.half_sin[y][x] = t.sin[x][y];
     }
     return t;
   }();
@@ -409,12 +431,7 @@ std::uint64_t isqrt(std::uint64_t v) {
 }
 
 int bit_length(std::uint64_t v) {
-  int n = 0;
-  while (v != 0) {
-    ++n;
-    v >>= 1;
-  }
-  return n;
+  return v == 0 ? 0 : 64 - __builtin_clzll(v);
 }
 
 }  // namespace
@@ -433,17 +450,19 @@ void resample_linear_fixed(const std::int32_t* in, int n, std::int32_t* out, int
   // resample_linear()'s walk, with the weights' common denominator kept.
   const int step = (n - 1) / last;
   const int step_rem = (n - 1) % last;
+  // Branch-free: a weight r of 0 adds in[j + 1] * 0 (the same integer), and
+  // before the last output j + 1 < n; the last output is in[n - 1] alone.
   int j = 0;
   int r = 0;
-  for (int i = 0; i < length; ++i) {
-    out[i] = r == 0 ? in[j] * last : in[j] * (last - r) + in[j + 1] * r;
+  for (int i = 0; i < last; ++i) {
+    out[i] = in[j] * (last - r) + in[j + 1] * r;
     j += step;
     r += step_rem;
-    if (r >= last) {
-      r -= last;
-      ++j;
-    }
+    const int carry = r >= last ? 1 : 0;
+    r -= last & -carry;
+    j += carry;
   }
+  out[last] = in[n - 1] * last;
 }
 
 bool fixed_descriptor(const std::int32_t* profile, int length, int coefficients, std::int32_t scale,
@@ -454,16 +473,59 @@ bool fixed_descriptor(const std::int32_t* profile, int length, int coefficients,
   // Deviations from the mean, times the length: exact integers.
   std::int64_t sum = 0;
   for (int y = 0; y < length; ++y) sum += profile[y];
-  std::int64_t dev[kTableLength];
-  for (int y = 0; y < length; ++y) dev[y] = std::int64_t{profile[y]} * length - sum;
   const FixedTable& t = fixed_table30();
+  // With a symmetric table, dev[y] and dev[l - y] share their cos and
+  // (negated) sin: their sum (even) and difference (odd) are multiplied
+  // once, and computed from the profile directly.
+  constexpr int kHalf = kTableLength / 2;
+  std::int64_t dev[kTableLength];
+  std::int64_t even[kHalf + 1];
+  std::int64_t odd[kHalf];
+  if (t.symmetric) {
+    even[0] = std::int64_t{profile[0]} * kTableLength - sum;
+    even[kHalf] = std::int64_t{profile[kHalf]} * kTableLength - sum;
+    for (int y = 1; y < kHalf; ++y) {
+      const std::int64_t a = profile[y], b = profile[kTableLength - y];
+      even[y] = (a + b) * kTableLength - 2 * sum;
+      odd[y] = (a - b) * kTableLength;
+    }
+  } else {
+    for (int y = 0; y < length; ++y) dev[y] = std::int64_t{profile[y]} * length - sum;
+  }
+  // Every coefficient's sums in one pass (those past `coefficients` unused).
+  static_assert(kMaxCoefficients == 3, "one accumulator per coefficient below");
+  std::int64_t folded_re[kMaxCoefficients] = {};
+  std::int64_t folded_im[kMaxCoefficients] = {};
+  if (t.symmetric) {
+    std::int64_t r0 = 0, r1 = 0, r2 = 0, i0 = 0, i1 = 0, i2 = 0;
+    for (int y = 0; y <= kHalf; ++y) {
+      const std::int64_t e = even[y];
+      r0 += e * t.half_cos[y][0];
+      r1 += e * t.half_cos[y][1];
+      r2 += e * t.half_cos[y][2];
+    }
+    for (int y = 1; y < kHalf; ++y) {
+      const std::int64_t o = odd[y];
+      i0 -= o * t.half_sin[y][0];
+      i1 -= o * t.half_sin[y][1];
+      i2 -= o * t.half_sin[y][2];
+    }
+    folded_re[0] = r0;
+    folded_re[1] = r1;
+    folded_re[2] = r2;
+    folded_im[0] = i0;
+    folded_im[1] = i1;
+    folded_im[2] = i2;
+  }
   std::int64_t c[kDescriptorSize];
   std::uint64_t largest = 0;
   for (int x = 0; x < coefficients; ++x) {
-    std::int64_t re = 0, im = 0;
-    for (int y = 0; y < length; ++y) {
-      re += dev[y] * t.cos[x][y];
-      im -= dev[y] * t.sin[x][y];
+    std::int64_t re = folded_re[x], im = folded_im[x];
+    if (!t.symmetric) {
+      for (int y = 0; y < length; ++y) {
+        re += dev[y] * t.cos[x][y];
+        im -= dev[y] * t.sin[x][y];
+      }
     }
     c[2 * x] = re;
     c[2 * x + 1] = im;

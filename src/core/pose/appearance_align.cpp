@@ -2,6 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#include "core/support/simd_dispatch.h"
+
+#if defined(KG_DISPATCH_AVX2)
+#include <immintrin.h>
+#endif
 
 namespace kg {
 
@@ -73,14 +81,16 @@ void level_to_model(int width, int height, float scale_x, float scale_y, double 
   out[8] = 1.0;
 }
 
-// The frame point of a level's normalised point (x, y) under g.
-void project(const double g[9], double xn, double yn, double& x, double& y) {
+// The frame point of a level's normalised point (x, y) under g. Inlined:
+// warp_pixels() calls it for every sample, and a call passes x and y
+// through memory (the same operations either way, so the same values).
+KG_ALWAYS_INLINE void project(const double g[9], double xn, double yn, double& x, double& y) {
   const double z = 1.0 / (g[6] * xn + g[7] * yn + g[8]);
   x = (g[0] * xn + g[1] * yn + g[2]) * z;
   y = (g[3] * xn + g[4] * yn + g[5]) * z;
 }
 
-float bilinear(ImageView f, double x, double y) {
+KG_ALWAYS_INLINE float bilinear(ImageView f, double x, double y) {
   const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
   const auto fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
   const std::uint8_t* r0 = f.row(y0) + x0;
@@ -129,11 +139,56 @@ struct NormalTerms {
   double gain, mi, mt, cutoff;
 };
 
+#if defined(KG_DISPATCH_AVX2)
+// normal_rows()'s sums with AVX2: row j's entries (weight sd[j]) sd[l] four
+// at a time (lanes l > j summed too, and left unused), each entry the same
+// operations in the same pixel order, so the same values.
+template <unsigned Rows>
+KG_TARGET_AVX2 void normal_rows_avx2(const NormalTerms& q, double a[kParams][kParams],
+                                     double b[kParams]) {
+  static_assert(kParams == 8, "two 4-lane halves a row");
+  __m256d sa[kParams][2];
+  for (auto& row : sa) row[0] = row[1] = _mm256_setzero_pd();
+  double sb[kParams] = {};
+  for (std::size_t k = 0; k < q.n; ++k) {
+    const std::uint32_t i = q.selected[k];
+    if (!q.valid[i]) continue;
+    const double e = q.gain * (q.warped[i] - q.mi) - (q.t[i] - q.mt);
+    if (std::fabs(e) >= q.cutoff) continue;
+    const double r = 1.0 - (e / q.cutoff) * (e / q.cutoff);
+    const double weight = r * r;
+    const float* sd = &q.steepest[k * kParams];
+    const __m256d low = _mm256_cvtps_pd(_mm_loadu_ps(sd));
+    const __m256d high = _mm256_cvtps_pd(_mm_loadu_ps(sd + 4));
+#pragma GCC unroll 8
+    for (int j = 0; j < kParams; ++j) {
+      if (!((Rows >> j) & 1u)) continue;
+      const double wj = weight * static_cast<double>(sd[j]);
+      sb[j] += wj * e;
+      const __m256d w4 = _mm256_set1_pd(wj);
+      sa[j][0] = _mm256_add_pd(sa[j][0], _mm256_mul_pd(w4, low));
+      if (j >= 4) sa[j][1] = _mm256_add_pd(sa[j][1], _mm256_mul_pd(w4, high));
+    }
+  }
+  for (int j = 0; j < kParams; ++j) {
+    if (!((Rows >> j) & 1u)) continue;
+    b[j] = sb[j];
+    alignas(32) double row[kParams];
+    _mm256_store_pd(row, sa[j][0]);
+    _mm256_store_pd(row + 4, sa[j][1]);
+    for (int l = 0; l <= j; ++l) a[j][l] = row[l];
+  }
+}
+#endif
+
 // Sums the rows of the normal equations in `Rows` (bit j: row j of the
 // lower triangle of a and b[j]) over every pixel, in pixel order: each
 // entry is the same sum, bit for bit, whichever rows are summed together.
 template <unsigned Rows>
 void normal_rows(const NormalTerms& q, double a[kParams][kParams], double b[kParams]) {
+#if defined(KG_DISPATCH_AVX2)
+  if (simd_level() == SimdLevel::kAvx2) return normal_rows_avx2<Rows>(q, a, b);
+#endif
   double sa[kParams][kParams] = {};
   double sb[kParams] = {};
   for (std::size_t k = 0; k < q.n; ++k) {
@@ -191,12 +246,127 @@ struct WarpGrid {
   float weight;
 };
 
+#if defined(KG_DISPATCH_AVX2)
+// warp_pixels()'s values for 4 pixels at a time with AVX2, the first
+// (end - begin) / 4 * 4 of them; returns where the portable loop takes
+// over. Each lane is one pixel and goes through its samples in the same
+// order with the same operations (double projection, the bilinear read in
+// float, the float sum), so the same values; a lane with a sample outside
+// the frame reads pixel (0, 0) from then on, its sum unused (the portable
+// loop stops there), and all lanes outside end the pixel's samples.
+KG_TARGET_AVX2 std::size_t warp_pixels_avx2(const WarpGrid& grid, ImageView frame,
+                                            const std::uint32_t* pixels, std::size_t begin,
+                                            std::size_t end, std::uint8_t* valid, float* warped) {
+  const WarpGrid q = grid;
+  const auto w = static_cast<std::uint32_t>(q.w);
+  __m256d g[9];
+  for (int i = 0; i < 9; ++i) g[i] = _mm256_set1_pd(q.g[i]);
+  const __m256d cx = _mm256_set1_pd(q.cx), cy = _mm256_set1_pd(q.cy);
+  const __m256d half_long = _mm256_set1_pd(q.half_long), first = _mm256_set1_pd(q.first);
+  const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
+  const __m256d max_x = _mm256_set1_pd(q.max_x), max_y = _mm256_set1_pd(q.max_y);
+  const std::ptrdiff_t stride = frame.stride;
+  // Pixel offsets in 32-bit lanes (frames of up to 2 GiB).
+  if (stride <= 0 || stride * (frame.height + 1) > INT32_MAX) return begin;
+  const __m128i stride4 = _mm_set1_epi32(static_cast<std::int32_t>(stride));
+  const __m128i low_byte = _mm_set1_epi32(0xFF);
+  std::size_t k = begin;
+  for (; k + 4 <= end; k += 4) {
+    alignas(16) std::int32_t u[4], v[4];
+    for (int l = 0; l < 4; ++l) {
+      const std::uint32_t i = pixels[k + static_cast<std::size_t>(l)];
+      u[l] = static_cast<int>(i % w);
+      v[l] = static_cast<int>(i / w);
+    }
+    const __m256d xn0 = _mm256_add_pd(
+        _mm256_div_pd(
+            _mm256_sub_pd(_mm256_cvtepi32_pd(_mm_load_si128(reinterpret_cast<const __m128i*>(u))),
+                          cx),
+            half_long),
+        first);
+    const __m256d yn0 = _mm256_add_pd(
+        _mm256_div_pd(
+            _mm256_sub_pd(_mm256_cvtepi32_pd(_mm_load_si128(reinterpret_cast<const __m128i*>(v))),
+                          cy),
+            half_long),
+        first);
+    __m256d inside = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+    __m128 sum = _mm_setzero_ps();
+    for (int sy = 0; sy < q.sub; ++sy) {
+      const __m256d yn = _mm256_add_pd(yn0, _mm256_set1_pd(sy * q.step));
+      int sx = 0;
+      for (; sx < q.sub; ++sx) {
+        const __m256d xn = _mm256_add_pd(xn0, _mm256_set1_pd(sx * q.step));
+        // project()
+        const __m256d z = _mm256_div_pd(
+            one,
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(g[6], xn), _mm256_mul_pd(g[7], yn)), g[8]));
+        const __m256d x = _mm256_mul_pd(
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(g[0], xn), _mm256_mul_pd(g[1], yn)), g[2]),
+            z);
+        const __m256d y = _mm256_mul_pd(
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(g[3], xn), _mm256_mul_pd(g[4], yn)), g[5]),
+            z);
+        const __m256d in = _mm256_and_pd(
+            _mm256_and_pd(_mm256_cmp_pd(x, zero, _CMP_GE_OQ), _mm256_cmp_pd(y, zero, _CMP_GE_OQ)),
+            _mm256_and_pd(_mm256_cmp_pd(x, max_x, _CMP_LT_OQ),
+                          _mm256_cmp_pd(y, max_y, _CMP_LT_OQ)));
+        inside = _mm256_and_pd(inside, in);
+        if (_mm256_movemask_pd(inside) == 0) break;
+        // bilinear(), at (0, 0) for the lanes outside.
+        const __m256d xs = _mm256_and_pd(x, inside), ys = _mm256_and_pd(y, inside);
+        const __m128i x0 = _mm256_cvttpd_epi32(xs), y0 = _mm256_cvttpd_epi32(ys);
+        const __m128 fx = _mm256_cvtpd_ps(_mm256_sub_pd(xs, _mm256_cvtepi32_pd(x0)));
+        const __m128 fy = _mm256_cvtpd_ps(_mm256_sub_pd(ys, _mm256_cvtepi32_pd(y0)));
+        // Each lane's two pixel pairs, two bytes at a time (little-endian:
+        // the left pixel is the low byte).
+        alignas(16) std::int32_t at[4], upper[4], lower[4];
+        _mm_store_si128(reinterpret_cast<__m128i*>(at),
+                        _mm_add_epi32(_mm_mullo_epi32(y0, stride4), x0));
+        for (int l = 0; l < 4; ++l) {
+          const std::uint8_t* r0 = frame.data + at[l];
+          std::uint16_t a, b;
+          std::memcpy(&a, r0, sizeof a);
+          std::memcpy(&b, r0 + stride, sizeof b);
+          upper[l] = a;
+          lower[l] = b;
+        }
+        const __m128i up = _mm_load_si128(reinterpret_cast<const __m128i*>(upper));
+        const __m128i down = _mm_load_si128(reinterpret_cast<const __m128i*>(lower));
+        const __m128i a00 = _mm_and_si128(up, low_byte), a01 = _mm_srli_epi32(up, 8);
+        const __m128i a10 = _mm_and_si128(down, low_byte), a11 = _mm_srli_epi32(down, 8);
+        const __m128 top = _mm_add_ps(_mm_cvtepi32_ps(a00),
+                                      _mm_mul_ps(fx, _mm_cvtepi32_ps(_mm_sub_epi32(a01, a00))));
+        const __m128 bottom = _mm_add_ps(_mm_cvtepi32_ps(a10),
+                                         _mm_mul_ps(fx, _mm_cvtepi32_ps(_mm_sub_epi32(a11, a10))));
+        sum = _mm_add_ps(sum, _mm_add_ps(top, _mm_mul_ps(fy, _mm_sub_ps(bottom, top))));
+      }
+      if (sx < q.sub) break;
+    }
+    const int in_bits = _mm256_movemask_pd(inside);
+    alignas(16) float value[4];
+    _mm_store_ps(value, _mm_mul_ps(sum, _mm_set1_ps(q.weight)));
+    for (int l = 0; l < 4; ++l) {
+      const std::uint32_t i = pixels[k + static_cast<std::size_t>(l)];
+      const bool ok = ((in_bits >> l) & 1) != 0;
+      valid[i] = ok ? 1 : 0;
+      warped[i] = ok ? value[l] : 0.f;
+    }
+  }
+  return k;
+}
+#endif
+
 // Samples pixels[begin..end) of the level (their flags into valid, their
 // values into warped). The grid is copied into locals: the byte stores to
 // `valid` may alias anything reached through a pointer, which would then be
 // reloaded for every pixel.
 void warp_pixels(const WarpGrid& grid, ImageView frame, const std::uint32_t* pixels,
                  std::size_t begin, std::size_t end, std::uint8_t* valid, float* warped) {
+#if defined(KG_DISPATCH_AVX2)
+  if (simd_level() == SimdLevel::kAvx2)
+    begin = warp_pixels_avx2(grid, frame, pixels, begin, end, valid, warped);
+#endif
   const WarpGrid q = grid;
   const auto w = static_cast<std::uint32_t>(q.w);
   for (std::size_t k = begin; k < end; ++k) {
