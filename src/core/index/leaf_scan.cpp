@@ -124,6 +124,33 @@ static int scan_leaf_i8_vector(const ArcSearchPointI8* p, int n, const ArcSearch
   return found;
 }
 
+static int scan_leaf_i8_ranked_vector(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q,
+                                      std::int32_t radius2, std::int32_t box,
+                                      LeafRankWeights weights, std::uint16_t* hits,
+                                      std::uint8_t* ranks) {
+  // scan_leaf_i8_vector with each point's attribute squares (the high
+  // half's lanes 2, 3) summed beside its distance, and the rank code
+  // computed by the reference's own function.
+  const int8x8_t query = vld1_s8(q.data());
+  const int16x4_t limit = vdup_n_s16(box_limit(box));
+  int found = 0;
+  for (int i = 0; i < n; ++i) {
+    const int16x8_t d = vsubl_s8(vld1_s8(p[i].data()), query);
+    const int16x4_t lo = vget_low_s16(d), hi = vget_high_s16(d);
+    const int32x4_t sq_lo = vmull_s16(lo, lo);
+    const int32x4_t sq_hi = vmull_s16(hi, hi);
+    const int32x2_t pairs = vadd_s32(vget_low_s32(sq_lo), vget_high_s32(sq_lo));
+    const std::int32_t d2 = vget_lane_s32(pairs, 0) + vget_lane_s32(pairs, 1) +
+                            vgetq_lane_s32(sq_hi, 0) + vgetq_lane_s32(sq_hi, 1);
+    const std::int32_t a2 = vgetq_lane_s32(sq_hi, 2) + vgetq_lane_s32(sq_hi, 3);
+    const uint16x4_t within = vcle_s16(vabs_s16(hi), limit);
+    ranks[i] = leaf_rank_code(d2, a2, weights);
+    hits[found] = static_cast<std::uint16_t>(i);
+    found += d2 < radius2 && vget_lane_u16(within, 2) != 0 && vget_lane_u16(within, 3) != 0 ? 1 : 0;
+  }
+  return found;
+}
+
 static bool leaf_may_match_i8_vector(const ArcSearchPointI8* bounds, const ArcSearchPointI8& q,
                                      std::int32_t radius2, std::int32_t box) {
   const int16x8_t query = vmovl_s8(vld1_s8(q.data()));
@@ -325,8 +352,8 @@ static bool leaf_may_match_i8_vector(const ArcSearchPointI8* bounds, const ArcSe
 
 #endif
 
-#if !defined(KG_LEAF_SSE2)
-// The ranked scan has no NEON version yet: the reference runs there.
+#if !defined(KG_LEAF_SSE2) && !defined(KG_LEAF_NEON)
+// Without vector code: the reference.
 static int scan_leaf_i8_ranked_vector(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q,
                                       std::int32_t radius2, std::int32_t box,
                                       LeafRankWeights weights, std::uint16_t* hits,
