@@ -46,7 +46,7 @@ class ArcSearch {
   // best ranked by their descriptor distance and scale attributes
   // (rank_weights()). A query of max_leaves() leaves finds ~30 arcs a leaf,
   // and ~5 % of them close a circuit; the joins and the completion pay for
-  // every one (docs/RESULTS.md, "Fewer arcs per query").
+  // every one (docs/RESULTS.md, "Fewer model arcs per scene arc").
   void set_max_hits(std::uint32_t max_hits) { max_hits_ = max_hits; }
   std::uint32_t max_hits() const { return max_hits_; }
   // How much a squared attribute difference at the box's edge weighs in
