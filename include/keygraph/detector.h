@@ -100,6 +100,17 @@ struct DetectOptions {
   // more time.
   int max_search_leaves = 8;
   int search_reference_models = 10;
+  // Model arcs kept per scene arc, per leaf of the budget (so the cap
+  // follows the index's size as the leaves do): a query keeps the best
+  // ranked search_arcs_per_leaf x leaves of the arcs it finds (~30 a leaf
+  // within the similarity threshold), by descriptor distance and scale
+  // attributes; 0 (the default) keeps them all. Not stored in the index.
+  // 20 cuts a 640x480 frame's instructions by ~10 % (half the
+  // correspondences) but loses ~3 points of signs at 1280x720 and recall
+  // at 200 models without circuit completion (docs/RESULTS.md, "Fewer
+  // model arcs per scene arc"): an opt-in where time counts more.
+  static constexpr int kDefaultSearchArcsPerLeaf = 0;
+  int search_arcs_per_leaf = kDefaultSearchArcsPerLeaf;
   // Detections whose confidence (Detection::confidence, in [0, 1]) is below
   // this are dropped: 0 keeps every detection that passed the checks; 0.5
   // keeps those more likely right than wrong.

@@ -64,6 +64,15 @@ DetectOptions DetectOptions::from(const ModelIndex& index) {
 }
 
 Status set_detect_option(DetectOptions& options, std::string_view name, std::string_view value) {
+  if (name == "search_arcs_per_leaf") {
+    const std::string text(value);
+    char* end = nullptr;
+    const long v = std::strtol(text.c_str(), &end, 10);
+    if (text.empty() || end != text.c_str() + text.size() || v < 0 || v > 1 << 20)
+      return {StatusCode::kInvalidArgument, "bad value '" + text + "' for " + std::string(name)};
+    options.search_arcs_per_leaf = static_cast<int>(v);
+    return Status::ok();
+  }
   if (name == "min_confidence" || name == "time_budget_ms") {
     const std::string text(value);
     char* end = nullptr;
@@ -97,6 +106,7 @@ std::vector<std::string> detect_option_names() {
   std::vector<std::string> names;
   for (std::string& n : param_names())
     if (is_detect_option(n)) names.push_back(std::move(n));
+  names.emplace_back("search_arcs_per_leaf");
   names.emplace_back("min_confidence");
   names.emplace_back("time_budget_ms");
   return names;

@@ -357,6 +357,89 @@ TYPED_TEST(KdTreeTyped, ApproximateSearchOrderAndArcKeys) {
   EXPECT_GT(prefixes, 40);  // the smaller budgets found fewer, not only all or none
 }
 
+// A cap on the hits (KdRanking) keeps, in the order found, the hits of the
+// lowest rank codes (leaf_scan.h's formula, in every encoding): the largest
+// set of whole codes within max_hits, so every kept hit ranks below every
+// dropped one; without the cap reached, the uncapped answer.
+TYPED_TEST(KdTreeTyped, RankedSearchKeepsTheBestRankedHits) {
+  using T = TypeParam;
+  using Dist = typename KdTraits<T>::Dist;
+  using Point = KdPoint<T, kSearchDims>;
+  Rng rng(23);
+  const std::uint32_t n = 20000;
+  const AttributedTree<T> t = attributed_tree<T>(rng, n);
+  const BasicKdTreeView<T, kSearchDims> tree(t.points.data(), nullptr, n, t.nodes.data(), t.depth,
+                                             t.bounds.data());
+  // Keys that name their slot: from = slot, to = from.
+  std::vector<std::uint32_t> from(n);
+  for (std::uint32_t i = 0; i < n; ++i) from[i] = i;
+  const std::vector<std::int16_t> to_offset(n, 0);
+  const KdArcKeys keys{from.data(), to_offset.data()};
+  const auto r2 = radius2_of<T>(0.7f);
+  const auto box =
+      static_cast<Dist>(std::is_same_v<T, float> ? 0.2 : 0.2 * encoding_scale(encoding_of<T>()));
+  KdRanking ranking;
+  ranking.descriptor = static_cast<float>(256.0 / (5.0 * static_cast<double>(r2)));
+  ranking.attribute = static_cast<float>(
+      2.0 * 256.0 / (5.0 * (static_cast<double>(box) + 1) * (static_cast<double>(box) + 1)));
+  auto code_of = [&](const Point& q, std::uint32_t slot) {
+    const Point& p = t.points[slot];
+    Dist a2 = 0;
+    for (int d = kDescriptorSize; d < kSearchDims; ++d) {
+      const Dist e = static_cast<Dist>(p[d]) - static_cast<Dist>(q[d]);
+      a2 += e * e;
+    }
+    const float r = static_cast<float>(kd_distance2(p, q)) * ranking.descriptor +
+                    static_cast<float>(a2) * ranking.attribute;
+    return r >= 255.f ? 255 : static_cast<int>(r);
+  };
+  std::vector<std::uint64_t> all(n), kept(n);
+  int cut_cases = 0;
+  for (int q = 0; q < 40; ++q) {
+    const Point query = with_attributes<T>(rng, test::clustered_descriptors(rng, 1)[0]);
+    for (int leaves : {1, 8, 24}) {
+      ranking.max_hits = 0;
+      const std::uint32_t found =
+          tree.radius_search_approximate(query, r2, box, leaves, keys, ranking, all.data(), n);
+      for (std::uint32_t max_hits : {found + 1, found / 2, found / 5, 1u}) {
+        if (max_hits == 0) continue;
+        ranking.max_hits = max_hits;
+        const std::uint32_t k =
+            tree.radius_search_approximate(query, r2, box, leaves, keys, ranking, kept.data(), n);
+        ASSERT_LE(k, std::min(found, max_hits)) << q << " " << leaves;
+        // A subsequence of the uncapped hits, in order.
+        std::uint32_t at = 0;
+        int worst_kept = -1;
+        for (std::uint32_t i = 0; i < k; ++i) {
+          while (at < found && all[at] != kept[i]) ++at;
+          ASSERT_LT(at, found) << q << " " << leaves << " " << i;
+          worst_kept =
+              std::max(worst_kept, code_of(query, static_cast<std::uint32_t>(kept[i] >> 32)));
+          ++at;
+        }
+        // Every dropped hit ranks at or above the first code not kept, and
+        // that code's hits would have passed max_hits.
+        int best_dropped = 256, at_best = 0;
+        for (std::uint32_t i = 0; i < found; ++i) {
+          if (std::find(kept.begin(), kept.begin() + k, all[i]) != kept.begin() + k) continue;
+          const int c = code_of(query, static_cast<std::uint32_t>(all[i] >> 32));
+          if (c < best_dropped) at_best = 0;
+          best_dropped = std::min(best_dropped, c);
+          at_best += c == best_dropped ? 1 : 0;
+        }
+        EXPECT_LT(worst_kept, best_dropped) << q << " " << leaves;
+        if (k < found) {
+          EXPECT_GT(k + static_cast<std::uint32_t>(at_best), max_hits) << q << " " << leaves;
+          ++cut_cases;
+        } else {
+          EXPECT_TRUE(std::equal(kept.begin(), kept.begin() + k, all.begin()));
+        }
+      }
+    }
+  }
+  EXPECT_GT(cut_cases, 100);  // the cap cut most searches
+}
+
 // A walk over every leaf of a deep tree with a radius that keeps every far
 // child needs more pending cells than the search holds (512): the surplus
 // is dropped, never written past the cells, and what is found stays a
@@ -523,6 +606,59 @@ TEST(LeafScan, VectorisedEqualsScalar) {
     total += ns;
   }
   EXPECT_GT(total, 10000);  // the cases were not all empty
+}
+
+// The ranked scan finds what the plain scan finds, and its rank codes are
+// the scalar reference's, in every lane (the vector code computes them in
+// float as leaf_rank_code() does).
+TEST(LeafScan, RankedVectorisedEqualsScalar) {
+  Rng rng(13);
+  auto random_point = [&](int spread) {
+    ArcSearchPointI8 p;
+    for (auto& v : p)
+      v = static_cast<std::int8_t>(static_cast<int>(rng.uniform(2 * spread + 1)) - spread);
+    return p;
+  };
+  std::vector<ArcSearchPointI8> points(kLeafSize);
+  std::uint16_t plain[kLeafSize], a[kLeafSize], b[kLeafSize];
+  std::uint8_t ra[kLeafSize], rb[kLeafSize];
+  long total = 0;
+  int codes_seen[256] = {};
+  for (int trial = 0; trial < 4000; ++trial) {
+    const int spread = trial % 4 == 0 ? 127 : 40;
+    for (auto& p : points) p = random_point(spread);
+    const ArcSearchPointI8 q = random_point(spread);
+    const int n = 1 + static_cast<int>(rng.uniform(kLeafSize));
+    const std::int32_t radius2 = static_cast<std::int32_t>(rng.uniform(6 * 254 * 254 + 2));
+    const std::int32_t box = trial % 5 == 0 ? std::numeric_limits<std::int32_t>::max()
+                                            : static_cast<std::int32_t>(rng.uniform(256));
+    const LeafRankWeights w{static_cast<float>(256.0 / (1.0 + radius2 * rng.uniform01())),
+                            static_cast<float>(rng.uniform01() * 0.05)};
+    const int np = scan_leaf_i8(points.data(), n, q, radius2, box, plain);
+    const int ns = scan_leaf_i8_ranked_scalar(points.data(), n, q, radius2, box, w, a, ra);
+    const int nv = scan_leaf_i8_ranked(points.data(), n, q, radius2, box, w, b, rb);
+    ASSERT_EQ(ns, np) << "trial " << trial;
+    ASSERT_EQ(ns, nv) << "trial " << trial;
+    for (int i = 0; i < ns; ++i) {
+      ASSERT_EQ(a[i], plain[i]) << "trial " << trial;
+      ASSERT_EQ(a[i], b[i]) << "trial " << trial;
+    }
+    for (int i = 0; i < n; ++i) {
+      std::int32_t d2 = 0, a2 = 0;
+      for (int c = 0; c < kSearchDims; ++c) {
+        const std::int32_t d = std::int32_t{points[i][c]} - std::int32_t{q[c]};
+        (c < kDescriptorSize ? d2 : a2) += d * d;
+      }
+      ASSERT_EQ(ra[i], leaf_rank_code(d2, a2, w)) << "trial " << trial << " point " << i;
+      ASSERT_EQ(ra[i], rb[i]) << "trial " << trial << " point " << i;
+      ++codes_seen[ra[i]];
+    }
+    total += ns;
+  }
+  EXPECT_GT(total, 10000);
+  int distinct = 0;
+  for (int c : codes_seen) distinct += c > 0 ? 1 : 0;
+  EXPECT_GT(distinct, 200);  // codes across the range, not all saturated
 }
 
 TEST(LeafScan, VectorisedBoundsTestEqualsScalar) {

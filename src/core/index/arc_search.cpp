@@ -67,6 +67,21 @@ ArcSearch::ArcSearch(const ModelIndex& index, int max_leaves) {
         radius2_scaled_ = 0;
       break;
   }
+  // Rank weights: d2 / r2 + w * a2 / (box + 1)^2 (a2 the two attributes'
+  // squared differences) in 256 steps up to its largest value, 1 + 2w (a
+  // hit at the radius with its attributes at the box's corner).
+  const double r2 =
+      std::max(encoding_ == DescriptorEncoding::kFloat32 ? static_cast<double>(radius2_)
+                                                         : static_cast<double>(radius2_scaled_),
+               1e-12);
+  const double w = kRankAttributeWeight;
+  const double edge = static_cast<double>(box_) + 1.0;
+  unboxed_.descriptor = static_cast<float>(256.0 / r2);
+  boxed_ = unboxed_;
+  if (box_ > 0) {
+    boxed_.descriptor = static_cast<float>(256.0 / ((1.0 + 2.0 * w) * r2));
+    boxed_.attribute = static_cast<float>(256.0 * w / ((1.0 + 2.0 * w) * edge * edge));
+  }
 }
 
 std::uint32_t ArcSearch::radius_search(const ArcDescriptor& q, const float* attributes,
@@ -136,22 +151,24 @@ std::uint32_t ArcSearch::search(const Query& q, std::uint32_t* out, std::uint32_
 
 std::uint32_t ArcSearch::search_keys(const Query& q, std::uint64_t* out,
                                      std::uint32_t capacity) const {
+  KdRanking ranking = q.box ? boxed_ : unboxed_;
+  ranking.max_hits = max_hits_;
   switch (encoding_) {
     case DescriptorEncoding::kFloat32: {
       const float b = q.box ? static_cast<float>(box_) : std::numeric_limits<float>::max();
-      return f32_.radius_search_approximate(q.point, radius2_, b, max_leaves_, keys_, out,
+      return f32_.radius_search_approximate(q.point, radius2_, b, max_leaves_, keys_, ranking, out,
                                             capacity);
     }
     case DescriptorEncoding::kInt16: {
       const std::int64_t b = q.box ? box_ : std::numeric_limits<std::int64_t>::max();
       return i16_.radius_search_approximate(encoded<std::int16_t>(q), radius2_scaled_, b,
-                                            max_leaves_, keys_, out, capacity);
+                                            max_leaves_, keys_, ranking, out, capacity);
     }
     case DescriptorEncoding::kInt8: {
       const std::int32_t b = q.box ? box_ : std::numeric_limits<std::int32_t>::max();
       return i8_.radius_search_approximate(encoded<std::int8_t>(q),
                                            static_cast<ArcTreeView8::Dist>(radius2_scaled_), b,
-                                           max_leaves_, keys_, out, capacity);
+                                           max_leaves_, keys_, ranking, out, capacity);
     }
   }
   return 0;

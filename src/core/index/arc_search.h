@@ -42,6 +42,20 @@ class ArcSearch {
   // Changes the leaf budget (a detector's options); 0: exact.
   void set_max_leaves(int max_leaves) { max_leaves_ = max_leaves < 0 ? 0 : max_leaves; }
 
+  // At most `max_hits` arcs per search_keys() query (0: all it finds): the
+  // best ranked by their descriptor distance and scale attributes
+  // (rank_weights()). A query of max_leaves() leaves finds ~30 arcs a leaf,
+  // and ~5 % of them close a circuit; the joins and the completion pay for
+  // every one (docs/RESULTS.md, "Fewer model arcs per scene arc").
+  void set_max_hits(std::uint32_t max_hits) { max_hits_ = max_hits; }
+  std::uint32_t max_hits() const { return max_hits_; }
+  // How much a squared attribute difference at the box's edge weighs in
+  // the rank against a squared descriptor distance at the radius: the
+  // attributes tell a model arc of the scene arc's local scale, which a
+  // close descriptor alone does not (2 kept the most circuits of 0 to 16
+  // on the perf frames at 160 hits).
+  static constexpr float kRankAttributeWeight = 2.f;
+
   DescriptorEncoding encoding() const { return encoding_; }
   // Slots of the model arcs whose descriptor is within
   // params.descriptor.similarity_threshold of q and, when `attributes` is
@@ -97,6 +111,8 @@ class ArcSearch {
   std::int64_t radius2_scaled_ = 0;  // int16, int8
   std::int32_t box_ = 0;             // attribute box, grid steps (0: none)
   int max_leaves_ = 0;               // approximate search (0: exact)
+  std::uint32_t max_hits_ = 0;       // search_keys' cap (0: none)
+  KdRanking boxed_{}, unboxed_{};    // rank weights of queries with and without attributes
   KdArcKeys keys_{};                 // the index's arcs by slot
 };
 

@@ -395,13 +395,44 @@ template <class T, std::size_t D>
 template <class Out>
 void BasicKdTreeView<T, D>::scan_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end,
                                       const Point& q, Dist radius2, Dist box, const Out& out,
-                                      std::uint32_t capacity, std::uint32_t& found) const {
+                                      std::uint32_t capacity, std::uint32_t& found,
+                                      RankedHits* ranked) const {
   const Point* bounds =
       bounds_ != nullptr ? bounds_ + 2 * (node - ((std::uint32_t{1} << depth_) - 1)) : nullptr;
   if constexpr (std::is_same_v<T, std::int8_t> && D == kSearchDims) {
     // The model index's default: the vectorised bounds test and leaf scan.
     if (bounds != nullptr && !leaf_may_match_i8(bounds, q, radius2, box)) return;
     std::uint16_t hits[kLeafSize];
+    if (ranked != nullptr) {
+      // Written as without a cap, each hit's rank code beside it (at its
+      // position in the output) for the cut (approximate()).
+      std::uint8_t leaf_ranks[kLeafSize];
+      const int n =
+          scan_leaf_i8_ranked(points_ + begin, static_cast<int>(end - begin), q, radius2, box,
+                              {ranked->descriptor, ranked->attribute}, hits, leaf_ranks);
+      const auto count = static_cast<std::uint32_t>(n);
+      std::uint16_t* const codes = ranked->count;
+      if (ids_ == nullptr && count <= capacity && found <= capacity - count) {
+        out.put_leaf(found, begin, end - begin, hits, count);
+        std::uint8_t* const ranks = ranked->ranks + found;
+        for (std::uint32_t h = 0; h < count; ++h) {
+          const std::uint8_t r = leaf_ranks[hits[h]];
+          ranks[h] = r;
+          ++codes[r];
+        }
+        found += count;
+        return;
+      }
+      for (int h = 0; h < n; ++h) {
+        if (found < capacity) {
+          out.put(found, id(begin + hits[h]));
+          ranked->ranks[found] = leaf_ranks[hits[h]];
+          ++codes[leaf_ranks[hits[h]]];
+        }
+        ++found;
+      }
+      return;
+    }
     const int n =
         scan_leaf_i8(points_ + begin, static_cast<int>(end - begin), q, radius2, box, hits);
     const auto count = static_cast<std::uint32_t>(n);
@@ -420,8 +451,23 @@ void BasicKdTreeView<T, D>::scan_leaf(std::uint32_t node, std::uint32_t begin, s
   } else {
     if (bounds != nullptr && !box_can_match(bounds, q, radius2, box)) return;
     for (std::uint32_t i = begin; i < end; ++i) {
-      if (kd_distance2(points_[i], q) < radius2 && within_box(points_[i], q, box)) {
-        if (found < capacity) out.put(found, id(i));
+      const Dist d2 = kd_distance2(points_[i], q);
+      if (d2 < radius2 && within_box(points_[i], q, box)) {
+        if (found < capacity) {
+          out.put(found, id(i));
+          if (ranked != nullptr) {
+            Dist a2 = 0;
+            for (std::size_t d = kDescriptorSize; d < D; ++d) {
+              const Dist e = static_cast<Dist>(points_[i][d]) - static_cast<Dist>(q[d]);
+              a2 += e * e;
+            }
+            const float r = static_cast<float>(d2) * ranked->descriptor +
+                            static_cast<float>(a2) * ranked->attribute;
+            const std::uint8_t code = r >= 255.f ? std::uint8_t{255} : static_cast<std::uint8_t>(r);
+            ranked->ranks[found] = code;
+            ++ranked->count[code];
+          }
+        }
         ++found;
       }
     }
@@ -482,10 +528,19 @@ std::uint32_t BasicKdTreeView<T, D>::radius_search_approximate(const Point& q, D
 }
 
 template <class T, std::size_t D>
+std::uint32_t BasicKdTreeView<T, D>::radius_search_approximate(
+    const Point& q, Dist radius2, Dist box, int max_leaves, const KdArcKeys& keys,
+    const KdRanking& ranking, std::uint64_t* out, std::uint32_t capacity) const {
+  return approximate(q, radius2, box, max_leaves, ArcKeyOut{out, keys}, capacity,
+                     ranking.max_hits > 0 ? &ranking : nullptr);
+}
+
+template <class T, std::size_t D>
 template <class Out>
 std::uint32_t BasicKdTreeView<T, D>::approximate(const Point& q, Dist radius2, Dist box,
                                                  int max_leaves, const Out& out,
-                                                 std::uint32_t capacity) const {
+                                                 std::uint32_t capacity,
+                                                 const KdRanking* ranking) const {
   std::uint32_t found = 0;
   if (n_ == 0 || max_leaves <= 0) return 0;
   // Pending far children live in `cells`; the min-heap orders small
@@ -511,6 +566,18 @@ std::uint32_t BasicKdTreeView<T, D>::approximate(const Point& q, Dist radius2, D
   // visited are the heap's (cells never run out at these budgets).
   constexpr int kBoundedLeaves = 64;
   const bool bounded = max_leaves <= kBoundedLeaves;
+  // A cap on the hits: each hit's rank code is kept beside it, then the
+  // best stay (bounded budgets only: at most kBoundedLeaves leaves of
+  // kLeafSize points).
+  if (!bounded) ranking = nullptr;
+  std::uint8_t ranked_codes[kBoundedLeaves * kLeafSize];
+  RankedHits collected{ranked_codes, {}, 0.f, 0.f};
+  RankedHits* ranked = nullptr;
+  if (ranking != nullptr) {
+    collected.descriptor = ranking->descriptor;
+    collected.attribute = ranking->attribute;
+    ranked = &collected;
+  }
   int head = 0;  // bounded: heap[head..size), keys ascending
   auto push = [&](PendingCell x, int remaining) {
     if (!bounded) {
@@ -572,13 +639,30 @@ std::uint32_t BasicKdTreeView<T, D>::approximate(const Point& q, Dist radius2, D
     if (n_batch == kBatch) {
       for (int b = 0; b < n_batch; ++b)
         scan_leaf(batch[b].node, batch[b].begin, batch[b].end, q, radius2, box, out, capacity,
-                  found);
+                  found, ranked);
       n_batch = 0;
     }
   }
   for (int b = 0; b < n_batch; ++b)
-    scan_leaf(batch[b].node, batch[b].begin, batch[b].end, q, radius2, box, out, capacity, found);
-  return found;
+    scan_leaf(batch[b].node, batch[b].begin, batch[b].end, q, radius2, box, out, capacity, found,
+              ranked);
+  if (ranked == nullptr) return found;
+  // More hits than the output holds: no cut (the first ones, truncated,
+  // as without a cap).
+  if (found > capacity || found <= ranking->max_hits) return found;
+  // The cut: the hits ranked below the first code at which their count
+  // would pass max_hits, in the order found.
+  std::uint32_t keep = 0;
+  int cut = 0;
+  while (keep + collected.count[cut] <= ranking->max_hits) keep += collected.count[cut++];
+  auto* const keys = out.out;
+  std::uint32_t kept = 0;
+  for (std::uint32_t i = 0; i < found; ++i) {
+    // Branch-free: an entry copied past the kept ones is overwritten next.
+    keys[kept] = keys[i];
+    kept += ranked_codes[i] < cut ? 1u : 0u;
+  }
+  return kept;
 }
 
 template <class T, std::size_t D>

@@ -115,6 +115,19 @@ struct KdArcKeys {
   const std::int16_t* to_offset = nullptr;
 };
 
+// A cap on an approximate search's hits (the keys search): at most
+// max_hits of them, those of the lowest rank codes (core/index/leaf_scan.h:
+// the squared descriptor distance times `descriptor` plus the attributes'
+// squared differences times `attribute`, in 256 steps; within a step the
+// first found), in the order found. max_hits 0: every hit. Applies to
+// budgets of up to 64 leaves (BasicKdTreeView's bounded queue); larger
+// budgets return every hit.
+struct KdRanking {
+  std::uint32_t max_hits = 0;
+  float descriptor = 0.f;
+  float attribute = 0.f;
+};
+
 template <class T, std::size_t D = kDescriptorSize>
 class BasicKdTreeView {
  public:
@@ -152,6 +165,12 @@ class BasicKdTreeView {
   std::uint32_t radius_search_approximate(const Point& q, Dist radius2, Dist box, int max_leaves,
                                           const KdArcKeys& keys, std::uint64_t* out,
                                           std::uint32_t capacity) const;
+  // The same, keeping only the best ranked hits (`ranking`); returns how
+  // many were kept (at most ranking.max_hits when it is not 0) when all
+  // hits fitted in `capacity`, else the hits found.
+  std::uint32_t radius_search_approximate(const Point& q, Dist radius2, Dist box, int max_leaves,
+                                          const KdArcKeys& keys, const KdRanking& ranking,
+                                          std::uint64_t* out, std::uint32_t capacity) const;
 
   // The k (<= 64) nearest points by descriptor distance (attributes are not
   // compared), closest first (ties: smaller id first): ids and squared
@@ -167,13 +186,21 @@ class BasicKdTreeView {
   // leaf `node`, slots [begin, end), within radius2 and box of q; skips the
   // leaf when its bounds rule it out. `Out` (kdtree.cpp) turns a slot into
   // what is written: its id, or its arc key.
+  // A ranked search's hits before its cut: the rank code of each hit
+  // written (by its position in the output), and the hits per code.
+  struct RankedHits {
+    std::uint8_t* ranks;
+    std::uint16_t count[256];
+    float descriptor, attribute;  // KdRanking's weights
+  };
+  // With `ranked` not null, also notes each hit's rank code there.
   template <class Out>
   void scan_leaf(std::uint32_t node, std::uint32_t begin, std::uint32_t end, const Point& q,
                  Dist radius2, Dist box, const Out& out, std::uint32_t capacity,
-                 std::uint32_t& found) const;
+                 std::uint32_t& found, RankedHits* ranked = nullptr) const;
   template <class Out>
   std::uint32_t approximate(const Point& q, Dist radius2, Dist box, int max_leaves, const Out& out,
-                            std::uint32_t capacity) const;
+                            std::uint32_t capacity, const KdRanking* ranking = nullptr) const;
 
   const Point* points_ = nullptr;
   const std::uint32_t* ids_ = nullptr;

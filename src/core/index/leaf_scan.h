@@ -24,6 +24,30 @@ int scan_leaf_i8_scalar(const ArcSearchPointI8* p, int n, const ArcSearchPointI8
 // is not kScalar (else the scalar code).
 int scan_leaf_i8(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q, std::int32_t radius2,
                  std::int32_t box, std::uint16_t* hits);
+// How a ranked search (BasicKdTreeView::radius_search_approximate with a
+// cap on its hits) orders the points it found: the rank code of a point is
+// min(255, floor(float(d2) * descriptor + float(a2) * attribute)) in float
+// arithmetic, d2 its squared descriptor distance and a2 the sum of its
+// squared attribute differences from the query. The weights make a point
+// at the radius and the box's corner rank 256 (ArcSearch: rank_weights()).
+struct LeafRankWeights {
+  float descriptor = 0.f;
+  float attribute = 0.f;
+};
+// The rank code of one point (the reference for the vector code).
+inline std::uint8_t leaf_rank_code(std::int32_t d2, std::int32_t a2, LeafRankWeights w) {
+  const float r = static_cast<float>(d2) * w.descriptor + static_cast<float>(a2) * w.attribute;
+  return r >= 255.f ? std::uint8_t{255} : static_cast<std::uint8_t>(r);
+}
+// scan_leaf_i8, also writing ranks[i], the rank code of point i, for every
+// i in [0, n) (hit or not; ranks[] needs the room hits[] needs).
+int scan_leaf_i8_ranked_scalar(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q,
+                               std::int32_t radius2, std::int32_t box, LeafRankWeights weights,
+                               std::uint16_t* hits, std::uint8_t* ranks);
+// The same, vectorised on x86-64 (SSE2); the scalar code elsewhere.
+int scan_leaf_i8_ranked(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q,
+                        std::int32_t radius2, std::int32_t box, LeafRankWeights weights,
+                        std::uint16_t* hits, std::uint8_t* ranks);
 // Whether a leaf whose points lie in [bounds[0], bounds[1]] (component-wise)
 // can hold a point within radius2 and box of q as scan_leaf_i8 tests them:
 // the squared distance from q to the bounds' box over the descriptor

@@ -176,6 +176,9 @@ Status FramePipeline::check_options(const ModelIndex& index, const DetectOptions
   if (!(options.time_budget_ms >= 0.0 && std::isfinite(options.time_budget_ms)))
     return {StatusCode::kInvalidArgument,
             "detect options: time_budget_ms must be a finite number >= 0 (0: no budget)"};
+  if (!(options.search_arcs_per_leaf >= 0 && options.search_arcs_per_leaf <= kLeafSize))
+    return {StatusCode::kInvalidArgument, "detect options: search_arcs_per_leaf must be in [0, " +
+                                              std::to_string(kLeafSize) + "] (0: every arc found)"};
   if (options.models == nullptr && options.model_count > 0)
     return {StatusCode::kInvalidArgument, "detect options: model_count without models"};
   for (std::size_t i = 0; options.models != nullptr && i < options.model_count; ++i) {
@@ -194,6 +197,8 @@ void FramePipeline::set_options(const DetectOptions& options) {
   params_ = with_options(index_->params(), options);
   search_.set_max_leaves(
       ArcSearch::leaves_for(params_.descriptor, static_cast<std::uint64_t>(index_->model_count())));
+  search_.set_max_hits(static_cast<std::uint32_t>(search_.max_leaves()) *
+                       static_cast<std::uint32_t>(std::max(0, options.search_arcs_per_leaf)));
   const auto models = static_cast<std::size_t>(index_->model_count());
   filter_models_ = options.models != nullptr;
   model_searched_.assign(models, filter_models_ ? 0 : 1);
