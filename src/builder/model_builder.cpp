@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <limits>
@@ -11,7 +10,6 @@
 #include <type_traits>
 #include <unordered_map>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "builder/image_io.h"
@@ -280,30 +278,8 @@ Status build_views(const cv::Mat& gray, const Params& params, BuiltModel& out) {
   LocalArcs described;
   std::vector<Point2f> view_points;
   cv::Mat image, inside;
-  // XP (scratch): KG_XP_BLUR="max_edge,sigma[,jpeg]" renders each view whose long
-  // edge is at most max_edge once more, blurred (and JPEG-degraded).
-  double xp_edge = 0, xp_sigma = 0;
-  int xp_jpeg = 0;
-  if (const char* e = std::getenv("KG_XP_BLUR"))
-    std::sscanf(e, "%lf,%lf,%d", &xp_edge, &xp_sigma, &xp_jpeg);
-  std::vector<std::pair<ModelView, int>> passes;
   for (const ModelView& view : views) {
-    passes.push_back({view, 0});
-    if (xp_edge > 0 && std::max(view.size.width, view.size.height) <= xp_edge)
-      passes.push_back({view, 1});
-  }
-  for (const auto& pass : passes) {
-    const ModelView& view = pass.first;
     render_view(gray, view, image, inside);
-    if (pass.second == 1) {
-      if (xp_sigma > 0)
-        cv::GaussianBlur(image, image, cv::Size(0, 0), xp_sigma, xp_sigma, cv::BORDER_REPLICATE);
-      if (xp_jpeg > 0) {
-        std::vector<std::uint8_t> buf;
-        cv::imencode(".jpg", image, buf, {cv::IMWRITE_JPEG_QUALITY, xp_jpeg});
-        image = cv::imdecode(buf, cv::IMREAD_GRAYSCALE);
-      }
-    }
     extractor.extract(image, params.keypoints, params.keypoints.max_model_keypoints, detected);
     const cv::Matx23d& a = view.to_view;
     const double det = a(0, 0) * a(1, 1) - a(0, 1) * a(1, 0);

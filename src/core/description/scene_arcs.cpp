@@ -118,8 +118,6 @@ bool SceneArcs::describe_edge(int e, Scratch& scratch) {
   queries_[static_cast<std::size_t>(e)] =
       fixed ? search_->query_quantised(q, scaled ? attributes : nullptr)
             : search_->query(d, scaled ? attributes : nullptr);
-  queries_[static_cast<std::size_t>(e)].wide =
-      search_->short_arc_length() > 0.f && chebyshev(a, b) < search_->short_arc_length();
   described_[static_cast<std::size_t>(e)] = 1;
   return true;
 }

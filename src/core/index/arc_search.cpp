@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <type_traits>
 
@@ -69,22 +67,6 @@ ArcSearch::ArcSearch(const ModelIndex& index, int max_leaves) {
         radius2_scaled_ = 0;
       break;
   }
-  radius2_wide_ = radius2_;
-  radius2_scaled_wide_ = radius2_scaled_;
-  if (const char* e = std::getenv("KG_XP_SHORT")) {
-    float len = 0.f, wide = 0.f;
-    if (std::sscanf(e, "%f,%f", &len, &wide) == 2 && len > 0.f && wide > radius) {
-      short_length_ = len;
-      radius2_wide_ = wide * wide;
-      if (encoding_ != DescriptorEncoding::kFloat32) {
-        const std::int64_t limit = encoding_ == DescriptorEncoding::kInt16
-                                       ? std::numeric_limits<ArcTreeView16::Dist>::max()
-                                       : std::numeric_limits<ArcTreeView8::Dist>::max();
-        if (!scaled_radius2(wide, encoding_, limit, radius2_scaled_wide_))
-          radius2_scaled_wide_ = radius2_scaled_;
-      }
-    }
-  }
 }
 
 std::uint32_t ArcSearch::radius_search(const ArcDescriptor& q, const float* attributes,
@@ -140,14 +122,14 @@ std::uint32_t ArcSearch::search(const Query& q, std::uint32_t* out, std::uint32_
   switch (encoding_) {
     case DescriptorEncoding::kFloat32: {
       const float b = q.box ? static_cast<float>(box_) : std::numeric_limits<float>::max();
-      return max_leaves_ > 0 ? f32_.radius_search_approximate(q.point, radius2_of(q), b,
-                                                              max_leaves_, out, capacity)
-                             : f32_.radius_search(q.point, radius2_of(q), b, out, capacity);
+      return max_leaves_ > 0
+                 ? f32_.radius_search_approximate(q.point, radius2_, b, max_leaves_, out, capacity)
+                 : f32_.radius_search(q.point, radius2_, b, out, capacity);
     }
     case DescriptorEncoding::kInt16:
-      return search_encoded(encoded<std::int16_t>(q), q.box, scaled_radius2_of(q), out, capacity);
+      return search_encoded(encoded<std::int16_t>(q), q.box, out, capacity);
     case DescriptorEncoding::kInt8:
-      return search_encoded(encoded<std::int8_t>(q), q.box, scaled_radius2_of(q), out, capacity);
+      return search_encoded(encoded<std::int8_t>(q), q.box, out, capacity);
   }
   return 0;
 }
@@ -157,18 +139,18 @@ std::uint32_t ArcSearch::search_keys(const Query& q, std::uint64_t* out,
   switch (encoding_) {
     case DescriptorEncoding::kFloat32: {
       const float b = q.box ? static_cast<float>(box_) : std::numeric_limits<float>::max();
-      return f32_.radius_search_approximate(q.point, radius2_of(q), b, max_leaves_, keys_, out,
+      return f32_.radius_search_approximate(q.point, radius2_, b, max_leaves_, keys_, out,
                                             capacity);
     }
     case DescriptorEncoding::kInt16: {
       const std::int64_t b = q.box ? box_ : std::numeric_limits<std::int64_t>::max();
-      return i16_.radius_search_approximate(encoded<std::int16_t>(q), scaled_radius2_of(q), b,
+      return i16_.radius_search_approximate(encoded<std::int16_t>(q), radius2_scaled_, b,
                                             max_leaves_, keys_, out, capacity);
     }
     case DescriptorEncoding::kInt8: {
       const std::int32_t b = q.box ? box_ : std::numeric_limits<std::int32_t>::max();
       return i8_.radius_search_approximate(encoded<std::int8_t>(q),
-                                           static_cast<ArcTreeView8::Dist>(scaled_radius2_of(q)), b,
+                                           static_cast<ArcTreeView8::Dist>(radius2_scaled_), b,
                                            max_leaves_, keys_, out, capacity);
     }
   }
@@ -213,28 +195,28 @@ void ArcSearch::prefetch(std::uint32_t slot) const {
 bool ArcSearch::matches(const Query& q, std::uint32_t slot) const {
   switch (encoding_) {
     case DescriptorEncoding::kFloat32:
-      return within(points_f32_[slot], q.point, radius2_of(q), q.box, static_cast<float>(box_));
+      return within(points_f32_[slot], q.point, radius2_, q.box, static_cast<float>(box_));
     case DescriptorEncoding::kInt16:
-      return within(points_i16_[slot], encoded<std::int16_t>(q), scaled_radius2_of(q), q.box,
+      return within(points_i16_[slot], encoded<std::int16_t>(q), radius2_scaled_, q.box,
                     static_cast<std::int64_t>(box_));
     case DescriptorEncoding::kInt8:
       return within(points_i8_[slot], encoded<std::int8_t>(q),
-                    static_cast<ArcTreeView8::Dist>(scaled_radius2_of(q)), q.box, box_);
+                    static_cast<ArcTreeView8::Dist>(radius2_scaled_), q.box, box_);
   }
   return false;
 }
 
-std::uint32_t ArcSearch::search_encoded(const ArcSearchPointI16& p, bool box, std::int64_t radius2s,
-                                        std::uint32_t* out, std::uint32_t capacity) const {
+std::uint32_t ArcSearch::search_encoded(const ArcSearchPointI16& p, bool box, std::uint32_t* out,
+                                        std::uint32_t capacity) const {
   const std::int64_t b = box ? box_ : std::numeric_limits<std::int64_t>::max();
   return max_leaves_ > 0
-             ? i16_.radius_search_approximate(p, radius2s, b, max_leaves_, out, capacity)
-             : i16_.radius_search(p, radius2s, b, out, capacity);
+             ? i16_.radius_search_approximate(p, radius2_scaled_, b, max_leaves_, out, capacity)
+             : i16_.radius_search(p, radius2_scaled_, b, out, capacity);
 }
 
-std::uint32_t ArcSearch::search_encoded(const ArcSearchPointI8& p, bool box, std::int64_t radius2s,
-                                        std::uint32_t* out, std::uint32_t capacity) const {
-  const auto r2 = static_cast<ArcTreeView8::Dist>(radius2s);
+std::uint32_t ArcSearch::search_encoded(const ArcSearchPointI8& p, bool box, std::uint32_t* out,
+                                        std::uint32_t capacity) const {
+  const auto r2 = static_cast<ArcTreeView8::Dist>(radius2_scaled_);
   const std::int32_t b = box ? box_ : std::numeric_limits<std::int32_t>::max();
   return max_leaves_ > 0 ? i8_.radius_search_approximate(p, r2, b, max_leaves_, out, capacity)
                          : i8_.radius_search(p, r2, b, out, capacity);

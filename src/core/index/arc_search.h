@@ -61,10 +61,7 @@ class ArcSearch {
   struct Query {
     ArcSearchPoint point{};
     bool box = false;
-    bool wide = false;  // searched with the short arcs' wider radius
   };
-  // XP: the wider radius of short scene arcs (0: none) and their length limit.
-  float short_arc_length() const { return short_length_; }
   Query query(const ArcDescriptor& q, const float* attributes) const;
   Query query_quantised(const std::int32_t* q, const float* attributes) const;
   std::uint32_t search(const Query& q, std::uint32_t* out, std::uint32_t capacity) const;
@@ -84,10 +81,10 @@ class ArcSearch {
  private:
   template <class T>
   std::array<T, kSearchDims> encoded(const Query& q) const;
-  std::uint32_t search_encoded(const ArcSearchPointI16& p, bool box, std::int64_t r2,
-                               std::uint32_t* out, std::uint32_t capacity) const;
-  std::uint32_t search_encoded(const ArcSearchPointI8& p, bool box, std::int64_t r2,
-                               std::uint32_t* out, std::uint32_t capacity) const;
+  std::uint32_t search_encoded(const ArcSearchPointI16& p, bool box, std::uint32_t* out,
+                               std::uint32_t capacity) const;
+  std::uint32_t search_encoded(const ArcSearchPointI8& p, bool box, std::uint32_t* out,
+                               std::uint32_t capacity) const;
 
   DescriptorEncoding encoding_ = DescriptorEncoding::kFloat32;
   const ArcSearchPoint* points_f32_ = nullptr;  // tree points, by slot
@@ -98,16 +95,9 @@ class ArcSearch {
   ArcTreeView8 i8_;
   float radius2_ = 0.f;              // float32
   std::int64_t radius2_scaled_ = 0;  // int16, int8
-  float radius2_wide_ = 0.f;
-  std::int64_t radius2_scaled_wide_ = 0;
-  float short_length_ = 0.f;
-  float radius2_of(const Query& q) const { return q.wide ? radius2_wide_ : radius2_; }
-  std::int64_t scaled_radius2_of(const Query& q) const {
-    return q.wide ? radius2_scaled_wide_ : radius2_scaled_;
-  }
-  std::int32_t box_ = 0;  // attribute box, grid steps (0: none)
-  int max_leaves_ = 0;    // approximate search (0: exact)
-  KdArcKeys keys_{};      // the index's arcs by slot
+  std::int32_t box_ = 0;             // attribute box, grid steps (0: none)
+  int max_leaves_ = 0;               // approximate search (0: exact)
+  KdArcKeys keys_{};                 // the index's arcs by slot
 };
 
 }  // namespace kg
