@@ -56,7 +56,7 @@ void add_pyramid(int width, int height, double tilt, double longitude, const Vie
     v.to_view = view_map(width, height, scale, tilt, longitude, v.size);
     if (std::max(v.size.width, v.size.height) < kSmallestView) break;
     out.push_back(v);
-    if (std::max(v.size.width, v.size.height) <= params.blurred_max_size) {
+    if (static_cast<double>(std::max(v.size.width, v.size.height)) <= params.blurred_max_size) {
       v.blur = kBlurredViewSigma;
       out.push_back(v);
     }
