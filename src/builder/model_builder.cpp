@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <limits>
@@ -366,15 +365,6 @@ void model_appearance(const cv::Mat& gray, int size, cv::Mat& out, float& scale)
 
 Status build_model(const cv::Mat& gray, const std::string& name, const Params& params,
                    BuiltModel& out) {
-  // XP (measurement hook, reverted below): the field from the environment.
-  if (const char* e = std::getenv("KG_XP_BLURRED_MAX_SIZE")) {
-    const auto v = static_cast<float>(std::atof(e));
-    if (v != params.views.blurred_max_size) {
-      Params p = params;
-      p.views.blurred_max_size = v;
-      return build_model(gray, name, p, out);
-    }
-  }
   Status s = format::validate_params(params);
   if (!s) return s;
   // Not in the file's parameter block (params.h), so not checked with it.
