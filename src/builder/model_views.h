@@ -30,8 +30,9 @@ struct ModelView {
 
 // The blur of a small view's blurred twin, in view pixels: what a sign of
 // that size in a phone or synthetic frame adds to a sharp drawing
-// (measured: 1.0 px added fewer correspondences on the tuning sets and lost
-// signs over 160 px; docs/RESULTS.md, "Blurred small views (issue 38)").
+// (measured on the tuning sets: 1.5 px on views up to 170 px found 7 more
+// signs than 1.0 px on views up to 120 px, which lost two over 160 px;
+// docs/RESULTS.md, "Blurred small views (issue 38)").
 inline constexpr double kBlurredViewSigma = 1.5;
 
 // The views of a width x height model for `params`, in this order: the
