@@ -30,7 +30,7 @@ struct ModelView {
 
 // The blur of a small view's blurred twin, in view pixels: what a sign of
 // that size in a phone or synthetic frame adds to a sharp drawing
-// (measured on the tuning sets: 1.5 px on views up to 170 px found 7 more
+// (measured on the tuning sets: 1.5 px on views up to 170 px found 5 more
 // signs than 1.0 px on views up to 120 px, which lost two over 160 px;
 // docs/RESULTS.md, "Blurred small views (issue 38)").
 inline constexpr double kBlurredViewSigma = 1.5;
