@@ -15,6 +15,7 @@
 
 #include "builder/desktop_detect.h"
 #include "builder/model_builder.h"
+#include "builder/model_quality.h"
 #include "builder/model_views.h"
 #include "support/opencv_scenes.h"
 #include "support/test_data.h"
@@ -69,6 +70,40 @@ TEST(BlurredViews, TheTwinIsItsViewBlurred) {
     ++checked;
   }
   EXPECT_GE(checked, 16);
+}
+
+// The model keeps the twins' arcs and keypoints, the quality report only
+// the sharp views (the format cannot tell a twin from its view): the same
+// views, smallest size and per-view counts as without the twins.
+TEST(BlurredViews, TheQualityReportShowsTheSharpViews) {
+  const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+  ASSERT_FALSE(box.empty());
+  Params params;
+  BuiltModel sharp, blurred;
+  ASSERT_TRUE(build_model(box, "box", params, sharp).is_ok());
+  params.views.blurred_max_size = 170.f;
+  ASSERT_TRUE(build_model(box, "box", params, blurred).is_ok());
+  std::size_t twins = 0;
+  for (const ViewSummary& v : blurred.views) twins += v.blur > 0.0 ? 1 : 0;
+  EXPECT_GE(twins, 16u);
+  EXPECT_EQ(blurred.views.size(), sharp.views.size() + twins);
+  EXPECT_GT(blurred.arcs.size(), sharp.arcs.size());
+  EXPECT_GT(blurred.keypoints.size(), sharp.keypoints.size());
+  QualityOptions options;
+  options.look_alikes = false;
+  QualityReport with, without;
+  ASSERT_TRUE(measure_quality({blurred}, {box}, params, options, with).is_ok());
+  ASSERT_TRUE(measure_quality({sharp}, {box}, params, options, without).is_ok());
+  ASSERT_EQ(with.models.size(), 1u);
+  ASSERT_EQ(without.models.size(), 1u);
+  EXPECT_EQ(with.models[0].view_count, without.models[0].view_count);
+  EXPECT_EQ(with.views.size(), without.views.size());
+  EXPECT_EQ(with.models[0].smallest_size, without.models[0].smallest_size);
+  for (std::size_t i = 0; i < std::min(with.views.size(), without.views.size()); ++i) {
+    EXPECT_EQ(with.views[i].scale, without.views[i].scale) << i;
+    EXPECT_EQ(with.views[i].tilt, without.views[i].tilt) << i;
+    EXPECT_EQ(with.views[i].longitude, without.views[i].longitude) << i;
+  }
 }
 
 class BlurredViewsOnScenes : public ::testing::Test {
