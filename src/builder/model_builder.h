@@ -23,11 +23,12 @@ namespace kg {
 // What one view of a model contributed (reports, keygraph build).
 struct ViewSummary {
   double scale = 1.0, tilt = 1.0, longitude = 0.0;  // builder/model_views.h
-  int width = 0, height = 0;                        // view image size
-  int keypoints = 0;                                // detected inside the model
-  int arcs = 0;                                     // stored (after deduplication)
-  int view_arcs = 0;                                // described in it (before deduplication)
-  std::uint64_t keygraphs = 0;                      // keygraphs over the view's own arcs
+  double blur = 0.0;            // > 0: a small view's blurred twin (ModelView::blur)
+  int width = 0, height = 0;    // view image size
+  int keypoints = 0;            // detected inside the model
+  int arcs = 0;                 // stored (after deduplication)
+  int view_arcs = 0;            // described in it (before deduplication)
+  std::uint64_t keygraphs = 0;  // keygraphs over the view's own arcs
 };
 
 struct BuiltModel {

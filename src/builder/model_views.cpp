@@ -56,6 +56,10 @@ void add_pyramid(int width, int height, double tilt, double longitude, const Vie
     v.to_view = view_map(width, height, scale, tilt, longitude, v.size);
     if (std::max(v.size.width, v.size.height) < kSmallestView) break;
     out.push_back(v);
+    if (static_cast<double>(std::max(v.size.width, v.size.height)) <= params.blurred_max_size) {
+      v.blur = kBlurredViewSigma;
+      out.push_back(v);
+    }
     // Stop once this view is as small as the smallest sign to be found.
     if (long_edge * scale <= smallest) break;
   }
@@ -177,6 +181,8 @@ void render_view(const cv::Mat& gray, const ModelView& view, cv::Mat& out, cv::M
     cv::warpAffine(rotated, out, cv::Mat(squeeze), view.size, cv::INTER_LINEAR,
                    cv::BORDER_REPLICATE);
   }
+  if (view.blur > 0.0)
+    cv::GaussianBlur(out, out, cv::Size(0, 0), view.blur, view.blur, cv::BORDER_REPLICATE);
   const cv::Mat ones(gray.size(), CV_8UC1, cv::Scalar(255));
   cv::warpAffine(ones, inside, cv::Mat(a), view.size, cv::INTER_NEAREST, cv::BORDER_CONSTANT,
                  cv::Scalar(0));

@@ -23,14 +23,26 @@ struct ModelView {
   double longitude = 0.0;  // direction of the tilt, degrees in [0, 180)
   cv::Matx23d to_view;     // model pixel centre -> view pixel centre
   cv::Size size;           // view image size
+  // Extra Gaussian blur, view pixels, after the view is rendered (0: none):
+  // the blurred twin of a small view (ViewParams::blurred_max_size).
+  double blur = 0.0;
 };
+
+// The blur of a small view's blurred twin, in view pixels: what a sign of
+// that size in a phone or synthetic frame adds to a sharp drawing
+// (measured on the tuning sets: 1.5 px on views up to 170 px found 5 more
+// signs than 1.0 px on views up to 120 px, which lost two over 160 px;
+// docs/RESULTS.md, "Blurred small views (issue 38)").
+inline constexpr double kBlurredViewSigma = 1.5;
 
 // The views of a width x height model for `params`, in this order: the
 // frontal scale pyramid (scale 1, then each params.scale_step smaller until
 // the long edge reaches params.min_size), and for each tilt level the same
 // pyramid at longitudes 72 / t degrees apart, then the frontal views larger
 // than the model image (each 1 / params.scale_step larger, up to
-// params.max_scale). With views disabled
+// params.max_scale). Each view of the pyramids whose long edge is at most
+// params.blurred_max_size is followed by its blurred twin (the same map,
+// blur kBlurredViewSigma). With views disabled
 // (min_size == 0) the frontal pyramid of `legacy_scales` levels, each
 // 1/sqrt(2) smaller.
 std::vector<ModelView> model_views(int width, int height, const ViewParams& params,
@@ -53,7 +65,8 @@ Status check_view_canvas(int width, int height, const ViewParams& params);
 
 // Renders `view` of `gray` (8-bit), with pixels outside the model taken
 // from its nearest border (no edges that a wall behind a sign would not
-// show). `inside` gets 255 where the view shows model pixels.
+// show), blurred by view.blur when that is set. `inside` gets 255 where the
+// view shows model pixels.
 void render_view(const cv::Mat& gray, const ModelView& view, cv::Mat& out, cv::Mat& inside);
 
 // Tilt levels for views up to `max_tilt` degrees in steps of about 0.5 in
