@@ -386,10 +386,8 @@ struct ViewParams {
   // with its own keypoints and arcs, merged and deduplicated like any
   // other view's. [0, 100000], 0 is off (the default); 170 measured
   // (docs/RESULTS.md, "Blurred small views (issue 38)"). The builder's
-  // alone: the frames are described as before. NOT YET STORED IN THE
-  // INDEX: the parameter block has no room for it (format 6.10), so it is
-  // set through this struct only (tests, the builder's callers) until it
-  // gets a field in the larger block; a file records no trace of it.
+  // alone: the frames are described as before. Format 6.11 (the first
+  // field past 256 bytes of the parameter block); older files read 0.
   float blurred_max_size = 0.f;
 };
 

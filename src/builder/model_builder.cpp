@@ -367,9 +367,6 @@ Status build_model(const cv::Mat& gray, const std::string& name, const Params& p
                    BuiltModel& out) {
   Status s = format::validate_params(params);
   if (!s) return s;
-  // Not in the file's parameter block (params.h), so not checked with it.
-  if (!(params.views.blurred_max_size >= 0.f && params.views.blurred_max_size <= 100000.f))
-    return {StatusCode::kInvalidArgument, "views.blurred_max_size: must be in [0, 100000]"};
   if (gray.empty() || gray.type() != CV_8UC1)
     return {StatusCode::kInvalidArgument, name + ": model image must be 8-bit gray"};
   out = BuiltModel{};

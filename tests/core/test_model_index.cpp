@@ -1226,6 +1226,9 @@ TEST(Golden, EveryGoldenLoadsAndDetects) {
     EXPECT_EQ(index.params().ransac.small_min_inliers, index.version_minor() >= 10 ? 6 : 0);
     EXPECT_EQ(index.params().ransac.small_min_appearance,
               index.version_minor() >= 10 ? 0.75f : 0.f);
+    // Blurred small views (6.11, past the first 256 bytes) are opt-in: every
+    // golden file holds 0, the older ones through their shorter block.
+    EXPECT_EQ(index.params().views.blurred_max_size, 0.f);
     if (index.version_minor() >= 2) {
       ASSERT_TRUE(index.has_appearance());
       const ModelAppearance look = index.appearance(0);
@@ -1956,6 +1959,14 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
     b = bytes();
     put_params(b, p);
     EXPECT_TRUE(rejected(b, "parameter ransac.min_appearance must be in [-1, 1]"));
+  }
+  // A field past the first 256 bytes of the block (6.11) is checked as well.
+  for (const float size : {-1.f, 100001.f, std::nanf("")}) {
+    p = paper_params();
+    p.views.blurred_max_size = size;
+    b = bytes();
+    put_params(b, p);
+    EXPECT_TRUE(rejected(b, "parameter views.blurred_max_size must be in [0, 100000]"));
   }
 
   b = bytes();

@@ -257,6 +257,9 @@ Status validate_params(const Params& p) {
   if (!(std::isfinite(p.ransac.small_min_appearance) && p.ransac.small_min_appearance >= -1.f &&
         p.ransac.small_min_appearance <= 1.f))
     return bad("ransac.small_min_appearance", "must be in [-1, 1]");
+  if (!(std::isfinite(p.views.blurred_max_size) && p.views.blurred_max_size >= 0.f &&
+        p.views.blurred_max_size <= 100000.f))
+    return bad("views.blurred_max_size", "must be in [0, 100000] (0: off)");
   return Status::ok();
 }
 

@@ -50,7 +50,10 @@ inline constexpr std::uint16_t kVersionMajor = 6;
 // 6.10: ransac.small_max_size, small_min_inliers and small_min_appearance
 // (poses of small instances kept with fewer inliers when their appearance
 // confirms them, issue 38); older files read them as 0, off.
-inline constexpr std::uint16_t kVersionMinor = 10;
+// 6.11: views.blurred_max_size (blurred twins of the small model views,
+// opt-in, issue 38), the first field past 256 bytes: the parameter block
+// is 320 bytes; older files read it as 0, off, as they were built.
+inline constexpr std::uint16_t kVersionMinor = 11;
 inline constexpr std::size_t kAlignment = 64;
 
 inline constexpr std::size_t kHeaderSize = 64;
@@ -260,6 +263,7 @@ constexpr void visit_params(P& p, F&& f) {
   f("ransac.small_max_size", p.ransac.small_max_size);                        // 6.10; 0: off
   f("ransac.small_min_inliers", p.ransac.small_min_inliers);                  // 6.10; 0: off
   f("ransac.small_min_appearance", p.ransac.small_min_appearance);            // 6.10
+  f("views.blurred_max_size", p.views.blurred_max_size);                      // 6.11; 0: off
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them, and a field past the end of an older file's
   // (shorter) block reads as zero too.
