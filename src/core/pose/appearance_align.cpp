@@ -184,6 +184,47 @@ KG_TARGET_AVX2 void normal_rows_avx2(const NormalTerms& q, double a[kParams][kPa
 }
 #endif
 
+#if defined(KG_NEON_FLOAT)
+// normal_rows()'s sums with AArch64 NEON: row j's entries (weight sd[j])
+// sd[l] two at a time (lanes l > j summed too, and left unused), each entry
+// the same operations in the same pixel order, so the same values.
+template <unsigned Rows>
+void normal_rows_neon(const NormalTerms& q, double a[kParams][kParams], double b[kParams]) {
+  static_assert(kParams == 8, "four 2-lane quarters a row");
+  float64x2_t sa[kParams][4];
+  for (auto& row : sa) row[0] = row[1] = row[2] = row[3] = vdupq_n_f64(0.0);
+  double sb[kParams] = {};
+  for (std::size_t k = 0; k < q.n; ++k) {
+    const std::uint32_t i = q.selected[k];
+    if (!q.valid[i]) continue;
+    const double e = q.gain * (q.warped[i] - q.mi) - (q.t[i] - q.mt);
+    if (std::fabs(e) >= q.cutoff) continue;
+    const double r = 1.0 - (e / q.cutoff) * (e / q.cutoff);
+    const double weight = r * r;
+    const float* sd = &q.steepest[k * kParams];
+    const float32x4_t low = vld1q_f32(sd), high = vld1q_f32(sd + 4);
+    const float64x2_t s[4] = {vcvt_f64_f32(vget_low_f32(low)), vcvt_high_f64_f32(low),
+                              vcvt_f64_f32(vget_low_f32(high)), vcvt_high_f64_f32(high)};
+#pragma GCC unroll 8
+    for (int j = 0; j < kParams; ++j) {
+      if (!((Rows >> j) & 1u)) continue;
+      const double wj = weight * static_cast<double>(sd[j]);
+      sb[j] += wj * e;
+      const float64x2_t w2 = vdupq_n_f64(wj);
+#pragma GCC unroll 4
+      for (int h = 0; h <= j / 2; ++h) sa[j][h] = vaddq_f64(sa[j][h], vmulq_f64(w2, s[h]));
+    }
+  }
+  for (int j = 0; j < kParams; ++j) {
+    if (!((Rows >> j) & 1u)) continue;
+    b[j] = sb[j];
+    double row[kParams];
+    for (int h = 0; h < 4; ++h) vst1q_f64(row + 2 * h, sa[j][h]);
+    for (int l = 0; l <= j; ++l) a[j][l] = row[l];
+  }
+}
+#endif
+
 // Sums the rows of the normal equations in `Rows` (bit j: row j of the
 // lower triangle of a and b[j]) over every pixel, in pixel order: each
 // entry is the same sum, bit for bit, whichever rows are summed together.
@@ -191,6 +232,9 @@ template <unsigned Rows>
 void normal_rows(const NormalTerms& q, double a[kParams][kParams], double b[kParams]) {
 #if defined(KG_DISPATCH_AVX2)
   if (simd_level() == SimdLevel::kAvx2) return normal_rows_avx2<Rows>(q, a, b);
+#endif
+#if defined(KG_NEON_FLOAT)
+  if (simd_level() != SimdLevel::kScalar) return normal_rows_neon<Rows>(q, a, b);
 #endif
   double sa[kParams][kParams] = {};
   double sb[kParams] = {};
