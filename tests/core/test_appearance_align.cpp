@@ -137,15 +137,19 @@ TEST(AppearanceAlign, SameFitWithWorkers) {
   }
 }
 
-#if defined(__x86_64__)
-// The AVX2 loops (the frame sampling, 4 pixels at a time; the normal
-// equations, 4 entries at a time) against the portable loops: the same
-// fit, bit for bit, for a pose several pixels off (several
-// samples a level pixel), a small instance (one sample), and a pose with
-// a fifth of the model outside the frame (pixels whose samples leave it
-// part of the way through, beside pixels whose samples all stay inside).
+#if defined(__x86_64__) || defined(__aarch64__)
+// The vector loops (AVX2 on x86-64, NEON on AArch64: the frame sampling, 4
+// pixels at a time; the normal equations, 4 or 2 entries at a time) against
+// the portable loops: the same fit, bit for bit, for a pose several pixels
+// off (several samples a level pixel), a small instance (one sample), and
+// a pose with a fifth of the model outside the frame (pixels whose samples
+// leave it part of the way through, beside pixels whose samples all stay
+// inside). (The ARM cross-builds, without OpenCV, run the same comparison
+// on the golden frames: test_vector_kernels.cpp.)
 TEST(AppearanceAlign, SameFitAtEverySimdLevel) {
+#if defined(__x86_64__)
   if (best_simd_level() != SimdLevel::kAvx2) GTEST_SKIP() << "needs a CPU with AVX2";
+#endif
   const std::vector<std::vector<cv::Point2f>> poses = {
       kCorners,
       {{300.f, 200.f}, {360.f, 206.f}, {358.f, 247.f}, {298.f, 242.f}},
@@ -160,7 +164,7 @@ TEST(AppearanceAlign, SameFitAtEverySimdLevel) {
     Homography portable_h = vector_h;
     AppearanceFit vector_fit, portable_fit;
     {
-      const test::SimdScope best(SimdLevel::kAvx2);
+      const test::SimdScope best(best_simd_level());
       vector_fit = aligner.align(image_of(s), test::view(s.frame), vector_h);
     }
     {

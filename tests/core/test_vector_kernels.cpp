@@ -1,8 +1,9 @@
 // The vector loops and the keypoints' row bands, on the golden PGM frames
 // (no OpenCV, so the ARM cross-builds run it under qemu):
-// - the blur, the Hessian keypoints and the triangle patch correlations at
-//   the best SIMD level this CPU and build have (AVX2 on x86-64, NEON on
-//   AArch64) equal the portable loops' (kScalar), byte for byte;
+// - the blur, the Hessian keypoints, the triangle patch correlations and
+//   the appearance alignment's fit at the best SIMD level this CPU and
+//   build have (AVX2 on x86-64, NEON on AArch64) equal the portable loops'
+//   (kScalar), byte for byte;
 // - the keypoints are the same, byte for byte, for 1 to 4 row bands on a
 //   worker pool, also when the candidate cap is reached, and detecting with
 //   workers allocates nothing once reserved.
@@ -17,6 +18,8 @@
 
 #include "core/image/blur.h"
 #include "core/keypoints/hessian.h"
+#include "core/pose/appearance_align.h"
+#include "core/pose/homography.h"
 #include "core/selection/triangle_patch.h"
 #include "core/support/worker_pool.h"
 #include "keygraph/simd.h"
@@ -278,6 +281,76 @@ TEST(TrianglePatchSimd, VectorSamplingEqualsPortable) {
   std::printf("%d of %zu triangle pairs measured\n", measured, portable_patches.size());
   EXPECT_GT(measured, 1000);
   EXPECT_EQ(mismatches, 0);
+}
+
+// The appearance alignment's vector loops (the frame sampling, 4 pixels at
+// a time; the normal equations' sums) against the portable ones: box.pgm
+// at half size (2x2 means) aligned onto box_in_scene.pgm from its pose
+// (tests/data/frames-corners.txt) with the corners moved a few pixels; at
+// a third of its size (one sample a level pixel); and moved so that about
+// a fifth of it lies left of the frame (pixels whose samples leave the
+// frame part of the way through). The same fit, bit for bit.
+TEST(AppearanceAlignSimd, VectorLoopsEqualPortable) {
+  if (cpu_lacks_vector_loops()) GTEST_SKIP() << "needs a CPU with AVX2 (the x86-64 vector loops)";
+  const platform::GrayImage& box = frames().box;
+  const int hw = box.width / 2, hh = box.height / 2;
+  std::vector<std::uint8_t> half(static_cast<std::size_t>(hw * hh));
+  for (int y = 0; y < hh; ++y)
+    for (int x = 0; x < hw; ++x) {
+      const auto at = [&](int dx, int dy) {
+        return static_cast<int>(
+            box.pixels[static_cast<std::size_t>((2 * y + dy) * box.width + 2 * x + dx)]);
+      };
+      half[static_cast<std::size_t>(y * hw + x)] =
+          static_cast<std::uint8_t>((at(0, 0) + at(1, 0) + at(0, 1) + at(1, 1) + 2) / 4);
+    }
+  const AppearanceImage appearance{half.data(), hw, hh,
+                                   static_cast<float>(hw) / static_cast<float>(box.width),
+                                   static_cast<float>(hh) / static_cast<float>(box.height)};
+  const float w = static_cast<float>(box.width - 1), h = static_cast<float>(box.height - 1);
+  const Point2f model[4] = {{0.f, 0.f}, {w, 0.f}, {w, h}, {0.f, h}};
+  // box_in_scene's corners, each moved by a few pixels.
+  const Point2f found[4] = {{117.85f + 3.f, 160.99f - 2.f},
+                            {284.55f - 2.f, 174.79f + 3.f},
+                            {268.40f + 2.5f, 297.65f + 1.5f},
+                            {89.14f - 1.f, 272.24f - 2.5f}};
+  std::vector<std::vector<Point2f>> poses(3);
+  for (int c = 0; c < 4; ++c) {
+    poses[0].push_back(found[c]);
+    poses[1].push_back({100.f + (found[c].x - 100.f) / 3.f, 160.f + (found[c].y - 160.f) / 3.f});
+    poses[2].push_back({found[c].x - 150.f, found[c].y});
+  }
+  const ImageView scene = frames().scene.view();
+  AppearanceAligner aligner;
+  aligner.reserve(hw * hh);
+  int measured = 0, aligned = 0, pose = 0;
+  for (const std::vector<Point2f>& corners : poses) {
+    Homography start{};
+    ASSERT_TRUE(fit_homography(model, corners.data(), 4, start));
+    Homography vector_h = start, portable_h = start;
+    AppearanceFit vector_fit, portable_fit;
+    {
+      const test::SimdScope best(best_simd_level());
+      vector_fit = aligner.align(appearance, scene, vector_h);
+    }
+    {
+      const test::SimdScope scalar(SimdLevel::kScalar);
+      portable_fit = aligner.align(appearance, scene, portable_h);
+    }
+    EXPECT_EQ(vector_fit.measured, portable_fit.measured);
+    EXPECT_EQ(vector_fit.aligned, portable_fit.aligned);
+    EXPECT_EQ(0, std::memcmp(vector_h.data(), portable_h.data(), sizeof(Homography)));
+    EXPECT_EQ(0, std::memcmp(&vector_fit.ncc, &portable_fit.ncc, sizeof(double)));
+    EXPECT_EQ(0, std::memcmp(&vector_fit.ncc_before, &portable_fit.ncc_before, sizeof(double)));
+    EXPECT_EQ(vector_fit.iterations, portable_fit.iterations);
+    std::printf("pose %d: measured %d aligned %d ncc %.4f -> %.4f, %d iterations\n", ++pose,
+                portable_fit.measured, portable_fit.aligned, portable_fit.ncc_before,
+                portable_fit.ncc, portable_fit.iterations);
+    measured += portable_fit.measured ? 1 : 0;
+    aligned += portable_fit.aligned ? 1 : 0;
+  }
+  EXPECT_EQ(measured, 3);
+  EXPECT_GE(aligned, 1);
 }
 
 #endif  // x86-64 or AArch64

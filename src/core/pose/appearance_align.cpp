@@ -10,6 +10,9 @@
 #if defined(KG_DISPATCH_AVX2)
 #include <immintrin.h>
 #endif
+#if defined(KG_NEON_FLOAT)
+#include <arm_neon.h>
+#endif
 
 namespace kg {
 
@@ -181,6 +184,47 @@ KG_TARGET_AVX2 void normal_rows_avx2(const NormalTerms& q, double a[kParams][kPa
 }
 #endif
 
+#if defined(KG_NEON_FLOAT)
+// normal_rows()'s sums with AArch64 NEON: row j's entries (weight sd[j])
+// sd[l] two at a time (lanes l > j summed too, and left unused), each entry
+// the same operations in the same pixel order, so the same values.
+template <unsigned Rows>
+void normal_rows_neon(const NormalTerms& q, double a[kParams][kParams], double b[kParams]) {
+  static_assert(kParams == 8, "four 2-lane quarters a row");
+  float64x2_t sa[kParams][4];
+  for (auto& row : sa) row[0] = row[1] = row[2] = row[3] = vdupq_n_f64(0.0);
+  double sb[kParams] = {};
+  for (std::size_t k = 0; k < q.n; ++k) {
+    const std::uint32_t i = q.selected[k];
+    if (!q.valid[i]) continue;
+    const double e = q.gain * (q.warped[i] - q.mi) - (q.t[i] - q.mt);
+    if (std::fabs(e) >= q.cutoff) continue;
+    const double r = 1.0 - (e / q.cutoff) * (e / q.cutoff);
+    const double weight = r * r;
+    const float* sd = &q.steepest[k * kParams];
+    const float32x4_t low = vld1q_f32(sd), high = vld1q_f32(sd + 4);
+    const float64x2_t s[4] = {vcvt_f64_f32(vget_low_f32(low)), vcvt_high_f64_f32(low),
+                              vcvt_f64_f32(vget_low_f32(high)), vcvt_high_f64_f32(high)};
+#pragma GCC unroll 8
+    for (int j = 0; j < kParams; ++j) {
+      if (!((Rows >> j) & 1u)) continue;
+      const double wj = weight * static_cast<double>(sd[j]);
+      sb[j] += wj * e;
+      const float64x2_t w2 = vdupq_n_f64(wj);
+#pragma GCC unroll 4
+      for (int h = 0; h <= j / 2; ++h) sa[j][h] = vaddq_f64(sa[j][h], vmulq_f64(w2, s[h]));
+    }
+  }
+  for (int j = 0; j < kParams; ++j) {
+    if (!((Rows >> j) & 1u)) continue;
+    b[j] = sb[j];
+    double row[kParams];
+    for (int h = 0; h < 4; ++h) vst1q_f64(row + 2 * h, sa[j][h]);
+    for (int l = 0; l <= j; ++l) a[j][l] = row[l];
+  }
+}
+#endif
+
 // Sums the rows of the normal equations in `Rows` (bit j: row j of the
 // lower triangle of a and b[j]) over every pixel, in pixel order: each
 // entry is the same sum, bit for bit, whichever rows are summed together.
@@ -188,6 +232,9 @@ template <unsigned Rows>
 void normal_rows(const NormalTerms& q, double a[kParams][kParams], double b[kParams]) {
 #if defined(KG_DISPATCH_AVX2)
   if (simd_level() == SimdLevel::kAvx2) return normal_rows_avx2<Rows>(q, a, b);
+#endif
+#if defined(KG_NEON_FLOAT)
+  if (simd_level() != SimdLevel::kScalar) return normal_rows_neon<Rows>(q, a, b);
 #endif
   double sa[kParams][kParams] = {};
   double sb[kParams] = {};
@@ -357,6 +404,120 @@ KG_TARGET_AVX2 std::size_t warp_pixels_avx2(const WarpGrid& grid, ImageView fram
 }
 #endif
 
+#if defined(KG_NEON_FLOAT)
+// warp_pixels()'s values for 4 pixels at a time with AArch64 NEON (the
+// doubles in two 2-lane halves, the floats in one 4-lane vector), the first
+// (end - begin) / 4 * 4 of them; returns where the portable loop takes
+// over. Each lane is one pixel and goes through its samples in the same
+// order with the same operations (double projection, the bilinear read in
+// float, the float sum), so the same values; a lane with a sample outside
+// the frame reads pixel (0, 0) from then on, its sum unused (the portable
+// loop stops there), and all lanes outside end the pixel's samples.
+std::size_t warp_pixels_neon(const WarpGrid& grid, ImageView frame, const std::uint32_t* pixels,
+                             std::size_t begin, std::size_t end, std::uint8_t* valid,
+                             float* warped) {
+  const WarpGrid q = grid;
+  const auto w = static_cast<std::uint32_t>(q.w);
+  float64x2_t g[9];
+  for (int i = 0; i < 9; ++i) g[i] = vdupq_n_f64(q.g[i]);
+  const float64x2_t cx = vdupq_n_f64(q.cx), cy = vdupq_n_f64(q.cy);
+  const float64x2_t half_long = vdupq_n_f64(q.half_long), first = vdupq_n_f64(q.first);
+  const float64x2_t zero = vdupq_n_f64(0.0), one = vdupq_n_f64(1.0);
+  const float64x2_t max_x = vdupq_n_f64(q.max_x), max_y = vdupq_n_f64(q.max_y);
+  const std::ptrdiff_t stride = frame.stride;
+  // Pixel offsets in 32-bit lanes (frames of up to 2 GiB).
+  if (stride <= 0 || stride * (frame.height + 1) > INT32_MAX) return begin;
+  const int32x4_t stride4 = vdupq_n_s32(static_cast<std::int32_t>(stride));
+  const uint32x4_t low_byte = vdupq_n_u32(0xFF);
+  std::size_t k = begin;
+  for (; k + 4 <= end; k += 4) {
+    double u[4], v[4];
+    for (int l = 0; l < 4; ++l) {
+      const std::uint32_t i = pixels[k + static_cast<std::size_t>(l)];
+      u[l] = static_cast<int>(i % w);
+      v[l] = static_cast<int>(i / w);
+    }
+    float64x2_t xn0[2], yn0[2];
+    uint64x2_t inside[2];
+    for (int h = 0; h < 2; ++h) {
+      xn0[h] = vaddq_f64(vdivq_f64(vsubq_f64(vld1q_f64(u + 2 * h), cx), half_long), first);
+      yn0[h] = vaddq_f64(vdivq_f64(vsubq_f64(vld1q_f64(v + 2 * h), cy), half_long), first);
+      inside[h] = vdupq_n_u64(~std::uint64_t{0});
+    }
+    float32x4_t sum = vdupq_n_f32(0.f);
+    for (int sy = 0; sy < q.sub; ++sy) {
+      const float64x2_t dy = vdupq_n_f64(sy * q.step);
+      int sx = 0;
+      for (; sx < q.sub; ++sx) {
+        const float64x2_t dx = vdupq_n_f64(sx * q.step);
+        int32x2_t x0[2], y0[2];
+        float32x2_t fx[2], fy[2];
+        for (int h = 0; h < 2; ++h) {
+          const float64x2_t xn = vaddq_f64(xn0[h], dx), yn = vaddq_f64(yn0[h], dy);
+          // project()
+          const float64x2_t z =
+              vdivq_f64(one, vaddq_f64(vaddq_f64(vmulq_f64(g[6], xn), vmulq_f64(g[7], yn)), g[8]));
+          const float64x2_t x =
+              vmulq_f64(vaddq_f64(vaddq_f64(vmulq_f64(g[0], xn), vmulq_f64(g[1], yn)), g[2]), z);
+          const float64x2_t y =
+              vmulq_f64(vaddq_f64(vaddq_f64(vmulq_f64(g[3], xn), vmulq_f64(g[4], yn)), g[5]), z);
+          const uint64x2_t in = vandq_u64(vandq_u64(vcgeq_f64(x, zero), vcgeq_f64(y, zero)),
+                                          vandq_u64(vcltq_f64(x, max_x), vcltq_f64(y, max_y)));
+          inside[h] = vandq_u64(inside[h], in);
+          // bilinear(), at (0, 0) for the lanes outside.
+          const float64x2_t xs =
+              vreinterpretq_f64_u64(vandq_u64(vreinterpretq_u64_f64(x), inside[h]));
+          const float64x2_t ys =
+              vreinterpretq_f64_u64(vandq_u64(vreinterpretq_u64_f64(y), inside[h]));
+          const int64x2_t xi = vcvtq_s64_f64(xs), yi = vcvtq_s64_f64(ys);
+          x0[h] = vmovn_s64(xi);
+          y0[h] = vmovn_s64(yi);
+          fx[h] = vcvt_f32_f64(vsubq_f64(xs, vcvtq_f64_s64(xi)));
+          fy[h] = vcvt_f32_f64(vsubq_f64(ys, vcvtq_f64_s64(yi)));
+        }
+        if (vmaxvq_u32(vreinterpretq_u32_u64(vorrq_u64(inside[0], inside[1]))) == 0) break;
+        const float32x4_t fx4 = vcombine_f32(fx[0], fx[1]), fy4 = vcombine_f32(fy[0], fy[1]);
+        // Each lane's two pixel pairs, two bytes at a time (little-endian:
+        // the left pixel is the low byte).
+        std::int32_t at[4];
+        std::uint32_t upper[4], lower[4];
+        vst1q_s32(at, vmlaq_s32(vcombine_s32(x0[0], x0[1]), vcombine_s32(y0[0], y0[1]), stride4));
+        for (int l = 0; l < 4; ++l) {
+          const std::uint8_t* r0 = frame.data + at[l];
+          std::uint16_t a, b;
+          std::memcpy(&a, r0, sizeof a);
+          std::memcpy(&b, r0 + stride, sizeof b);
+          upper[l] = a;
+          lower[l] = b;
+        }
+        const uint32x4_t up = vld1q_u32(upper), down = vld1q_u32(lower);
+        const int32x4_t a00 = vreinterpretq_s32_u32(vandq_u32(up, low_byte));
+        const int32x4_t a01 = vreinterpretq_s32_u32(vshrq_n_u32(up, 8));
+        const int32x4_t a10 = vreinterpretq_s32_u32(vandq_u32(down, low_byte));
+        const int32x4_t a11 = vreinterpretq_s32_u32(vshrq_n_u32(down, 8));
+        const float32x4_t top =
+            vaddq_f32(vcvtq_f32_s32(a00), vmulq_f32(fx4, vcvtq_f32_s32(vsubq_s32(a01, a00))));
+        const float32x4_t bottom =
+            vaddq_f32(vcvtq_f32_s32(a10), vmulq_f32(fx4, vcvtq_f32_s32(vsubq_s32(a11, a10))));
+        sum = vaddq_f32(sum, vaddq_f32(top, vmulq_f32(fy4, vsubq_f32(bottom, top))));
+      }
+      if (sx < q.sub) break;
+    }
+    float value[4];
+    vst1q_f32(value, vmulq_f32(sum, vdupq_n_f32(q.weight)));
+    const std::uint64_t in_lanes[4] = {vgetq_lane_u64(inside[0], 0), vgetq_lane_u64(inside[0], 1),
+                                       vgetq_lane_u64(inside[1], 0), vgetq_lane_u64(inside[1], 1)};
+    for (int l = 0; l < 4; ++l) {
+      const std::uint32_t i = pixels[k + static_cast<std::size_t>(l)];
+      const bool ok = in_lanes[l] != 0;
+      valid[i] = ok ? 1 : 0;
+      warped[i] = ok ? value[l] : 0.f;
+    }
+  }
+  return k;
+}
+#endif
+
 // Samples pixels[begin..end) of the level (their flags into valid, their
 // values into warped). The grid is copied into locals: the byte stores to
 // `valid` may alias anything reached through a pointer, which would then be
@@ -366,6 +527,10 @@ void warp_pixels(const WarpGrid& grid, ImageView frame, const std::uint32_t* pix
 #if defined(KG_DISPATCH_AVX2)
   if (simd_level() == SimdLevel::kAvx2)
     begin = warp_pixels_avx2(grid, frame, pixels, begin, end, valid, warped);
+#endif
+#if defined(KG_NEON_FLOAT)
+  if (simd_level() != SimdLevel::kScalar)
+    begin = warp_pixels_neon(grid, frame, pixels, begin, end, valid, warped);
 #endif
   const WarpGrid q = grid;
   const auto w = static_cast<std::uint32_t>(q.w);

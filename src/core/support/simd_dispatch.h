@@ -1,8 +1,9 @@
 // How the core compiles its vector code (keygraph/simd.h is the contract).
 // The core is built for the baseline ISA (SSE2 on x86-64, NEON on ARM) so
 // that one binary runs on every CPU of its architecture. Loops written
-// with baseline intrinsics (the leaf scan; on AArch64 the blur and the
-// Hessian response) are compiled in when the target has them and run unless
+// with baseline intrinsics (the leaf scan; on AArch64 the blur, the Hessian
+// response and the appearance alignment's sampling and normal equations)
+// are compiled in when the target has them and run unless
 // the level is kScalar; loops worth AVX2 get an x86-64 AVX2 twin (the
 // Hessian response, the float conversion and halving: the same source
 // compiled a second time; the blur's passes: GCC vector types, shared with
