@@ -61,7 +61,7 @@ void declare_eval_settings(Options& options, Params& params, DetectorSettings& d
               if (!s)
                 return "--set " + v + ": " + s.message() +
                        " (a parameter of keygraph/params.h, as keygraph inspect lists them, "
-                       "or min_confidence or time_budget_ms)";
+                       "or min_confidence, time_budget_ms or search_arcs_per_leaf)";
               detector.options.push_back(v);
               return {};
             }
@@ -103,7 +103,7 @@ namespace {
 
 const char* const kSetHelp =
     "a parameter of keygraph/params.h, or a runtime option of the keygraph\n"
-    "methods' detectors: min_confidence, time_budget_ms";
+    "methods' detectors: min_confidence, time_budget_ms, search_arcs_per_leaf";
 
 const char* const kQuietHelp =
     "no progress on stderr (by default one line rewritten in place on a\n"
