@@ -10,7 +10,9 @@ sees the change and reloads). Checked:
 - live exits 0 with N JSON lines, no error on stderr, and reloads the index
   RELOADS times (its "reloaded" lines);
 - resident memory (VmRSS) and open file descriptors of the live process,
-  sampled at every replacement: the descriptors constant, the memory after
+  sampled at every replacement: the descriptors not growing (none of the
+  later half above the first sample; a reload in progress may hold one
+  more for a moment), the memory after
   the first reload within RSS_SLACK_KB of its highest value by then (it
   must not grow with frames or reloads);
 - detections identical before and after each reload: on every frame where
@@ -145,9 +147,13 @@ def main(argv):
             if not same:
                 failures += fail(f"tracked {image}: {found}, detected {ref}")
                 break
-        fds = {s[2] for s in samples}
-        if len(fds) != 1:
-            failures += fail(f"open descriptors changed: {samples}")
+        # A sample can catch a reload with the new file open for a moment
+        # (one descriptor more, once); a leak stays, so every later sample
+        # would be higher than the first.
+        fd_counts = [s[2] for s in samples]
+        if fd_counts and min(fd_counts[len(fd_counts) // 2:]) > fd_counts[0]:
+            failures += fail(f"open descriptors grew: {samples}")
+        fds = set(fd_counts)
         if len(samples) >= 3:
             settled = max(s[1] for s in samples[:2])
             grown = [s for s in samples[2:] if s[1] > settled + RSS_SLACK_KB]
