@@ -111,15 +111,79 @@ inline bool inside(int16x8_t d, std::int32_t radius2, int16x4_t limit) {
 
 }  // namespace
 
+namespace {
+
+// One group of up to four int8 points against the query: their squared
+// descriptor distances, their attribute differences and which of them are
+// inside the ball and the box (bit per point; only the `left` first).
+struct I8Group {
+  __m128i d2;    // |descriptor difference|^2 of the four points
+  __m128i attr;  // [a6 a7 b6 b7 c6 c7 d6 d7]: the attribute differences
+  int inside;
+};
+
+inline __attribute__((always_inline)) I8Group test_i8_group(const ArcSearchPointI8* p, int i, int n,
+                                                            __m128i query, __m128i limit,
+                                                            __m128i r2) {
+  // Squares of lanes 0..5 only: the attribute lanes 6, 7 are masked out of
+  // the sum and compared with the box instead.
+  const __m128i descriptor_lanes = _mm_set_epi16(0, 0, -1, -1, -1, -1, -1, -1);
+  const __m128i zero = _mm_setzero_si128();
+  // The last group may hold 1 to 3 points: load only those (8-byte loads
+  // for a lone point), never past the leaf.
+  const int left = n - i;
+  const auto* bytes = reinterpret_cast<const __m128i*>(p[i].data());
+  const __m128i x0 = left >= 2 ? _mm_loadu_si128(bytes) : _mm_loadl_epi64(bytes);
+  const __m128i x1 = left >= 4   ? _mm_loadu_si128(bytes + 1)
+                     : left == 3 ? _mm_loadl_epi64(bytes + 1)
+                                 : zero;
+  const __m128i a = _mm_sub_epi16(widen_low(x0), query);
+  const __m128i b = _mm_sub_epi16(widen_high(x0), query);
+  const __m128i c = _mm_sub_epi16(widen_low(x1), query);
+  const __m128i d = _mm_sub_epi16(widen_high(x1), query);
+  // madd of the descriptor lanes: (d0^2 + d1^2, d2^2 + d3^2, d4^2 + d5^2, 0).
+  const __m128i ma = _mm_and_si128(a, descriptor_lanes), mb = _mm_and_si128(b, descriptor_lanes);
+  const __m128i mc = _mm_and_si128(c, descriptor_lanes), md = _mm_and_si128(d, descriptor_lanes);
+  const __m128i sa = _mm_madd_epi16(ma, ma), sb = _mm_madd_epi16(mb, mb);
+  const __m128i sc = _mm_madd_epi16(mc, mc), sd = _mm_madd_epi16(md, md);
+  // Transpose-and-add to [|a|^2, |b|^2, |c|^2, |d|^2].
+  const __m128i ab = _mm_add_epi32(_mm_unpacklo_epi32(sa, sb), _mm_unpackhi_epi32(sa, sb));
+  const __m128i cd = _mm_add_epi32(_mm_unpacklo_epi32(sc, sd), _mm_unpackhi_epi32(sc, sd));
+  I8Group g;
+  g.d2 = _mm_add_epi32(_mm_unpacklo_epi64(ab, cd), _mm_unpackhi_epi64(ab, cd));
+  const __m128i ball = _mm_cmpgt_epi32(r2, g.d2);
+  // A point is inside the box when neither of its two |differences|
+  // exceeds it.
+  g.attr = _mm_unpackhi_epi64(_mm_unpackhi_epi32(a, b), _mm_unpackhi_epi32(c, d));
+  const __m128i magnitude = _mm_max_epi16(g.attr, _mm_sub_epi16(zero, g.attr));
+  const __m128i within = _mm_cmpeq_epi32(_mm_cmpgt_epi16(magnitude, limit), zero);
+  g.inside = _mm_movemask_ps(_mm_castsi128_ps(_mm_and_si128(ball, within)));
+  if (left < 4) g.inside &= (1 << left) - 1;
+  return g;
+}
+
+// Appends group i's inside points' positions to hits[found...]; found <= i,
+// so the four lanes written end within the group's rounded-up end.
+inline __attribute__((always_inline)) int append_hits(int inside, int i, std::uint16_t* hits,
+                                                      int found) {
+  const std::uint64_t positions =
+      kCompacted[inside] + 0x0001000100010001ULL * static_cast<std::uint64_t>(i);
+  __builtin_memcpy(hits + found, &positions, sizeof positions);
+  return found + kBitCount[inside];
+}
+
+}  // namespace
+
 static int scan_leaf_i8_vector(const ArcSearchPointI8* p, int n, const ArcSearchPointI8& q,
                                std::int32_t radius2, std::int32_t box, std::uint16_t* hits) {
-  const int8x8_t query = vld1_s8(q.data());
-  const int16x4_t limit = vdup_n_s16(box_limit(box));
+  std::int64_t q64;
+  __builtin_memcpy(&q64, q.data(), sizeof q64);
+  const __m128i query = widen_low(_mm_set1_epi64x(q64));
+  const __m128i limit = _mm_set1_epi16(box_limit(box));
+  const __m128i r2 = _mm_set1_epi32(radius2);
   int found = 0;
-  for (int i = 0; i < n; ++i) {
-    const int16x8_t d = vsubl_s8(vld1_s8(p[i].data()), query);  // 8 x int16
-    hits[found] = static_cast<std::uint16_t>(i);
-    found += inside(d, radius2, limit) ? 1 : 0;
+  for (int i = 0; i < n; i += 4) {  // four points: 32 bytes, one 8-lane difference each
+    found = append_hits(test_i8_group(p, i, n, query, limit, r2).inside, i, hits, found);
   }
   return found;
 }
@@ -128,25 +192,31 @@ static int scan_leaf_i8_ranked_vector(const ArcSearchPointI8* p, int n, const Ar
                                       std::int32_t radius2, std::int32_t box,
                                       LeafRankWeights weights, std::uint16_t* hits,
                                       std::uint8_t* ranks) {
-  // scan_leaf_i8_vector with each point's attribute squares (the high
-  // half's lanes 2, 3) summed beside its distance, and the rank code
-  // computed by the reference's own function.
-  const int8x8_t query = vld1_s8(q.data());
-  const int16x4_t limit = vdup_n_s16(box_limit(box));
+  // scan_leaf_i8_vector with each group's four rank codes computed beside
+  // its distances: the attributes' squares by one madd, the codes in float
+  // as leaf_rank_code() computes them (no fused multiply-add in the core).
+  std::int64_t q64;
+  __builtin_memcpy(&q64, q.data(), sizeof q64);
+  const __m128i query = widen_low(_mm_set1_epi64x(q64));
+  const __m128i limit = _mm_set1_epi16(box_limit(box));
+  const __m128i r2 = _mm_set1_epi32(radius2);
+  const __m128i zero = _mm_setzero_si128();
+  const __m128 wd = _mm_set1_ps(weights.descriptor);
+  const __m128 wa = _mm_set1_ps(weights.attribute);
+  const __m128 top = _mm_set1_ps(255.f);
   int found = 0;
-  for (int i = 0; i < n; ++i) {
-    const int16x8_t d = vsubl_s8(vld1_s8(p[i].data()), query);
-    const int16x4_t lo = vget_low_s16(d), hi = vget_high_s16(d);
-    const int32x4_t sq_lo = vmull_s16(lo, lo);
-    const int32x4_t sq_hi = vmull_s16(hi, hi);
-    const int32x2_t pairs = vadd_s32(vget_low_s32(sq_lo), vget_high_s32(sq_lo));
-    const std::int32_t d2 = vget_lane_s32(pairs, 0) + vget_lane_s32(pairs, 1) +
-                            vgetq_lane_s32(sq_hi, 0) + vgetq_lane_s32(sq_hi, 1);
-    const std::int32_t a2 = vgetq_lane_s32(sq_hi, 2) + vgetq_lane_s32(sq_hi, 3);
-    const uint16x4_t within = vcle_s16(vabs_s16(hi), limit);
-    ranks[i] = leaf_rank_code(d2, a2, weights);
-    hits[found] = static_cast<std::uint16_t>(i);
-    found += d2 < radius2 && vget_lane_u16(within, 2) != 0 && vget_lane_u16(within, 3) != 0 ? 1 : 0;
+  for (int i = 0; i < n; i += 4) {
+    const I8Group g = test_i8_group(p, i, n, query, limit, r2);
+    // (a6^2 + a7^2, b6^2 + b7^2, c6^2 + c7^2, d6^2 + d7^2).
+    const __m128i a2 = _mm_madd_epi16(g.attr, g.attr);
+    const __m128 rank = _mm_min_ps(
+        _mm_add_ps(_mm_mul_ps(_mm_cvtepi32_ps(g.d2), wd), _mm_mul_ps(_mm_cvtepi32_ps(a2), wa)),
+        top);
+    const __m128i codes = _mm_cvttps_epi32(rank);  // 0..255
+    const __m128i bytes4 = _mm_packus_epi16(_mm_packs_epi32(codes, zero), zero);
+    const int packed = _mm_cvtsi128_si32(bytes4);
+    __builtin_memcpy(ranks + i, &packed, sizeof packed);
+    found = append_hits(g.inside, i, hits, found);
   }
   return found;
 }
