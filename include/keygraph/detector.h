@@ -111,6 +111,14 @@ struct DetectOptions {
   // model arcs per scene arc"): an opt-in where time counts more.
   static constexpr int kDefaultSearchArcsPerLeaf = 0;
   int search_arcs_per_leaf = kDefaultSearchArcsPerLeaf;
+  // RANSAC stops a model's attempt after this many draws when no hypothesis
+  // so far has the support an instance needs (ransac.min_inlier_keygraphs
+  // and the fewest inliers any acceptance rule takes); 0 draws to the cap
+  // (ransac.max_iterations) as the paper does. Most of the cap's draws go
+  // to models absent from the frame, whose pools hold no instance. Not
+  // stored in the index (docs/RESULTS.md, "RANSAC on barren pools").
+  static constexpr int kDefaultRansacBarrenDraws = 0;
+  int ransac_barren_draws = kDefaultRansacBarrenDraws;
   // Detections whose confidence (Detection::confidence, in [0, 1]) is below
   // this are dropped: 0 keeps every detection that passed the checks; 0.5
   // keeps those more likely right than wrong.

@@ -61,7 +61,8 @@ void declare_eval_settings(Options& options, Params& params, DetectorSettings& d
               if (!s)
                 return "--set " + v + ": " + s.message() +
                        " (a parameter of keygraph/params.h, as keygraph inspect lists them, "
-                       "or min_confidence, time_budget_ms or search_arcs_per_leaf)";
+                       "or min_confidence, time_budget_ms, search_arcs_per_leaf or "
+                       "ransac_barren_draws)";
               detector.options.push_back(v);
               return {};
             }
@@ -103,7 +104,8 @@ namespace {
 
 const char* const kSetHelp =
     "a parameter of keygraph/params.h, or a runtime option of the keygraph\n"
-    "methods' detectors: min_confidence, time_budget_ms, search_arcs_per_leaf";
+    "methods' detectors: min_confidence, time_budget_ms, search_arcs_per_leaf,\n"
+    "ransac_barren_draws";
 
 const char* const kQuietHelp =
     "no progress on stderr (by default one line rewritten in place on a\n"

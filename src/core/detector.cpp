@@ -64,13 +64,14 @@ DetectOptions DetectOptions::from(const ModelIndex& index) {
 }
 
 Status set_detect_option(DetectOptions& options, std::string_view name, std::string_view value) {
-  if (name == "search_arcs_per_leaf") {
+  if (name == "search_arcs_per_leaf" || name == "ransac_barren_draws") {
     const std::string text(value);
     char* end = nullptr;
     const long v = std::strtol(text.c_str(), &end, 10);
     if (text.empty() || end != text.c_str() + text.size() || v < 0 || v > 1 << 20)
       return {StatusCode::kInvalidArgument, "bad value '" + text + "' for " + std::string(name)};
-    options.search_arcs_per_leaf = static_cast<int>(v);
+    (name == "search_arcs_per_leaf" ? options.search_arcs_per_leaf : options.ransac_barren_draws) =
+        static_cast<int>(v);
     return Status::ok();
   }
   if (name == "min_confidence" || name == "time_budget_ms") {
@@ -107,6 +108,7 @@ std::vector<std::string> detect_option_names() {
   for (std::string& n : param_names())
     if (is_detect_option(n)) names.push_back(std::move(n));
   names.emplace_back("search_arcs_per_leaf");
+  names.emplace_back("ransac_barren_draws");
   names.emplace_back("min_confidence");
   names.emplace_back("time_budget_ms");
   return names;

@@ -330,6 +330,55 @@ TEST(DetectOptions, ArcCapKeepsTheCircuitsThatFindTheObjects) {
   EXPECT_FALSE(capped_detector.set_options(capped));
 }
 
+// ransac_barren_draws: a model's RANSAC attempt stops once that many draws
+// found nothing an instance could be made of. On the two-model index the
+// absent model's attempt (graf in box_in_scene, the box in graf3) drew to
+// the cap or through its whole pool; stopped early, the frame takes fewer
+// RANSAC iterations and finds the same object at the same place (the found
+// model's own attempt needs a few draws and is untouched).
+TEST(DetectOptions, BarrenDrawsStopAbsentModelsEarly) {
+  const Fixture& f = fixture();
+  const ModelIndex& index = f.built.index;
+  const Limits limits = limits_for(f.box_scene, f.graf_scene);
+  DetectOptions full = DetectOptions::from(index);
+  EXPECT_EQ(full.ransac_barren_draws, DetectOptions::kDefaultRansacBarrenDraws);
+  DetectOptions barren = full;
+  barren.ransac_barren_draws = 100;
+  Detector full_detector(index, limits, full), barren_detector(index, limits, barren);
+  ASSERT_TRUE(full_detector.status()) << full_detector.status().message();
+  ASSERT_TRUE(barren_detector.status()) << barren_detector.status().message();
+  for (const cv::Mat* scene : {&f.box_scene, &f.graf_scene}) {
+    const bool graf = scene == &f.graf_scene;
+    DetectionList a, b;
+    ASSERT_TRUE(full_detector.detect(test::view(*scene), a));
+    ASSERT_TRUE(barren_detector.detect(test::view(*scene), b));
+    ASSERT_EQ(a.size(), 1u);
+    ASSERT_EQ(b.size(), 1u);
+    ASSERT_EQ(b[0].model_id, graf ? 1 : 0);
+    const int all = full_detector.stats().ransac_iterations;
+    const int stopped = barren_detector.stats().ransac_iterations;
+    std::printf("%s: RANSAC iterations %d -> %d (the found model's %d -> %d)\n",
+                graf ? "graf3" : "box_in_scene", all, stopped, a[0].ransac_iterations,
+                b[0].ransac_iterations);
+    // The absent model's barren attempts stop at 100 draws (box_in_scene
+    // 1122 -> 202 iterations, graf3 15002 -> 5202, where one cluster of the
+    // absent box has the support and runs to the cap).
+    EXPECT_LT(2 * stopped, all);
+    EXPECT_EQ(b[0].ransac_iterations, a[0].ransac_iterations);
+    EXPECT_EQ(b[0].inliers, a[0].inliers);
+    EXPECT_LT(test::max_corner_error(b[0], a[0].homography, index.model(b[0].model_id)), 1.0);
+    if (graf) {
+      EXPECT_LT(test::max_corner_error(b[0], test::graf_truth(), index.model(1)), 5.0);
+    }
+  }
+  // By name; negative counts are refused.
+  DetectOptions o;
+  EXPECT_TRUE(set_detect_option(o, "ransac_barren_draws", "2000"));
+  EXPECT_EQ(o.ransac_barren_draws, 2000);
+  barren.ransac_barren_draws = -1;
+  EXPECT_FALSE(barren_detector.set_options(barren));
+}
+
 TEST(DetectOptions, SetByName) {
   DetectOptions o;
   EXPECT_TRUE(set_detect_option(o, "ransac.seed", "7"));

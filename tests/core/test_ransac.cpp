@@ -699,6 +699,51 @@ TEST(Ransac, LoopRunsTheLocalOptimisation) {
   EXPECT_GE(stats.best.point_inliers, 297);
 }
 
+// RansacOptions::barren_draws: a pool of outliers alone stops after that
+// many draws instead of at the cap; a pool holding an instance, whose draws
+// soon find a hypothesis with the support asked for, runs as without it.
+TEST(Ransac, BarrenPoolsStopEarly) {
+  RansacOptions options;
+  options.max_iterations = 3000;
+  RansacOptions barren = options;
+  barren.barren_draws = 200;
+  barren.least_point_inliers = 12;
+  barren.least_sample_inliers = 12;
+  {
+    const Correspondences c = make_correspondences(0, 300, 0.5, 5);
+    PointEstimator est;
+    est.model = &c.model;
+    est.scene = &c.scene;
+    Rng rng(3);
+    Homography best{};
+    const RansacStats full = ransac(est, options, rng, best);
+    EXPECT_EQ(full.iterations, 3000);
+    EXPECT_LT(full.best.point_inliers, 12);  // nothing an instance would need
+    Rng rng2(3);
+    est.hypotheses = 0;
+    const RansacStats stopped = ransac(est, barren, rng2, best);
+    EXPECT_EQ(stopped.iterations, 200);
+    EXPECT_EQ(est.hypotheses, 200);
+    EXPECT_LT(stopped.best.point_inliers, 12);
+  }
+  {
+    const Correspondences c = make_correspondences(150, 150, 0.5, 6);
+    PointEstimator est;
+    est.model = &c.model;
+    est.scene = &c.scene;
+    Rng rng(4), rng2(4);
+    Homography a{}, b{};
+    const RansacStats full = ransac(est, options, rng, a);
+    const RansacStats with = ransac(est, barren, rng2, b);
+    EXPECT_GE(full.best.point_inliers, 140);
+    EXPECT_EQ(with.iterations, full.iterations);
+    EXPECT_EQ(with.best.point_inliers, full.best.point_inliers);
+    EXPECT_EQ(with.best.cost, full.best.cost);
+    EXPECT_EQ(a, b);
+    EXPECT_EQ(rng.next(), rng2.next());
+  }
+}
+
 TEST(Ransac, RequiredIterationsEdgeCases) {
   EXPECT_EQ(required_iterations(0.0, 4, 0.99, 2000), 2000);
   EXPECT_EQ(required_iterations(1.0, 4, 0.99, 2000), 1);

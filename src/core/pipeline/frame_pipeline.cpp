@@ -179,6 +179,9 @@ Status FramePipeline::check_options(const ModelIndex& index, const DetectOptions
   if (!(options.search_arcs_per_leaf >= 0 && options.search_arcs_per_leaf <= kLeafSize))
     return {StatusCode::kInvalidArgument, "detect options: search_arcs_per_leaf must be in [0, " +
                                               std::to_string(kLeafSize) + "] (0: every arc found)"};
+  if (!(options.ransac_barren_draws >= 0))
+    return {StatusCode::kInvalidArgument,
+            "detect options: ransac_barren_draws must be >= 0 (0: never stop early)"};
   if (options.models == nullptr && options.model_count > 0)
     return {StatusCode::kInvalidArgument, "detect options: model_count without models"};
   for (std::size_t i = 0; options.models != nullptr && i < options.model_count; ++i) {
@@ -465,6 +468,7 @@ void FramePipeline::estimate_poses(ImageView frame, const Keypoint* keypoints, i
   if (!matches_.empty()) grid_.build(keypoints, count, frame.width, frame.height, cell);
   frame_keypoints.grid = &grid_;
   // Each model's RANSAC, on the workers when there are several.
+  poses_.set_barren_draws(options_.ransac_barren_draws);
   const PoseStage::Result r = poses_.estimate(
       *index_, params_, matches_.data(), matches_.size(), scene_points_.data(), frame_keypoints,
       limits_.max_detections, workers_.threads() > 1 ? &workers_ : nullptr,

@@ -241,6 +241,12 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
           : rp.min_verification_z;
   const double align_min_z =
       lowest_z > 0.0 ? kAlignZShare * lowest_z : -std::numeric_limits<double>::infinity();
+  // An attempt whose draws found nothing that could make an instance
+  // stops early (DetectOptions::ransac_barren_draws): the cap's draws go
+  // mostly to models absent from the frame.
+  options.barren_draws = barren_draws_;
+  options.least_point_inliers = least_inliers;
+  options.least_sample_inliers = rp.min_inlier_keygraphs;
   int iterations = 0;
   // Each attempt finds one instance or rules out one false cluster.
   for (int attempt = 0; attempt < rp.max_instances; ++attempt) {

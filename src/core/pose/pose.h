@@ -36,6 +36,10 @@ class PoseEstimator {
   // (AppearanceAligner::set_workers): the same instances with or without.
   void set_workers(WorkerPool* workers) { aligner_.set_workers(workers); }
 
+  // RANSAC stops a model's attempt after this many draws while nothing it
+  // drew could make an instance (DetectOptions::ransac_barren_draws; 0: never).
+  void set_barren_draws(int draws) { barren_draws_ = draws; }
+
   // Appends the instances of `model_id` found among matches[0..n) (all of
   // that model) to `out`, at most `max_out` in total in `out`. Returns the
   // RANSAC iterations run.
@@ -80,6 +84,7 @@ class PoseEstimator {
   WorkVector<Point2f> guided_model_;
   WorkVector<Point2f> guided_scene_;
   AppearanceAligner aligner_;
+  int barren_draws_ = 0;
 };
 
 }  // namespace kg

@@ -104,6 +104,7 @@ PoseStage::Result PoseStage::estimate(const ModelIndex& index, const Params& par
                                       int max_out, WorkerPool* workers,
                                       const Clock::time_point* deadline, DetectionList& out) {
   group(index, matches, n);
+  for (PoseEstimator& e : estimators_) e.set_barren_draws(barren_draws_);
   const int threads =
       workers == nullptr ? 1 : std::min(workers->threads(), static_cast<int>(found_.size()));
   if (threads <= 1)

@@ -39,6 +39,9 @@ class PoseStage {
   void reserve(int threads, int max_matches, int k, std::uint32_t max_model_keypoints,
                int max_appearance_pixels, int models, bool fill);
 
+  // DetectOptions::ransac_barren_draws for the estimations that follow.
+  void set_barren_draws(int draws) { barren_draws_ = draws; }
+
   struct Result {
     int ransac_iterations = 0;
     bool truncated = false;    // max_out reached
@@ -82,6 +85,7 @@ class PoseStage {
   // threads, its instances (tasks_ and found_ are empty with one).
   WorkVector<PoseEstimator> estimators_;
   WorkVector<DetectionList> found_;
+  int barren_draws_ = 0;
 };
 
 }  // namespace kg

@@ -84,6 +84,13 @@ struct RansacOptions {
   // the whole pool if sampled as often as uniform draws sample it (the
   // paper's 200 000).
   int progressive_horizon = 200000;
+  // Stop after this many draws while the best model so far (if any) has
+  // fewer than least_point_inliers or least_sample_inliers: a pool in which
+  // that many draws found nothing useful holds no instance the rest of the
+  // budget would find (0: never; docs/RESULTS.md, "RANSAC on barren pools").
+  int barren_draws = 0;
+  int least_point_inliers = 0;
+  int least_sample_inliers = 0;
 };
 
 struct RansacStats {
@@ -351,6 +358,10 @@ RansacStats ransac(Estimator& estimator, const RansacOptions& options, Rng& rng,
   while (more && stats.iterations < options.max_iterations &&
          (enumerate_all || stats.iterations < options.min_iterations ||
           stats.iterations < stats.required_iterations)) {
+    if (options.barren_draws > 0 && stats.iterations >= options.barren_draws &&
+        !(have_best && stats.best.point_inliers >= options.least_point_inliers &&
+          stats.best.sample_inliers >= options.least_sample_inliers))
+      break;
     ++stats.iterations;
     if (enumerate) {
       std::copy(next_sample, next_sample + h, sample);
