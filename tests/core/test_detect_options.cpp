@@ -342,6 +342,8 @@ TEST(DetectOptions, BarrenDrawsStopAbsentModelsEarly) {
   const Limits limits = limits_for(f.box_scene, f.graf_scene);
   DetectOptions full = DetectOptions::from(index);
   EXPECT_EQ(full.ransac_barren_draws, DetectOptions::kDefaultRansacBarrenDraws);
+  EXPECT_EQ(full.ransac_barren_draws, 2000);
+  full.ransac_barren_draws = 0;  // to the cap
   DetectOptions barren = full;
   barren.ransac_barren_draws = 100;
   Detector full_detector(index, limits, full), barren_detector(index, limits, barren);
