@@ -17,6 +17,7 @@
 #include "builder/in_memory_index.h"
 #include "builder/keypoints.h"
 #include "builder/model_set.h"
+#include "core/image/upsample.h"
 #include "core/index/index_format.h"
 #include "core/keygraphs/keygraph.h"
 #include "core/pose/point_grid.h"
@@ -36,6 +37,27 @@ void model_outline(const TruthModel& m, Point2f (&out)[4]) {
   out[1] = {w, 0.f};
   out[2] = {w, h};
   out[3] = {0.f, h};
+}
+
+// The longest side of a model outline under a pose, frame pixels (as
+// pose.cpp's small rule measures a found one).
+float long_side(const Homography& pose, const Point2f (&outline)[4]) {
+  float longest = 0.f;
+  for (int c = 0; c < 4; ++c) {
+    const Point2f a = kg::apply(pose, outline[c]), b = kg::apply(pose, outline[(c + 1) % 4]);
+    longest = std::max(longest, std::hypot(a.x - b.x, a.y - b.y));
+  }
+  return longest;
+}
+
+// H (model to frame pixels) followed by the frame's 2x upsampling.
+Homography to_upsampled(const Homography& h) {
+  Homography u = h;
+  for (int c = 0; c < 3; ++c) {
+    u[c] = 2.0 * h[c] + 0.5 * h[6 + c];
+    u[3 + c] = 2.0 * h[3 + c] + 0.5 * h[6 + c];
+  }
+  return u;
 }
 
 double median_of(std::vector<double>& v) {
@@ -143,25 +165,42 @@ void measure_truth_support(const Detector& detector, const std::vector<int>& det
   const int vertices = vertex_count(params.graph.structure);
   const ConstSpan<KeygraphMatch> matches = detector.last_matches();
   const ConstSpan<Keypoint> sampled = detector.last_keypoints();
-  // With an upsampled frame the detector works on other keypoints.
-  if (params.keypoints.scene_upsample != 1 || truth.empty()) return;
+  // With the whole frame upsampled (scene_upsample 2, or 3's second pass,
+  // which last_matches() describes) the detector's keypoints are those of
+  // the upsampled frame: the support is measured there, under the true
+  // pose scaled to it. With 4 only a window is upsampled: not measured.
+  const int upsample = params.keypoints.scene_upsample;
+  if ((upsample != 1 && upsample != 2 && upsample != 3) || truth.empty()) return;
+  const bool upsampled = upsample != 1;
+  cv::Mat work = gray;
+  if (upsampled) {
+    Plane<std::uint8_t> plane;
+    upsample2x(ImageView(gray.data, gray.cols, gray.rows, static_cast<int>(gray.step)), plane);
+    work = cv::Mat(plane.height(), plane.width(), CV_8UC1, plane.row(0)).clone();
+  }
   std::vector<Keypoint> keypoints;
-  extractor.extract(gray, params.keypoints, Limits{}.max_keypoints, keypoints);
+  extractor.extract(work, params.keypoints, Limits{}.max_keypoints, keypoints);
   PointGrid grid;
-  grid.reserve(static_cast<int>(keypoints.size()), gray.cols, gray.rows,
+  grid.reserve(static_cast<int>(keypoints.size()), work.cols, work.rows,
                std::max(4.f, static_cast<float>(params.ransac.inlier_threshold)));
-  grid.build(keypoints.data(), static_cast<int>(keypoints.size()), gray.cols, gray.rows,
+  grid.build(keypoints.data(), static_cast<int>(keypoints.size()), work.cols, work.rows,
              std::max(4.f, static_cast<float>(params.ransac.inlier_threshold)));
   FrameKeypoints frame;
   frame.keypoints = keypoints.data();
   frame.count = static_cast<int>(keypoints.size());
   frame.grid = &grid;
-  frame.width = gray.cols;
-  frame.height = gray.rows;
+  frame.width = work.cols;
+  frame.height = work.rows;
   const RansacParams& rp = params.ransac;
+  // The small-instance rule (ransac.small_*) accepts fewer re-found
+  // keypoints for an outline at most small_max_size frame pixels long
+  // (with the appearance, not checked here, as for confirmed_*).
+  const bool small_rule = rp.small_max_size > 0.f && rp.small_min_inliers > 0 &&
+                          index.model_count() > 0 && !index.appearance(0).empty();
   for (std::size_t i = 0; i < truth.size() && i < cases.size(); ++i) {
     const TruthQuad& t = truth[i];
     TruthCase& c = cases[i];
+    float truth_long = 0.f;  // the outline's longest side under the pose kept
     for (const int m : t.models) {
       const int id = detector_model[static_cast<std::size_t>(m)];
       if (id < 0) continue;
@@ -190,13 +229,17 @@ void measure_truth_support(const Detector& detector, const std::vector<int>& det
         }
       }
       for (const Homography& pose : poses) {
-        const PoseSupport s = measure_pose_support(index, id, frame, pose);
+        const PoseSupport s =
+            measure_pose_support(index, id, frame, upsampled ? to_upsampled(pose) : pose);
         if (s.refound > c.truth_refound || (s.refound == c.truth_refound && s.z > c.truth_z)) {
           c.truth_shown = s.shown;
           c.truth_refound = s.refound;
           c.truth_z = s.z;
-          // Correspondences of this model that agree with this pose.
-          const auto tolerance = static_cast<float>(rp.inlier_threshold);
+          truth_long = long_side(pose, outline);
+          // Correspondences of this model that agree with this pose
+          // (sampled: mapped back to frame pixels; the tolerance counts
+          // upsampled pixels there, as the pose stage's does).
+          const auto tolerance = static_cast<float>(rp.inlier_threshold) * (upsampled ? 0.5f : 1.f);
           c.truth_matches = 0;
           for (const KeygraphMatch& match : matches) {
             if (match.model_id != id) continue;
@@ -221,7 +264,9 @@ void measure_truth_support(const Detector& detector, const std::vector<int>& det
       c.truth_verifiable =
           (c.truth_refound >= rp.min_inliers && c.truth_z >= rp.min_verification_z) ||
           (rp.confirmed_min_inliers > 0 && c.truth_refound >= rp.confirmed_min_inliers &&
-           c.truth_z >= rp.confirmed_min_verification_z);
+           c.truth_z >= rp.confirmed_min_verification_z) ||
+          (small_rule && c.truth_refound >= rp.small_min_inliers &&
+           c.truth_z >= rp.min_verification_z && truth_long <= rp.small_max_size);
     }
   }
 }

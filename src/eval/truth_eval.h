@@ -83,14 +83,16 @@ struct TruthCase {
   double homography_error = -1;
   int detections = 0, wrong_identity = 0, false_detections = 0;  // the scene's
   double time_ms = 0;                                            // the scene's, for this method
-  // keygraph methods (Hessian keypoints on the frame as it is): the
+  // keygraph methods (Hessian keypoints on the frame as it is, or on the
+  // frame upsampled 2x with keypoints.scene_upsample 2 or 3): the
   // instance's ground-truth pose asked of the detector's verification
   // (measure_pose_support(), core/pose/pose.h) over the frame's keypoints, for
   // the acceptable model and, without a truth homography, the corner order
   // that re-finds the most model keypoints. shown / refound -1: not
   // measured. verifiable: refound and z reach ransac.min_inliers and
-  // min_verification_z, or the confirmed_* keypoint thresholds (which also
-  // ask the appearance): whether the frame's keypoints could confirm the
+  // min_verification_z, or the confirmed_* keypoint thresholds, or for an
+  // outline of at most small_max_size px small_min_inliers (the last two
+  // also ask the appearance): whether the frame's keypoints could confirm the
   // true pose at all; a miss where they could not is the keypoints', not
   // the search's or RANSAC's.
   // truth_matches: the keygraph correspondences of that model the
