@@ -140,6 +140,19 @@ struct NormalTerms {
   const float* t;
   const float* steepest;  // n x kParams
   double gain, mi, mt, cutoff;
+
+  // Selected pixel k's residual e and Tukey weight, false when the pixel is
+  // invalid or an outlier (|e| at or past the cutoff). Every normal_rows
+  // variant calls this, so they sum the same values.
+  bool weighted_residual(std::size_t k, double& e, double& weight) const {
+    const std::uint32_t i = selected[k];
+    if (!valid[i]) return false;
+    e = gain * (warped[i] - mi) - (t[i] - mt);
+    if (std::fabs(e) >= cutoff) return false;
+    const double r = 1.0 - (e / cutoff) * (e / cutoff);
+    weight = r * r;
+    return true;
+  }
 };
 
 #if defined(KG_DISPATCH_AVX2)
@@ -154,12 +167,8 @@ KG_TARGET_AVX2 void normal_rows_avx2(const NormalTerms& q, double a[kParams][kPa
   for (auto& row : sa) row[0] = row[1] = _mm256_setzero_pd();
   double sb[kParams] = {};
   for (std::size_t k = 0; k < q.n; ++k) {
-    const std::uint32_t i = q.selected[k];
-    if (!q.valid[i]) continue;
-    const double e = q.gain * (q.warped[i] - q.mi) - (q.t[i] - q.mt);
-    if (std::fabs(e) >= q.cutoff) continue;
-    const double r = 1.0 - (e / q.cutoff) * (e / q.cutoff);
-    const double weight = r * r;
+    double e, weight;
+    if (!q.weighted_residual(k, e, weight)) continue;
     const float* sd = &q.steepest[k * kParams];
     const __m256d low = _mm256_cvtps_pd(_mm_loadu_ps(sd));
     const __m256d high = _mm256_cvtps_pd(_mm_loadu_ps(sd + 4));
@@ -195,12 +204,8 @@ void normal_rows_neon(const NormalTerms& q, double a[kParams][kParams], double b
   for (auto& row : sa) row[0] = row[1] = row[2] = row[3] = vdupq_n_f64(0.0);
   double sb[kParams] = {};
   for (std::size_t k = 0; k < q.n; ++k) {
-    const std::uint32_t i = q.selected[k];
-    if (!q.valid[i]) continue;
-    const double e = q.gain * (q.warped[i] - q.mi) - (q.t[i] - q.mt);
-    if (std::fabs(e) >= q.cutoff) continue;
-    const double r = 1.0 - (e / q.cutoff) * (e / q.cutoff);
-    const double weight = r * r;
+    double e, weight;
+    if (!q.weighted_residual(k, e, weight)) continue;
     const float* sd = &q.steepest[k * kParams];
     const float32x4_t low = vld1q_f32(sd), high = vld1q_f32(sd + 4);
     const float64x2_t s[4] = {vcvt_f64_f32(vget_low_f32(low)), vcvt_high_f64_f32(low),
@@ -239,12 +244,8 @@ void normal_rows(const NormalTerms& q, double a[kParams][kParams], double b[kPar
   double sa[kParams][kParams] = {};
   double sb[kParams] = {};
   for (std::size_t k = 0; k < q.n; ++k) {
-    const std::uint32_t i = q.selected[k];
-    if (!q.valid[i]) continue;
-    const double e = q.gain * (q.warped[i] - q.mi) - (q.t[i] - q.mt);
-    if (std::fabs(e) >= q.cutoff) continue;
-    const double r = 1.0 - (e / q.cutoff) * (e / q.cutoff);
-    const double weight = r * r;
+    double e, weight;
+    if (!q.weighted_residual(k, e, weight)) continue;
     const float* sd = &q.steepest[k * kParams];
     for (int j = 0; j < kParams; ++j) {
       if (!((Rows >> j) & 1u)) continue;
