@@ -39,27 +39,6 @@ void model_outline(const TruthModel& m, Point2f (&out)[4]) {
   out[3] = {0.f, h};
 }
 
-// The longest side of a model outline under a pose, frame pixels (as
-// pose.cpp's small rule measures a found one).
-float long_side(const Homography& pose, const Point2f (&outline)[4]) {
-  float longest = 0.f;
-  for (int c = 0; c < 4; ++c) {
-    const Point2f a = kg::apply(pose, outline[c]), b = kg::apply(pose, outline[(c + 1) % 4]);
-    longest = std::max(longest, std::hypot(a.x - b.x, a.y - b.y));
-  }
-  return longest;
-}
-
-// H (model to frame pixels) followed by the frame's 2x upsampling.
-Homography to_upsampled(const Homography& h) {
-  Homography u = h;
-  for (int c = 0; c < 3; ++c) {
-    u[c] = 2.0 * h[c] + 0.5 * h[6 + c];
-    u[3 + c] = 2.0 * h[3 + c] + 0.5 * h[6 + c];
-  }
-  return u;
-}
-
 double median_of(std::vector<double>& v) {
   if (v.empty()) return -1;
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
@@ -229,13 +208,15 @@ void measure_truth_support(const Detector& detector, const std::vector<int>& det
         }
       }
       for (const Homography& pose : poses) {
-        const PoseSupport s =
-            measure_pose_support(index, id, frame, upsampled ? to_upsampled(pose) : pose);
+        const PoseSupport s = measure_pose_support(
+            index, id, frame, upsampled ? homography_to_upsampled(pose) : pose);
         if (s.refound > c.truth_refound || (s.refound == c.truth_refound && s.z > c.truth_z)) {
           c.truth_shown = s.shown;
           c.truth_refound = s.refound;
           c.truth_z = s.z;
-          truth_long = long_side(pose, outline);
+          Point2f corners[4];
+          for (int q = 0; q < 4; ++q) corners[q] = kg::apply(pose, outline[q]);
+          truth_long = static_cast<float>(longest_side(corners));
           // Correspondences of this model that agree with this pose
           // (sampled: mapped back to frame pixels; the tolerance counts
           // upsampled pixels there, as the pose stage's does).

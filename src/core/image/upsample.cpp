@@ -37,4 +37,14 @@ Homography homography_from_upsampled(const Homography& h) {
   return out;
 }
 
+Homography homography_to_upsampled(const Homography& h) {
+  // [2 0 0.5; 0 2 0.5; 0 0 1] H: upsampled = 2 frame + 0.5.
+  Homography out = h;
+  for (int c = 0; c < 3; ++c) {
+    out[c] = 2.0 * h[c] + 0.5 * h[6 + c];
+    out[3 + c] = 2.0 * h[3 + c] + 0.5 * h[6 + c];
+  }
+  return out;
+}
+
 }  // namespace kg

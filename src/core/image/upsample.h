@@ -28,5 +28,8 @@ void upsample2x(ImageView src, Plane<std::uint8_t>& dst);
 // H maps model pixels to upsampled pixels; the result maps them to frame
 // pixels (the scaling above applied after H).
 Homography homography_from_upsampled(const Homography& h);
+// The inverse: H maps model pixels to frame pixels; the result maps them
+// to upsampled pixels.
+Homography homography_to_upsampled(const Homography& h);
 
 }  // namespace kg
