@@ -389,6 +389,16 @@ struct ViewParams {
   // alone: the frames are described as before. Format 6.11 (the first
   // field past 256 bytes of the parameter block); older files read 0.
   float blurred_max_size = 0.f;
+  // Glowing small views (issue 38): every view whose long edge is at most
+  // this many pixels is rendered a second time through a photometric model
+  // of a small illuminated sign in a phone frame (highlights clipped, a
+  // tone curve; src/builder/model_views.h, fitted on the real exit-sign dev
+  // split), with its own keypoints and arcs, merged and deduplicated like
+  // any other view's (after the blurred twin when both are on). [0,
+  // 100000], 0 is off (the default); 170 measured (docs/RESULTS.md,
+  // "Glowing small views (issue 38)"). The builder's alone: the frames are
+  // described as before. Format 6.12; older files read 0.
+  float glow_max_size = 0.f;
 };
 
 struct Params {

@@ -325,6 +325,7 @@ Status build_views(const cv::Mat& gray, const Params& params, BuiltModel& out) {
     summary.tilt = view.tilt;
     summary.longitude = view.longitude;
     summary.blur = view.blur;
+    summary.glow = view.glow;
     summary.width = view.size.width;
     summary.height = view.size.height;
     summary.keypoints = static_cast<int>(kept.size());

@@ -24,6 +24,7 @@ namespace kg {
 struct ViewSummary {
   double scale = 1.0, tilt = 1.0, longitude = 0.0;  // builder/model_views.h
   double blur = 0.0;            // > 0: a small view's blurred twin (ModelView::blur)
+  bool glow = false;            // a small view's glowing twin (ModelView::glow)
   int width = 0, height = 0;    // view image size
   int keypoints = 0;            // detected inside the model
   int arcs = 0;                 // stored (after deduplication)

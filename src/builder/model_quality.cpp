@@ -36,7 +36,7 @@ float smallest_size(const BuiltModel& model, const Params& params) {
   // The frontal pyramid comes first, largest first; then tilted views, then
   // (views.max_scale) views larger than the model image.
   for (const ViewSummary& v : model.views) {
-    if (v.blur > 0.0) continue;  // the sharp view before it judges the size
+    if (v.blur > 0.0 || v.glow) continue;  // the sharp view before it judges the size
     if (v.tilt != 1.0 || v.scale > 1.0) break;
     if (static_cast<std::uint64_t>(v.keypoints) < enough_keypoints ||
         v.keygraphs < enough_keygraphs)
@@ -164,11 +164,11 @@ Status measure_quality(const std::vector<BuiltModel>& models, const std::vector<
     q.view_begin = static_cast<std::uint32_t>(out.views.size());
     q.shared_arcs = shared[m];
     q.smallest_size = smallest_size(model, params);
-    // The blurred twins of small views (ViewParams::blurred_max_size) are
-    // not stored: the format has no field to tell them from their sharp
-    // view; their arcs are in the model's.
+    // The blurred and glowing twins of small views (ViewParams::
+    // blurred_max_size, glow_max_size) are not stored: the format has no field to tell them from
+    // their sharp view; their arcs are in the model's.
     for (const ViewSummary& v : model.views) {
-      if (v.blur > 0.0) continue;
+      if (v.blur > 0.0 || v.glow) continue;
       ViewQuality vq;
       vq.scale = static_cast<float>(v.scale);
       vq.tilt = static_cast<float>(v.tilt);

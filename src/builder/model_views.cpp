@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 
@@ -57,8 +58,14 @@ void add_pyramid(int width, int height, double tilt, double longitude, const Vie
     if (std::max(v.size.width, v.size.height) < kSmallestView) break;
     out.push_back(v);
     if (static_cast<double>(std::max(v.size.width, v.size.height)) <= params.blurred_max_size) {
-      v.blur = kBlurredViewSigma;
-      out.push_back(v);
+      ModelView twin = v;
+      twin.blur = kBlurredViewSigma;
+      out.push_back(twin);
+    }
+    if (static_cast<double>(std::max(v.size.width, v.size.height)) <= params.glow_max_size) {
+      ModelView twin = v;
+      twin.glow = true;
+      out.push_back(twin);
     }
     // Stop once this view is as small as the smallest sign to be found.
     if (long_edge * scale <= smallest) break;
@@ -141,6 +148,15 @@ int asift_tilt_levels(float max_tilt) {
   return std::clamp(static_cast<int>(std::lround((t - 1.0) / 0.5)), 1, 8);
 }
 
+cv::Mat glow_table() {
+  cv::Mat table(1, 256, CV_8UC1);
+  for (int v = 0; v < 256; ++v) {
+    const double y = std::pow(std::min(v / 255.0, kGlowClip) / kGlowClip, kGlowGamma);
+    table.at<std::uint8_t>(0, v) = static_cast<std::uint8_t>(std::lround(255.0 * y));
+  }
+  return table;
+}
+
 void render_view(const cv::Mat& gray, const ModelView& view, cv::Mat& out, cv::Mat& inside) {
   const cv::Matx23d& a = view.to_view;
   // Shrink of each model axis direction is at most the largest singular
@@ -183,6 +199,7 @@ void render_view(const cv::Mat& gray, const ModelView& view, cv::Mat& out, cv::M
   }
   if (view.blur > 0.0)
     cv::GaussianBlur(out, out, cv::Size(0, 0), view.blur, view.blur, cv::BORDER_REPLICATE);
+  if (view.glow) cv::LUT(out, glow_table(), out);
   const cv::Mat ones(gray.size(), CV_8UC1, cv::Scalar(255));
   cv::warpAffine(ones, inside, cv::Mat(a), view.size, cv::INTER_NEAREST, cv::BORDER_CONSTANT,
                  cv::Scalar(0));

@@ -26,6 +26,9 @@ struct ModelView {
   // Extra Gaussian blur, view pixels, after the view is rendered (0: none):
   // the blurred twin of a small view (ViewParams::blurred_max_size).
   double blur = 0.0;
+  // The glowing twin of a small view (ViewParams::glow_max_size): the view
+  // rendered through the glow model below after its anti-aliasing.
+  bool glow = false;
 };
 
 // The blur of a small view's blurred twin, in view pixels: what a sign of
@@ -35,6 +38,25 @@ struct ModelView {
 // docs/RESULTS.md, "Blurred small views (issue 38)").
 inline constexpr double kBlurredViewSigma = 1.5;
 
+// The photometric model of a small illuminated sign in a phone frame
+// (ViewParams::glow_max_size), on intensities in [0, 1]: the highlights
+// clipped at kGlowClip (rescaled to [0, 1]), then a tone curve
+// y^kGlowGamma. Fitted on the real exit-sign dev split (50 signs): the
+// model image warped by each truth pose and rendered through a model,
+// against the frame's pixels inside the sign, 1 - their correlation,
+// median over the signs: 0.42 for the sharp view, 0.40 for this one. The
+// grid also had a bloom (the part above a threshold blurred by 1.5-6 px and
+// added back 0.3-1.5 times) and a camera blur (0.5-2.5 px): the fit set
+// both to 0, and a bloom of gain 1 and 2 px with a 0.75 px blur predicted
+// the frames worse (0.48) (docs/RESULTS.md, "Glowing small views (issue
+// 38)").
+inline constexpr double kGlowClip = 0.7;
+inline constexpr double kGlowGamma = 1.3;
+
+// That model as a table of the 256 grey levels: round(255 * (min(v / 255,
+// kGlowClip) / kGlowClip)^kGlowGamma).
+cv::Mat glow_table();
+
 // The views of a width x height model for `params`, in this order: the
 // frontal scale pyramid (scale 1, then each params.scale_step smaller until
 // the long edge reaches params.min_size), and for each tilt level the same
@@ -42,7 +64,9 @@ inline constexpr double kBlurredViewSigma = 1.5;
 // than the model image (each 1 / params.scale_step larger, up to
 // params.max_scale). Each view of the pyramids whose long edge is at most
 // params.blurred_max_size is followed by its blurred twin (the same map,
-// blur kBlurredViewSigma). With views disabled
+// blur kBlurredViewSigma), and each view whose long edge is at most
+// params.glow_max_size by its glowing twin (glow set), after the blurred
+// one. With views disabled
 // (min_size == 0) the frontal pyramid of `legacy_scales` levels, each
 // 1/sqrt(2) smaller.
 std::vector<ModelView> model_views(int width, int height, const ViewParams& params,
@@ -65,7 +89,8 @@ Status check_view_canvas(int width, int height, const ViewParams& params);
 
 // Renders `view` of `gray` (8-bit), with pixels outside the model taken
 // from its nearest border (no edges that a wall behind a sign would not
-// show), blurred by view.blur when that is set. `inside` gets 255 where the
+// show), blurred by view.blur when that is set, through the glow model
+// (glow_table()) when view.glow is. `inside` gets 255 where the
 // view shows model pixels.
 void render_view(const cv::Mat& gray, const ModelView& view, cv::Mat& out, cv::Mat& inside);
 

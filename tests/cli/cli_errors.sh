@@ -114,12 +114,13 @@ grep -q "views.max_scale must be in \[1, 4\]" "$LOG/stderr" ||
 # The appearance parameters (format 6.2) are range-checked, naming the field.
 # So is the search budget (6.3), and the triangle patch check and
 # progressive sampling (6.4), circuit completion (6.5), the neighbour
-# rank of model arcs (6.6) and the largest view scale (6.7; also against
-# ransac.max_scale_change: 3 is above sqrt(8)).
+# rank of model arcs (6.6), the largest view scale (6.7; also against
+# ransac.max_scale_change: 3 is above sqrt(8)) and the glowing twins (6.12).
 for assignment in views.appearance_size=9999 views.appearance_size=-1 ransac.min_appearance=1.5 \
   ransac.min_appearance=nan descriptor.search_reference_models=-5 \
   ransac.min_triangle_correlation=1.5 ransac.progressive_sampling=2 graph.complete_circuits=2 \
-  graph.max_neighbour_rank=-1 views.max_scale=0.5 views.max_scale=5 views.max_scale=3; do
+  graph.max_neighbour_rank=-1 views.max_scale=0.5 views.max_scale=5 views.max_scale=3 \
+  views.glow_max_size=-1; do
   next_case
   expect_failure "build: --set $assignment" \
     "$KG" build --set "$assignment" "$DATA/box.png" -o "$CASE/o.kgi"

@@ -545,6 +545,8 @@ TEST_F(ModelIndexTest, NonDefaultParamsRoundTrip) {
   p.ransac.seed = 0x0123456789abcdefULL;
   p.ransac.min_appearance = -0.25f;
   p.views.appearance_size = 0;  // none stored, though the models have one
+  p.views.blurred_max_size = 170.f;
+  p.views.glow_max_size = 120.f;  // 6.12
   Bytes b;
   ASSERT_TRUE(serialize_index(models(), p, b));
   AlignedBytes buffer(b);
@@ -1229,6 +1231,8 @@ TEST(Golden, EveryGoldenLoadsAndDetects) {
     // Blurred small views (6.11, past the first 256 bytes) are opt-in: every
     // golden file holds 0, the older ones through their shorter block.
     EXPECT_EQ(index.params().views.blurred_max_size, 0.f);
+    // Glowing small views (6.12) are opt-in: every golden file holds 0.
+    EXPECT_EQ(index.params().views.glow_max_size, 0.f);
     if (index.version_minor() >= 2) {
       ASSERT_TRUE(index.has_appearance());
       const ModelAppearance look = index.appearance(0);
@@ -1967,6 +1971,13 @@ TEST_F(ModelIndexTest, RejectsBadParameterValues) {
     b = bytes();
     put_params(b, p);
     EXPECT_TRUE(rejected(b, "parameter views.blurred_max_size must be in [0, 100000]"));
+  }
+  for (const float size : {-1.f, 100001.f, std::nanf("")}) {
+    p = paper_params();
+    p.views.glow_max_size = size;
+    b = bytes();
+    put_params(b, p);
+    EXPECT_TRUE(rejected(b, "parameter views.glow_max_size must be in [0, 100000]"));
   }
 
   b = bytes();

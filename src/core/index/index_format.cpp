@@ -260,6 +260,9 @@ Status validate_params(const Params& p) {
   if (!(std::isfinite(p.views.blurred_max_size) && p.views.blurred_max_size >= 0.f &&
         p.views.blurred_max_size <= 100000.f))
     return bad("views.blurred_max_size", "must be in [0, 100000] (0: off)");
+  if (!(std::isfinite(p.views.glow_max_size) && p.views.glow_max_size >= 0.f &&
+        p.views.glow_max_size <= 100000.f))
+    return bad("views.glow_max_size", "must be in [0, 100000] (0: off)");
   return Status::ok();
 }
 

@@ -53,7 +53,9 @@ inline constexpr std::uint16_t kVersionMajor = 6;
 // 6.11: views.blurred_max_size (blurred twins of the small model views,
 // opt-in, issue 38), the first field past 256 bytes: the parameter block
 // is 320 bytes; older files read it as 0, off, as they were built.
-inline constexpr std::uint16_t kVersionMinor = 11;
+// 6.12: views.glow_max_size (glowing twins of the small model views,
+// opt-in, issue 38); older files read it as 0, off, as they were built.
+inline constexpr std::uint16_t kVersionMinor = 12;
 inline constexpr std::size_t kAlignment = 64;
 
 inline constexpr std::size_t kHeaderSize = 64;
@@ -264,6 +266,7 @@ constexpr void visit_params(P& p, F&& f) {
   f("ransac.small_min_inliers", p.ransac.small_min_inliers);                  // 6.10; 0: off
   f("ransac.small_min_appearance", p.ransac.small_min_appearance);            // 6.10
   f("views.blurred_max_size", p.views.blurred_max_size);                      // 6.11; 0: off
+  f("views.glow_max_size", p.views.glow_max_size);                            // 6.12; 0: off
   // Later minor versions append here; the block's zero tail is what an
   // older file holds for them, and a field past the end of an older file's
   // (shorter) block reads as zero too.
