@@ -121,6 +121,16 @@ struct DetectOptions {
   // index (docs/RESULTS.md, "RANSAC on barren pools").
   static constexpr int kDefaultRansacBarrenDraws = 2000;
   int ransac_barren_draws = kDefaultRansacBarrenDraws;
+  // A cluster's appearance alignment (ransac.min_appearance and the
+  // confirmed and small rules) stops after the coarse (half-resolution)
+  // level when neither the cluster's pose nor the coarse level's fit
+  // correlates with the frame at this or more ([-1, 1]; -1: never): the
+  // cluster is then rejected for its appearance without the fine level,
+  // most of an alignment's cost. Values above the lowest appearance an
+  // acceptance rule takes act as that value. Not stored in the index
+  // (docs/RESULTS.md, "Aligning only what can be accepted").
+  static constexpr double kDefaultAlignCoarseMinNcc = 0.45;
+  double align_coarse_min_ncc = kDefaultAlignCoarseMinNcc;
   // Detections whose confidence (Detection::confidence, in [0, 1]) is below
   // this are dropped: 0 keeps every detection that passed the checks; 0.5
   // keeps those more likely right than wrong.
