@@ -220,8 +220,9 @@ TEST(AppearanceAlign, AnotherImageAtTheSamePoseCorrelatesPoorly) {
 TEST(AppearanceAlign, AbandonsAfterTheCoarseLevelWhatCannotCorrelate) {
   // align()'s abandon_below: another object's appearance at the box's pose
   // (a false cluster) stops after the coarse level, its pose unchanged and
-  // its correlation low; the box itself, several pixels off, is not
-  // abandoned and gets the same fit, bit for bit, as without the test.
+  // its correlation low, and with refuse_below before any step; the box
+  // itself, several pixels off, is not abandoned and gets the same fit, bit
+  // for bit, as without the tests.
   const Scene s = make_scene(kCorners);
   ASSERT_FALSE(s.frame.empty());
   cv::Mat other = test::load_gray(test::opencv_data("graf1.png"));
@@ -255,12 +256,22 @@ TEST(AppearanceAlign, AbandonsAfterTheCoarseLevelWhatCannotCorrelate) {
   EXPECT_EQ(wrong_stopped.ncc_coarse, wrong_full.ncc_coarse);
   EXPECT_LT(wrong_stopped.ncc_coarse, kAbandonBelow);
   EXPECT_LT(wrong_stopped.iterations, wrong_full.iterations);  // the fine level's steps saved
+  // refuse_below: not a step when the pose given correlates under it.
+  Homography refused = before;
+  const AppearanceFit wrong_refused =
+      aligner.align(wrong_image, test::view(s.frame), refused, kAbandonBelow, 0.3);
+  EXPECT_TRUE(wrong_refused.measured);
+  EXPECT_TRUE(wrong_refused.abandoned);
+  EXPECT_FALSE(wrong_refused.coarse_measured);
+  EXPECT_EQ(wrong_refused.iterations, 0);
+  EXPECT_EQ(refused, before);
+  EXPECT_EQ(wrong_refused.ncc, wrong_full.ncc_before);
 
   Homography right_full = perturbed(s, kCorners, kOffsets);
   Homography right_tested = right_full;
   const AppearanceFit a = aligner.align(image_of(s), test::view(s.frame), right_full);
   const AppearanceFit b =
-      aligner.align(image_of(s), test::view(s.frame), right_tested, kAbandonBelow);
+      aligner.align(image_of(s), test::view(s.frame), right_tested, kAbandonBelow, 0.3);
   EXPECT_FALSE(b.abandoned);
   EXPECT_TRUE(b.aligned);
   EXPECT_GT(b.ncc_coarse, kAbandonBelow);

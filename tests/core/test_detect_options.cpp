@@ -392,7 +392,10 @@ TEST(DetectOptions, AlignmentOnlyForWhatCanBeAccepted) {
   EXPECT_EQ(stopping.align_coarse_min_ncc, DetectOptions::kDefaultAlignCoarseMinNcc);
   EXPECT_EQ(stopping.align_coarse_min_ncc, 0.45);
   DetectOptions every = stopping;
-  every.align_coarse_min_ncc = -1.0;  // every cluster aligned in full, as before
+  EXPECT_EQ(stopping.align_min_ncc, DetectOptions::kDefaultAlignMinNcc);
+  EXPECT_EQ(stopping.align_min_ncc, 0.3);
+  every.align_min_ncc = -1.0;  // every cluster aligned in full, as before
+  every.align_coarse_min_ncc = -1.0;
   DetectOptions two_threads = stopping;
   Limits two = limits;
   two.threads = 2;
@@ -445,7 +448,13 @@ TEST(DetectOptions, AlignmentOnlyForWhatCanBeAccepted) {
   EXPECT_TRUE(set_detect_option(o, "align_coarse_min_ncc", "-1"));
   EXPECT_FALSE(set_detect_option(o, "align_coarse_min_ncc", "1.5"));
   EXPECT_FALSE(set_detect_option(o, "align_coarse_min_ncc", "x"));
+  EXPECT_TRUE(set_detect_option(o, "align_min_ncc", "0.2"));
+  EXPECT_EQ(o.align_min_ncc, 0.2);
+  EXPECT_FALSE(set_detect_option(o, "align_min_ncc", "-2"));
   stopping.align_coarse_min_ncc = 2.0;
+  EXPECT_FALSE(stopping_detector.set_options(stopping));
+  stopping.align_coarse_min_ncc = 0.45;
+  stopping.align_min_ncc = -1.5;
   EXPECT_FALSE(stopping_detector.set_options(stopping));
 }
 
@@ -465,6 +474,7 @@ TEST(DetectOptions, NoAlignmentForAClusterOnAnInstanceFound) {
   const Limits limits = Limits{}.for_frame(f.graf_scene.cols, f.graf_scene.rows);
   DetectOptions stopping = DetectOptions::from(index);
   DetectOptions every = stopping;
+  every.align_min_ncc = -1.0;
   every.align_coarse_min_ncc = -1.0;
   Detector every_detector(index, limits, every), stopping_detector(index, limits, stopping);
   ASSERT_TRUE(every_detector.status()) << every_detector.status().message();

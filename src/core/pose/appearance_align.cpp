@@ -896,7 +896,7 @@ bool AppearanceAligner::prepare(const AppearanceImage& appearance, ImageView fra
 }
 
 AppearanceFit AppearanceAligner::align(const AppearanceImage& appearance, ImageView frame,
-                                       Homography& h, double abandon_below) {
+                                       Homography& h, double abandon_below, double refuse_below) {
   AppearanceFit fit;
   if (!prepare(appearance, frame)) return fit;
   const int w = appearance.width, hgt = appearance.height;
@@ -939,6 +939,10 @@ AppearanceFit AppearanceAligner::align(const AppearanceImage& appearance, ImageV
   fit.measured = score(h.data(), fit.ncc_before);
   if (!fit.measured) return fit;
   fit.ncc = fit.ncc_before;
+  if (fit.ncc_before < refuse_below) {
+    fit.abandoned = true;  // not worth a step
+    return fit;
+  }
 
   double refined[9];
   std::copy(h.begin(), h.end(), refined);

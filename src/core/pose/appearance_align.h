@@ -50,9 +50,10 @@ struct AppearanceFit {
   // frame at its last Gauss-Newton step (coarse_measured: whether it ran).
   bool coarse_measured = false;
   double ncc_coarse = 0.0;
-  // The fine level was not run: the coarse level's correlation and the one
-  // under the pose given were both below align()'s abandon_below. The pose
-  // is then returned unchanged (aligned false, ncc = ncc_before).
+  // No step or only the coarse level's were run: the correlation under the
+  // pose given was below align()'s refuse_below (coarse_measured false), or
+  // it and the coarse level's were both below abandon_below. The pose is
+  // then returned unchanged (aligned false, ncc = ncc_before).
   bool abandoned = false;
 };
 
@@ -68,10 +69,11 @@ class AppearanceAligner {
   // appearance larger than reserved is not aligned (measured stays false).
   // The fine level is skipped (AppearanceFit::abandoned) when, after the
   // coarse level's steps, neither the pose given nor the coarse level
-  // correlates at abandon_below or more: a pose that will be rejected for
-  // its appearance either way (the default never abandons).
+  // correlates at abandon_below or more, and every step when the pose given
+  // correlates under refuse_below: poses that will be rejected for their
+  // appearance either way (the defaults never abandon).
   AppearanceFit align(const AppearanceImage& appearance, ImageView frame, Homography& h,
-                      double abandon_below = -2.0);
+                      double abandon_below = -2.0, double refuse_below = -2.0);
 
   // Workers (nullptr: none) to sample the frame under the pose with: each
   // pixel's sample is computed on its own, so the fit is the same, bit for

@@ -263,6 +263,8 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
   // at least 0 (below): with no rule above 0 nothing is abandoned.
   const double abandon_below =
       lowest_appearance > 0.0 ? std::min(align_coarse_min_ncc_, lowest_appearance) : -2.0;
+  const double refuse_below =
+      lowest_appearance > 0.0 ? std::min(align_min_ncc_, lowest_appearance) : -2.0;
   // An attempt whose draws found nothing that could make an instance
   // stops early (DetectOptions::ransac_barren_draws): the cap's draws go
   // mostly to models absent from the frame.
@@ -331,6 +333,20 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
       final_score = s;
     }
 
+    // A cluster on an instance of this model already found (the outlines
+    // hold each other's centres) repeats it: rejected either way
+    // (repeats_instance, below), so it is neither refined further nor
+    // aligned (align_coarse_min_ncc -1: judged in full, as before).
+    const bool skip_repeats = align_coarse_min_ncc_ > -1.0;
+    if (skip_repeats && !out.empty()) {
+      Point2f at[4];
+      for (int c = 0; c < 4; ++c) at[c] = kg::apply(refined, info.outline[c]);
+      if (holds_an_instance(out, model_id, at)) {
+        explain_cluster(k);  // the inliers of `refined`
+        continue;
+      }
+    }
+
     // Guided refinement over all model keypoints, then the support that
     // the descriptors gave is recounted under the final pose.
     Support support = guided_refine(index, params, info, frame, refined);
@@ -350,15 +366,13 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
     Point2f corners[4];
     for (int c = 0; c < 4; ++c) corners[c] = kg::apply(refined, info.outline[c]);
     const bool worth_aligning = !small_only || longest_side(corners) <= rp.small_max_size;
-    // A cluster whose pose and an instance of this model already found
-    // hold each other's centres repeats it: rejected either way
-    // (repeats_instance, below), so it is not aligned. -1 aligns as before.
-    const bool repeat = align_coarse_min_ncc_ > -1.0 && holds_an_instance(out, model_id, corners);
+    // The same for a pose that the guided refinement brought onto one.
+    const bool repeat = skip_repeats && holds_an_instance(out, model_id, corners);
     if (can_align && z >= align_min_z && worth_aligning && !repeat) {
       Homography aligned = refined;
       const AppearanceFit fit =
           aligner_.align({stored.pixels, stored.width, stored.height, stored.scale, stored.scale},
-                         frame.image, aligned, abandon_below);
+                         frame.image, aligned, abandon_below, refuse_below);
       ++align_counts_.aligned;
       align_counts_.abandoned += fit.abandoned ? 1 : 0;
       if (fit.measured) {

@@ -40,11 +40,17 @@ class PoseEstimator {
   // drew could make an instance (DetectOptions::ransac_barren_draws; 0: never).
   void set_barren_draws(int draws) { barren_draws_ = draws; }
 
-  // A cluster's appearance alignment stops after its coarse level when
-  // neither its pose nor the coarse fit correlates at this or more (capped
-  // at the lowest appearance an acceptance rule takes), rejecting it
-  // (DetectOptions::align_coarse_min_ncc; -1: never).
-  void set_align_coarse_min_ncc(double ncc) { align_coarse_min_ncc_ = ncc; }
+  // A cluster's appearance alignment does not start when its pose
+  // correlates under `before`, and stops after its coarse level when
+  // neither its pose nor the coarse fit correlates at `coarse` or more
+  // (each capped at the lowest appearance an acceptance rule takes),
+  // rejecting it (DetectOptions::align_min_ncc, align_coarse_min_ncc; -1:
+  // never). With `coarse` above -1 a cluster on an instance already found
+  // is not refined nor aligned either.
+  void set_align_min_ncc(double before, double coarse) {
+    align_min_ncc_ = before;
+    align_coarse_min_ncc_ = coarse;
+  }
 
   // Appearance alignments run and abandoned after their coarse level, counted
   // over every estimate() since the estimator was made.
@@ -101,7 +107,7 @@ class PoseEstimator {
   WorkVector<Point2f> guided_scene_;
   AppearanceAligner aligner_;
   int barren_draws_ = 0;
-  double align_coarse_min_ncc_ = -1.0;
+  double align_min_ncc_ = -1.0, align_coarse_min_ncc_ = -1.0;
   AlignCounts align_counts_;
 };
 

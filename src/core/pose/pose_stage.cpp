@@ -109,7 +109,7 @@ PoseStage::Result PoseStage::estimate(const ModelIndex& index, const Params& par
   group(index, matches, n);
   for (PoseEstimator& e : estimators_) {
     e.set_barren_draws(barren_draws_);
-    e.set_align_coarse_min_ncc(align_coarse_min_ncc_);
+    e.set_align_min_ncc(align_min_ncc_, align_coarse_min_ncc_);
   }
   const int threads =
       workers == nullptr ? 1 : std::min(workers->threads(), static_cast<int>(found_.size()));

@@ -41,8 +41,12 @@ class PoseStage {
 
   // DetectOptions::ransac_barren_draws for the estimations that follow.
   void set_barren_draws(int draws) { barren_draws_ = draws; }
-  // DetectOptions::align_coarse_min_ncc for the estimations that follow.
-  void set_align_coarse_min_ncc(double ncc) { align_coarse_min_ncc_ = ncc; }
+  // DetectOptions::align_min_ncc and align_coarse_min_ncc for the
+  // estimations that follow.
+  void set_align_min_ncc(double before, double coarse) {
+    align_min_ncc_ = before;
+    align_coarse_min_ncc_ = coarse;
+  }
 
   struct Result {
     int ransac_iterations = 0;
@@ -90,7 +94,7 @@ class PoseStage {
   WorkVector<PoseEstimator> estimators_;
   WorkVector<DetectionList> found_;
   int barren_draws_ = 0;
-  double align_coarse_min_ncc_ = -1.0;
+  double align_min_ncc_ = -1.0, align_coarse_min_ncc_ = -1.0;
 };
 
 }  // namespace kg
