@@ -70,6 +70,11 @@ struct DetectStats {
   // (RansacParams::min_triangle_correlation); correspondences counts them.
   int patch_rejections = 0;
   int ransac_iterations = 0;  // summed over models and instances
+  // Clusters whose model appearance was aligned onto the frame, and of
+  // those the alignments stopped after the coarse level
+  // (DetectOptions::align_coarse_min_ncc).
+  int alignments = 0;
+  int alignments_abandoned = 0;
   // Circuit completion (GraphParams::complete_circuits), summed over the
   // keygraphs: model triples joined from two arcs similar to scene arcs,
   // of which clockwise, of which a plausible local map (whose closing arc

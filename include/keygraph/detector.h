@@ -121,6 +121,25 @@ struct DetectOptions {
   // index (docs/RESULTS.md, "RANSAC on barren pools").
   static constexpr int kDefaultRansacBarrenDraws = 2000;
   int ransac_barren_draws = kDefaultRansacBarrenDraws;
+  // Aligning only what can be accepted. A cluster's appearance alignment
+  // (for ransac.min_appearance and the confirmed and small rules) stops
+  // after the coarse (half-resolution) level when neither the cluster's
+  // pose nor the coarse level's fit correlates with the frame at
+  // align_coarse_min_ncc or more, and does not start when the pose
+  // correlates under align_min_ncc: the cluster is then rejected for its
+  // appearance (the fine level is most of an alignment's cost). With
+  // align_coarse_min_ncc above -1, a cluster whose pose and an instance of
+  // its model already found hold each other's centres (a repeat, rejected
+  // either way) is neither refined further nor aligned. [-1, 1] each; -1
+  // never (both -1: every cluster judged in full, as before); values above
+  // the lowest appearance an acceptance rule takes act as that value. On
+  // the tuning sets no accepted cluster's pose correlated under 0.43, nor
+  // under 0.52 with its coarse fit. Not stored in the index (docs/RESULTS.md,
+  // "Aligning only what can be accepted").
+  static constexpr double kDefaultAlignCoarseMinNcc = 0.45;
+  double align_coarse_min_ncc = kDefaultAlignCoarseMinNcc;
+  static constexpr double kDefaultAlignMinNcc = 0.3;
+  double align_min_ncc = kDefaultAlignMinNcc;
   // Detections whose confidence (Detection::confidence, in [0, 1]) is below
   // this are dropped: 0 keeps every detection that passed the checks; 0.5
   // keeps those more likely right than wrong.

@@ -74,6 +74,16 @@ Status set_detect_option(DetectOptions& options, std::string_view name, std::str
         static_cast<int>(v);
     return Status::ok();
   }
+  if (name == "align_coarse_min_ncc" || name == "align_min_ncc") {
+    const std::string text(value);
+    char* end = nullptr;
+    const double v = std::strtod(text.c_str(), &end);
+    if (text.empty() || end != text.c_str() + text.size() || !(v >= -1.0 && v <= 1.0))
+      return {StatusCode::kInvalidArgument, "bad value '" + text + "' for " + std::string(name) +
+                                                " (a correlation in [-1, 1]; -1: never)"};
+    (name == "align_min_ncc" ? options.align_min_ncc : options.align_coarse_min_ncc) = v;
+    return Status::ok();
+  }
   if (name == "min_confidence" || name == "time_budget_ms") {
     const std::string text(value);
     char* end = nullptr;
@@ -109,6 +119,8 @@ std::vector<std::string> detect_option_names() {
     if (is_detect_option(n)) names.push_back(std::move(n));
   names.emplace_back("search_arcs_per_leaf");
   names.emplace_back("ransac_barren_draws");
+  names.emplace_back("align_coarse_min_ncc");
+  names.emplace_back("align_min_ncc");
   names.emplace_back("min_confidence");
   names.emplace_back("time_budget_ms");
   return names;

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <vector>
 
@@ -214,6 +215,70 @@ TEST(AppearanceAlign, AnotherImageAtTheSamePoseCorrelatesPoorly) {
   ASSERT_TRUE(fit_wrong.measured);
   EXPECT_GT(fit_right.ncc, 0.95);
   EXPECT_LT(fit_wrong.ncc, 0.4);
+}
+
+TEST(AppearanceAlign, AbandonsAfterTheCoarseLevelWhatCannotCorrelate) {
+  // align()'s abandon_below: another object's appearance at the box's pose
+  // (a false cluster) stops after the coarse level, its pose unchanged and
+  // its correlation low, and with refuse_below before any step; the box
+  // itself, several pixels off, is not abandoned and gets the same fit, bit
+  // for bit, as without the tests.
+  const Scene s = make_scene(kCorners);
+  ASSERT_FALSE(s.frame.empty());
+  cv::Mat other = test::load_gray(test::opencv_data("graf1.png"));
+  ASSERT_FALSE(other.empty());
+  cv::resize(other, other, s.appearance.size(), 0, 0, cv::INTER_AREA);
+  const AppearanceImage wrong_image{other.data, other.cols, other.rows, s.scale_x, s.scale_y};
+  AppearanceAligner aligner;
+  aligner.reserve(kAppearanceSize * kAppearanceSize);
+  constexpr double kAbandonBelow = 0.45;
+
+  Homography full = perturbed(s, kCorners, kOffsets);
+  const AppearanceFit wrong_full = aligner.align(wrong_image, test::view(s.frame), full);
+  Homography stopped = perturbed(s, kCorners, kOffsets);
+  const Homography before = stopped;
+  const AppearanceFit wrong_stopped =
+      aligner.align(wrong_image, test::view(s.frame), stopped, kAbandonBelow);
+  std::printf(
+      "another image: %d steps, correlation %.3f -> %.3f (coarse %.3f); abandoned after %d\n",
+      wrong_full.iterations, wrong_full.ncc_before, wrong_full.ncc, wrong_full.ncc_coarse,
+      wrong_stopped.iterations);
+  ASSERT_TRUE(wrong_full.measured);
+  EXPECT_FALSE(wrong_full.abandoned);
+  EXPECT_TRUE(wrong_full.coarse_measured);
+  EXPECT_LT(wrong_full.ncc, 0.4);  // rejected either way
+  EXPECT_TRUE(wrong_stopped.measured);
+  EXPECT_TRUE(wrong_stopped.abandoned);
+  EXPECT_FALSE(wrong_stopped.aligned);
+  EXPECT_EQ(stopped, before);
+  EXPECT_EQ(wrong_stopped.ncc, wrong_stopped.ncc_before);
+  EXPECT_EQ(wrong_stopped.ncc_before, wrong_full.ncc_before);
+  EXPECT_EQ(wrong_stopped.ncc_coarse, wrong_full.ncc_coarse);
+  EXPECT_LT(wrong_stopped.ncc_coarse, kAbandonBelow);
+  EXPECT_LT(wrong_stopped.iterations, wrong_full.iterations);  // the fine level's steps saved
+  // refuse_below: not a step when the pose given correlates under it.
+  Homography refused = before;
+  const AppearanceFit wrong_refused =
+      aligner.align(wrong_image, test::view(s.frame), refused, kAbandonBelow, 0.3);
+  EXPECT_TRUE(wrong_refused.measured);
+  EXPECT_TRUE(wrong_refused.abandoned);
+  EXPECT_FALSE(wrong_refused.coarse_measured);
+  EXPECT_EQ(wrong_refused.iterations, 0);
+  EXPECT_EQ(refused, before);
+  EXPECT_EQ(wrong_refused.ncc, wrong_full.ncc_before);
+
+  Homography right_full = perturbed(s, kCorners, kOffsets);
+  Homography right_tested = right_full;
+  const AppearanceFit a = aligner.align(image_of(s), test::view(s.frame), right_full);
+  const AppearanceFit b =
+      aligner.align(image_of(s), test::view(s.frame), right_tested, kAbandonBelow, 0.3);
+  EXPECT_FALSE(b.abandoned);
+  EXPECT_TRUE(b.aligned);
+  EXPECT_GT(b.ncc_coarse, kAbandonBelow);
+  EXPECT_EQ(right_tested, right_full);
+  EXPECT_EQ(b.ncc, a.ncc);
+  EXPECT_EQ(b.iterations, a.iterations);
+  EXPECT_LT(max_corner_error(s, right_tested), 0.5);
 }
 
 TEST(AppearanceAlign, LeavesAPoseMostlyOutsideTheFrameAlone) {

@@ -381,6 +381,121 @@ TEST(DetectOptions, BarrenDrawsStopAbsentModelsEarly) {
   EXPECT_FALSE(barren_detector.set_options(barren));
 }
 
+TEST(DetectOptions, AlignmentOnlyForWhatCanBeAccepted) {
+  // align_coarse_min_ncc: a false cluster's appearance alignment stops
+  // after the coarse level, and a cluster on an instance already found is
+  // not aligned, while the objects found keep their poses bit for bit.
+  const Fixture& f = fixture();
+  const ModelIndex& index = f.built.index;
+  const Limits limits = limits_for(f.box_scene, f.graf_scene);
+  DetectOptions stopping = DetectOptions::from(index);
+  EXPECT_EQ(stopping.align_coarse_min_ncc, DetectOptions::kDefaultAlignCoarseMinNcc);
+  EXPECT_EQ(stopping.align_coarse_min_ncc, 0.45);
+  DetectOptions every = stopping;
+  EXPECT_EQ(stopping.align_min_ncc, DetectOptions::kDefaultAlignMinNcc);
+  EXPECT_EQ(stopping.align_min_ncc, 0.3);
+  every.align_min_ncc = -1.0;  // every cluster aligned in full, as before
+  every.align_coarse_min_ncc = -1.0;
+  DetectOptions two_threads = stopping;
+  Limits two = limits;
+  two.threads = 2;
+  Detector every_detector(index, limits, every), stopping_detector(index, limits, stopping),
+      threaded_detector(index, two, two_threads);
+  ASSERT_TRUE(every_detector.status()) << every_detector.status().message();
+  ASSERT_TRUE(stopping_detector.status()) << stopping_detector.status().message();
+  ASSERT_TRUE(threaded_detector.status()) << threaded_detector.status().message();
+  int saved = 0;
+  for (const cv::Mat* scene : {&f.box_scene, &f.graf_scene}) {
+    const bool graf = scene == &f.graf_scene;
+    DetectionList a, b, c;
+    ASSERT_TRUE(every_detector.detect(test::view(*scene), a));
+    ASSERT_TRUE(stopping_detector.detect(test::view(*scene), b));
+    ASSERT_TRUE(threaded_detector.detect(test::view(*scene), c));
+    const DetectStats& sa = every_detector.stats();
+    const DetectStats& sb = stopping_detector.stats();
+    std::printf("%s: alignments %d (%d abandoned) -> %d (%d abandoned)\n",
+                graf ? "graf3" : "box_in_scene", sa.alignments, sa.alignments_abandoned,
+                sb.alignments, sb.alignments_abandoned);
+    ASSERT_EQ(a.size(), 1u);
+    ASSERT_EQ(b.size(), 1u);
+    ASSERT_EQ(c.size(), 1u);
+    EXPECT_EQ(b[0].model_id, graf ? 1 : 0);
+    EXPECT_EQ(b[0].model_id, a[0].model_id);
+    EXPECT_EQ(b[0].homography, a[0].homography);
+    EXPECT_EQ(b[0].appearance, a[0].appearance);
+    EXPECT_EQ(b[0].inliers, a[0].inliers);
+    EXPECT_EQ(c[0].homography, b[0].homography);
+    EXPECT_GT(b[0].appearance, 0.8);
+    EXPECT_EQ(sa.alignments_abandoned, 0);
+    // The same counts whatever the thread count.
+    EXPECT_EQ(threaded_detector.stats().alignments, sb.alignments);
+    EXPECT_EQ(threaded_detector.stats().alignments_abandoned, sb.alignments_abandoned);
+    if (graf) {
+      EXPECT_LT(test::max_corner_error(b[0], test::graf_truth(), index.model(1)), 5.0);
+      EXPECT_GE(sb.alignments_abandoned, 1);  // a false cluster
+    }
+    // Every alignment left runs in full but the abandoned ones, and the
+    // found object's is one of them.
+    EXPECT_GE(sb.alignments - sb.alignments_abandoned, 1);
+    EXPECT_LE(sb.alignments, sa.alignments);
+    saved += (sa.alignments - sb.alignments) + sb.alignments_abandoned;
+  }
+  EXPECT_GT(saved, 0);
+  // By name, in [-1, 1].
+  DetectOptions o;
+  EXPECT_TRUE(set_detect_option(o, "align_coarse_min_ncc", "0.6"));
+  EXPECT_EQ(o.align_coarse_min_ncc, 0.6);
+  EXPECT_TRUE(set_detect_option(o, "align_coarse_min_ncc", "-1"));
+  EXPECT_FALSE(set_detect_option(o, "align_coarse_min_ncc", "1.5"));
+  EXPECT_FALSE(set_detect_option(o, "align_coarse_min_ncc", "x"));
+  EXPECT_TRUE(set_detect_option(o, "align_min_ncc", "0.2"));
+  EXPECT_EQ(o.align_min_ncc, 0.2);
+  EXPECT_FALSE(set_detect_option(o, "align_min_ncc", "-2"));
+  stopping.align_coarse_min_ncc = 2.0;
+  EXPECT_FALSE(stopping_detector.set_options(stopping));
+  stopping.align_coarse_min_ncc = 0.45;
+  stopping.align_min_ncc = -1.5;
+  EXPECT_FALSE(stopping_detector.set_options(stopping));
+}
+
+TEST(DetectOptions, NoAlignmentForAClusterOnAnInstanceFound) {
+  // graf1 (the whole image) in graf3: after graf is found, RANSAC's next
+  // attempts find clusters on the same instance (repeats, rejected), which
+  // correlate too well to be abandoned after the coarse level; with
+  // align_coarse_min_ncc on they are not aligned at all.
+  static const test::InMemoryIndex built = [] {
+    test::InMemoryIndex x;
+    EXPECT_TRUE(test::build_in_memory({{"graf1", test::load_gray(test::opencv_data("graf1.png"))}},
+                                      Params{}, x));
+    return x;
+  }();
+  const ModelIndex& index = built.index;
+  const Fixture& f = fixture();
+  const Limits limits = Limits{}.for_frame(f.graf_scene.cols, f.graf_scene.rows);
+  DetectOptions stopping = DetectOptions::from(index);
+  DetectOptions every = stopping;
+  every.align_min_ncc = -1.0;
+  every.align_coarse_min_ncc = -1.0;
+  Detector every_detector(index, limits, every), stopping_detector(index, limits, stopping);
+  ASSERT_TRUE(every_detector.status()) << every_detector.status().message();
+  ASSERT_TRUE(stopping_detector.status()) << stopping_detector.status().message();
+  DetectionList a, b;
+  ASSERT_TRUE(every_detector.detect(test::view(f.graf_scene), a));
+  ASSERT_TRUE(stopping_detector.detect(test::view(f.graf_scene), b));
+  const DetectStats& sa = every_detector.stats();
+  const DetectStats& sb = stopping_detector.stats();
+  std::printf("graf1 in graf3: alignments %d (%d abandoned) -> %d (%d abandoned)\n", sa.alignments,
+              sa.alignments_abandoned, sb.alignments, sb.alignments_abandoned);
+  ASSERT_EQ(a.size(), 1u);
+  ASSERT_EQ(b.size(), 1u);
+  EXPECT_EQ(b[0].homography, a[0].homography);
+  EXPECT_EQ(b[0].appearance, a[0].appearance);
+  EXPECT_GT(b[0].appearance, 0.8);
+  EXPECT_GE(sa.alignments, 2);  // the instance and its repeats
+  EXPECT_EQ(sb.alignments, 1);  // the instance alone
+  EXPECT_EQ(sb.alignments_abandoned, 0);
+}
+
 TEST(DetectOptions, SetByName) {
   DetectOptions o;
   EXPECT_TRUE(set_detect_option(o, "ransac.seed", "7"));

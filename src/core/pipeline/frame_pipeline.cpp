@@ -182,6 +182,12 @@ Status FramePipeline::check_options(const ModelIndex& index, const DetectOptions
   if (!(options.ransac_barren_draws >= 0))
     return {StatusCode::kInvalidArgument,
             "detect options: ransac_barren_draws must be >= 0 (0: never stop early)"};
+  if (!(options.align_coarse_min_ncc >= -1.0 && options.align_coarse_min_ncc <= 1.0))
+    return {StatusCode::kInvalidArgument,
+            "detect options: align_coarse_min_ncc must be in [-1, 1] (-1: never)"};
+  if (!(options.align_min_ncc >= -1.0 && options.align_min_ncc <= 1.0))
+    return {StatusCode::kInvalidArgument,
+            "detect options: align_min_ncc must be in [-1, 1] (-1: never)"};
   if (options.models == nullptr && options.model_count > 0)
     return {StatusCode::kInvalidArgument, "detect options: model_count without models"};
   for (std::size_t i = 0; options.models != nullptr && i < options.model_count; ++i) {
@@ -469,11 +475,14 @@ void FramePipeline::estimate_poses(ImageView frame, const Keypoint* keypoints, i
   frame_keypoints.grid = &grid_;
   // Each model's RANSAC, on the workers when there are several.
   poses_.set_barren_draws(options_.ransac_barren_draws);
+  poses_.set_align_min_ncc(options_.align_min_ncc, options_.align_coarse_min_ncc);
   const PoseStage::Result r = poses_.estimate(
       *index_, params_, matches_.data(), matches_.size(), scene_points_.data(), frame_keypoints,
       limits_.max_detections, workers_.threads() > 1 ? &workers_ : nullptr,
       budgeted_ ? &deadline_ : nullptr, out);
   stats_.ransac_iterations += r.ransac_iterations;
+  stats_.alignments += r.alignments;
+  stats_.alignments_abandoned += r.alignments_abandoned;
   stats_.truncated_detections = stats_.truncated_detections || r.truncated;
   if (r.out_of_time) out_of_time("pose");
   keep_best_of_overlapping(out);

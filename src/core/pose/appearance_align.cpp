@@ -663,7 +663,9 @@ double AppearanceAligner::footprint(const Level& level, const double g[9]) {
   return std::sqrt(std::fabs((ux - ox) * (vy - oy) - (uy - oy) * (vx - ox)));
 }
 
-int AppearanceAligner::refine_level(const Level& level, ImageView frame, double g[9]) {
+int AppearanceAligner::refine_level(const Level& level, ImageView frame, double g[9], double* ncc,
+                                    bool* ncc_measured) {
+  if (ncc_measured != nullptr) *ncc_measured = false;
   const int w = level.width, h = level.height;
   const float* t = level.values;
   const double half_long = 0.5 * std::max(w, h);
@@ -770,8 +772,10 @@ int AppearanceAligner::refine_level(const Level& level, ImageView frame, double 
     workers_->run(groups, by_pixel);
   }
   int iterations = 0;
+  bool sampled = false;  // warped_ holds the selected pixels under a step's pose
   for (; iterations < kMaxIterations; ++iterations) {
     warp_level(level, frame, g, selected_.data(), n);
+    sampled = true;
     double count = 0, si = 0, st = 0, sii = 0, stt = 0;
     for (const std::uint32_t i : selected_) {
       if (!valid_[i]) continue;
@@ -837,6 +841,28 @@ int AppearanceAligner::refine_level(const Level& level, ImageView frame, double 
       break;
     }
   }
+  if (ncc != nullptr && ncc_measured != nullptr && sampled) {
+    // The last step's samples (before its update: under kConverged of a
+    // level pixel away once converged), plain correlation.
+    double count = 0, st = 0, si = 0, stt = 0, sii = 0, sti = 0;
+    for (const std::uint32_t i : selected_) {
+      if (!valid_[i]) continue;
+      const double tv = t[i], s = warped_[i];
+      count += 1;
+      st += tv;
+      si += s;
+      stt += tv * tv;
+      sii += s * s;
+      sti += tv * s;
+    }
+    if (count >= kMinInside * static_cast<double>(n)) {
+      const double vt = stt - st * st / count, vi = sii - si * si / count;
+      if (vt > kMinVariance * count) {
+        *ncc = vi > kMinVariance * count ? (sti - st * si / count) / std::sqrt(vt * vi) : 0.0;
+        *ncc_measured = std::isfinite(*ncc);
+      }
+    }
+  }
   return iterations;
 }
 
@@ -870,7 +896,7 @@ bool AppearanceAligner::prepare(const AppearanceImage& appearance, ImageView fra
 }
 
 AppearanceFit AppearanceAligner::align(const AppearanceImage& appearance, ImageView frame,
-                                       Homography& h) {
+                                       Homography& h, double abandon_below, double refuse_below) {
   AppearanceFit fit;
   if (!prepare(appearance, frame)) return fit;
   const int w = appearance.width, hgt = appearance.height;
@@ -913,12 +939,22 @@ AppearanceFit AppearanceAligner::align(const AppearanceImage& appearance, ImageV
   fit.measured = score(h.data(), fit.ncc_before);
   if (!fit.measured) return fit;
   fit.ncc = fit.ncc_before;
+  if (fit.ncc_before < refuse_below) {
+    fit.abandoned = true;  // not worth a step
+    return fit;
+  }
 
   double refined[9];
   std::copy(h.begin(), h.end(), refined);
   if (half.values != nullptr) {
     multiply(refined, half_to_model, g);
-    fit.iterations += refine_level(half, frame, g);
+    fit.iterations += refine_level(half, frame, g, &fit.ncc_coarse, &fit.coarse_measured);
+    if (fit.coarse_measured && fit.ncc_coarse < abandon_below && fit.ncc_before < abandon_below) {
+      // Neither the pose given nor the coarse level's fit correlates well
+      // enough: the fine level (four times the pixels) is not run.
+      fit.abandoned = true;
+      return fit;
+    }
     multiply(g, half_from_model, refined);
   }
   multiply(refined, to_model, g);

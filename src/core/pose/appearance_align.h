@@ -46,6 +46,15 @@ struct AppearanceFit {
   double ncc_before = 0.0;
   double ncc = 0.0;
   int iterations = 0;  // Gauss-Newton steps over both levels
+  // The correlation of the coarse (half) level's selected pixels with the
+  // frame at its last Gauss-Newton step (coarse_measured: whether it ran).
+  bool coarse_measured = false;
+  double ncc_coarse = 0.0;
+  // No step or only the coarse level's were run: the correlation under the
+  // pose given was below align()'s refuse_below (coarse_measured false), or
+  // it and the coarse level's were both below abandon_below. The pose is
+  // then returned unchanged (aligned false, ncc = ncc_before).
+  bool abandoned = false;
 };
 
 class AppearanceAligner {
@@ -58,7 +67,13 @@ class AppearanceAligner {
   // `frame` (best a lightly blurred frame: the appearance is area-averaged),
   // and keeps the refinement only when it raises the correlation. An
   // appearance larger than reserved is not aligned (measured stays false).
-  AppearanceFit align(const AppearanceImage& appearance, ImageView frame, Homography& h);
+  // The fine level is skipped (AppearanceFit::abandoned) when, after the
+  // coarse level's steps, neither the pose given nor the coarse level
+  // correlates at abandon_below or more, and every step when the pose given
+  // correlates under refuse_below: poses that will be rejected for their
+  // appearance either way (the defaults never abandon).
+  AppearanceFit align(const AppearanceImage& appearance, ImageView frame, Homography& h,
+                      double abandon_below = -2.0, double refuse_below = -2.0);
 
   // Workers (nullptr: none) to sample the frame under the pose with: each
   // pixel's sample is computed on its own, so the fit is the same, bit for
@@ -74,8 +89,11 @@ class AppearanceAligner {
   // Smooths the appearance into full_; false when it cannot be used.
   bool prepare(const AppearanceImage& appearance, ImageView frame);
   // Runs Gauss-Newton on one level; g maps the level's normalised
-  // coordinates to frame pixels and is updated in place.
-  int refine_level(const Level& level, ImageView frame, double g[9]);
+  // coordinates to frame pixels and is updated in place. With `ncc`, the
+  // correlation of the selected pixels with the frame sampled at the last
+  // step (false when no step sampled the frame or it cannot be measured).
+  int refine_level(const Level& level, ImageView frame, double g[9], double* ncc = nullptr,
+                   bool* ncc_measured = nullptr);
   // NCC of the level with the frame under g (AppearanceFit::measured says
   // when it cannot be measured).
   bool correlation(const Level& level, ImageView frame, const double g[9], double& ncc);

@@ -31,6 +31,10 @@ bool outlines_overlap(const Point2f* a, const Point2f* b) {
   return inside_quad(a, centre_of(b)) || inside_quad(b, centre_of(a));
 }
 
+bool outlines_hold_each_other(const Point2f* a, const Point2f* b) {
+  return inside_quad(a, centre_of(b)) && inside_quad(b, centre_of(a));
+}
+
 namespace {
 
 // Difference of appearance correlations that decides between two models

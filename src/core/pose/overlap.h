@@ -10,6 +10,8 @@ namespace kg {
 // Whether two detections' outlines cover the same part of the frame: the
 // centre of either lies inside the other.
 bool outlines_overlap(const Point2f* a, const Point2f* b);
+// Whether each outline's centre lies inside the other (a stricter overlap).
+bool outlines_hold_each_other(const Point2f* a, const Point2f* b);
 
 // Where detections overlap, keeps the best supported one: the clearly
 // better appearance correlation where both have one, else the most inliers,

@@ -37,6 +37,16 @@ bool repeats_instance(const DetectionList& out, int model_id, const Point2f* cor
   return false;
 }
 
+// Whether an instance of `model_id` in `out` and this outline hold each
+// other's centres: a cluster on an instance already found, which
+// repeats_instance() then rejects whatever its alignment does.
+bool holds_an_instance(const DetectionList& out, int model_id, const Point2f* corners) {
+  for (const Detection& d : out) {
+    if (d.model_id == model_id && outlines_hold_each_other(d.corners, corners)) return true;
+  }
+  return false;
+}
+
 // The longest side of an outline, in frame pixels.
 float longest_side(const Point2f* corners) {
   float longest = 0.f;
@@ -241,6 +251,20 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
           : rp.min_verification_z;
   const double align_min_z =
       lowest_z > 0.0 ? kAlignZShare * lowest_z : -std::numeric_limits<double>::infinity();
+  // The lowest appearance an acceptance rule takes: an alignment abandoned
+  // below it (DetectOptions::align_coarse_min_ncc) rejects its cluster.
+  double lowest_appearance = rp.min_appearance;
+  if (can_align && rp.confirmed_min_inliers > 0)
+    lowest_appearance =
+        std::min(lowest_appearance, static_cast<double>(rp.confirmed_min_appearance));
+  if (small_rule)
+    lowest_appearance = std::min(lowest_appearance, static_cast<double>(rp.small_min_appearance));
+  // An abandoned alignment reports the pose's own correlation, counted as
+  // at least 0 (below): with no rule above 0 nothing is abandoned.
+  const double abandon_below =
+      lowest_appearance > 0.0 ? std::min(align_coarse_min_ncc_, lowest_appearance) : -2.0;
+  const double refuse_below =
+      lowest_appearance > 0.0 ? std::min(align_min_ncc_, lowest_appearance) : -2.0;
   // An attempt whose draws found nothing that could make an instance
   // stops early (DetectOptions::ransac_barren_draws): the cap's draws go
   // mostly to models absent from the frame.
@@ -309,6 +333,20 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
       final_score = s;
     }
 
+    // A cluster on an instance of this model already found (the outlines
+    // hold each other's centres) repeats it: rejected either way
+    // (repeats_instance, below), so it is neither refined further nor
+    // aligned (align_coarse_min_ncc -1: judged in full, as before).
+    const bool skip_repeats = align_coarse_min_ncc_ > -1.0;
+    if (skip_repeats && !out.empty()) {
+      Point2f at[4];
+      for (int c = 0; c < 4; ++c) at[c] = kg::apply(refined, info.outline[c]);
+      if (holds_an_instance(out, model_id, at)) {
+        explain_cluster(k);  // the inliers of `refined`
+        continue;
+      }
+    }
+
     // Guided refinement over all model keypoints, then the support that
     // the descriptors gave is recounted under the final pose.
     Support support = guided_refine(index, params, info, frame, refined);
@@ -328,11 +366,15 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
     Point2f corners[4];
     for (int c = 0; c < 4; ++c) corners[c] = kg::apply(refined, info.outline[c]);
     const bool worth_aligning = !small_only || longest_side(corners) <= rp.small_max_size;
-    if (can_align && z >= align_min_z && worth_aligning) {
+    // The same for a pose that the guided refinement brought onto one.
+    const bool repeat = skip_repeats && holds_an_instance(out, model_id, corners);
+    if (can_align && z >= align_min_z && worth_aligning && !repeat) {
       Homography aligned = refined;
       const AppearanceFit fit =
           aligner_.align({stored.pixels, stored.width, stored.height, stored.scale, stored.scale},
-                         frame.image, aligned);
+                         frame.image, aligned, abandon_below, refuse_below);
+      ++align_counts_.aligned;
+      align_counts_.abandoned += fit.abandoned ? 1 : 0;
       if (fit.measured) {
         // The correlation of the pose kept; a negative one counts as none.
         const bool keep = fit.aligned && is_plausible_pose(aligned, info.width, info.height, rp,
@@ -348,22 +390,7 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
     }
     final_score = estimator.score(refined);
 
-    // Distinct scene keypoints among the inliers (a scene point explained
-    // twice counts once).
-    int distinct = 0;
-    {
-      inlier_scene_.clear();
-      for (std::size_t i = 0; i < pair_count; ++i) {
-        if (pair_inlier_[i]) inlier_scene_.push_back(pair_scene_[i]);
-      }
-      std::sort(inlier_scene_.begin(), inlier_scene_.end(),
-                [](Point2f a, Point2f b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
-      for (std::size_t i = 0; i < inlier_scene_.size(); ++i) {
-        if (i == 0 || inlier_scene_[i].x != inlier_scene_[i - 1].x ||
-            inlier_scene_[i].y != inlier_scene_[i - 1].y)
-          ++distinct;
-      }
-    }
+    const int distinct = distinct_inlier_points();
     for (int c = 0; c < 4; ++c) corners[c] = kg::apply(refined, info.outline[c]);
     // Enough keypoint support, and an appearance that does not contradict
     // it; or less support that the appearance confirms.
@@ -409,6 +436,24 @@ int PoseEstimator::estimate(const ModelIndex& index, const Params& params, int m
     explain_cluster(k);
   }
   return iterations;
+}
+
+int PoseEstimator::distinct_inlier_points() {
+  // Distinct scene keypoints among the inliers (a scene point explained
+  // twice counts once).
+  inlier_scene_.clear();
+  for (std::size_t i = 0; i < pair_inlier_.size(); ++i) {
+    if (pair_inlier_[i]) inlier_scene_.push_back(pair_scene_[i]);
+  }
+  std::sort(inlier_scene_.begin(), inlier_scene_.end(),
+            [](Point2f a, Point2f b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
+  int distinct = 0;
+  for (std::size_t i = 0; i < inlier_scene_.size(); ++i) {
+    if (i == 0 || inlier_scene_[i].x != inlier_scene_[i - 1].x ||
+        inlier_scene_[i].y != inlier_scene_[i - 1].y)
+      ++distinct;
+  }
+  return distinct;
 }
 
 void PoseEstimator::explain_cluster(int k) {

@@ -40,6 +40,26 @@ class PoseEstimator {
   // drew could make an instance (DetectOptions::ransac_barren_draws; 0: never).
   void set_barren_draws(int draws) { barren_draws_ = draws; }
 
+  // A cluster's appearance alignment does not start when its pose
+  // correlates under `before`, and stops after its coarse level when
+  // neither its pose nor the coarse fit correlates at `coarse` or more
+  // (each capped at the lowest appearance an acceptance rule takes),
+  // rejecting it (DetectOptions::align_min_ncc, align_coarse_min_ncc; -1:
+  // never). With `coarse` above -1 a cluster on an instance already found
+  // is not refined nor aligned either.
+  void set_align_min_ncc(double before, double coarse) {
+    align_min_ncc_ = before;
+    align_coarse_min_ncc_ = coarse;
+  }
+
+  // Appearance alignments run and abandoned after their coarse level, counted
+  // over every estimate() since the estimator was made.
+  struct AlignCounts {
+    int aligned = 0;
+    int abandoned = 0;
+  };
+  AlignCounts align_counts() const { return align_counts_; }
+
   // Appends the instances of `model_id` found among matches[0..n) (all of
   // that model) to `out`, at most `max_out` in total in `out`. Returns the
   // RANSAC iterations run.
@@ -66,6 +86,8 @@ class PoseEstimator {
   // Removes the matches touching the inlier pairs (pair_inlier_) of the
   // cluster just judged and marks those pairs explained.
   void explain_cluster(int k);
+  // The distinct scene keypoints among the inlier pairs (pair_inlier_).
+  int distinct_inlier_points();
   // Distinct keypoint correspondences and, per keygraph match, its k indices into them.
   WorkVector<std::uint64_t> pairs_;
   WorkVector<Point2f> pair_model_;
@@ -85,6 +107,8 @@ class PoseEstimator {
   WorkVector<Point2f> guided_scene_;
   AppearanceAligner aligner_;
   int barren_draws_ = 0;
+  double align_min_ncc_ = -1.0, align_coarse_min_ncc_ = -1.0;
+  AlignCounts align_counts_;
 };
 
 }  // namespace kg

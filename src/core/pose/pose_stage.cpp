@@ -81,6 +81,7 @@ PoseStage::Result PoseStage::estimate_in_order(const ModelIndex& index, const Pa
   // The pool is free while the models run in order; not afterwards, when
   // this estimator may run a model as a task of the pool.
   pose.set_workers(workers);
+  const PoseEstimator::AlignCounts before = pose.align_counts();
   for (int model = 0; model < index.model_count(); ++model) {
     const std::uint32_t begin = model_begin_[static_cast<std::size_t>(model)];
     const std::uint32_t end = model_begin_[static_cast<std::size_t>(model) + 1];
@@ -95,6 +96,8 @@ PoseStage::Result PoseStage::estimate_in_order(const ModelIndex& index, const Pa
                       scene_points, frame, rng, max_out, out, r.truncated);
   }
   pose.set_workers(nullptr);
+  r.alignments = pose.align_counts().aligned - before.aligned;
+  r.alignments_abandoned = pose.align_counts().abandoned - before.abandoned;
   return r;
 }
 
@@ -104,7 +107,10 @@ PoseStage::Result PoseStage::estimate(const ModelIndex& index, const Params& par
                                       int max_out, WorkerPool* workers,
                                       const Clock::time_point* deadline, DetectionList& out) {
   group(index, matches, n);
-  for (PoseEstimator& e : estimators_) e.set_barren_draws(barren_draws_);
+  for (PoseEstimator& e : estimators_) {
+    e.set_barren_draws(barren_draws_);
+    e.set_align_min_ncc(align_min_ncc_, align_coarse_min_ncc_);
+  }
   const int threads =
       workers == nullptr ? 1 : std::min(workers->threads(), static_cast<int>(found_.size()));
   if (threads <= 1)
@@ -141,9 +147,13 @@ PoseStage::Result PoseStage::estimate(const ModelIndex& index, const Params& par
     t.first = static_cast<std::uint32_t>(list.size());
     t.truncated = false;
     Rng rng = model_rng(params, t.model);
-    t.iterations = estimators_[static_cast<std::size_t>(worker)].estimate(
-        index, params, t.model, grouped_.data() + t.begin, static_cast<int>(t.end - t.begin),
-        scene_points, frame, rng, static_cast<int>(DetectionList::capacity()), list, t.truncated);
+    PoseEstimator& pose = estimators_[static_cast<std::size_t>(worker)];
+    const PoseEstimator::AlignCounts before = pose.align_counts();
+    t.iterations = pose.estimate(index, params, t.model, grouped_.data() + t.begin,
+                                 static_cast<int>(t.end - t.begin), scene_points, frame, rng,
+                                 static_cast<int>(DetectionList::capacity()), list, t.truncated);
+    t.alignments = pose.align_counts().aligned - before.aligned;
+    t.abandoned = pose.align_counts().abandoned - before.abandoned;
     t.last = static_cast<std::uint32_t>(list.size());
   };
   // A thread out of models helps the ones still running with their
@@ -187,6 +197,8 @@ PoseStage::Result PoseStage::estimate(const ModelIndex& index, const Params& par
     }
     r.truncated = r.truncated || t.truncated;
     r.ransac_iterations += t.iterations;
+    r.alignments += t.alignments;
+    r.alignments_abandoned += t.abandoned;
   }
   return r;
 }

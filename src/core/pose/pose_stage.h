@@ -41,10 +41,17 @@ class PoseStage {
 
   // DetectOptions::ransac_barren_draws for the estimations that follow.
   void set_barren_draws(int draws) { barren_draws_ = draws; }
+  // DetectOptions::align_min_ncc and align_coarse_min_ncc for the
+  // estimations that follow.
+  void set_align_min_ncc(double before, double coarse) {
+    align_min_ncc_ = before;
+    align_coarse_min_ncc_ = coarse;
+  }
 
   struct Result {
     int ransac_iterations = 0;
-    bool truncated = false;    // max_out reached
+    int alignments = 0, alignments_abandoned = 0;  // DetectStats'
+    bool truncated = false;                        // max_out reached
     bool out_of_time = false;  // `deadline` passed before every model was estimated
   };
   // Appends the instances found among matches[0..n) (any order of models)
@@ -66,6 +73,7 @@ class PoseStage {
     int worker = 0;
     std::uint32_t first = 0, last = 0;
     int iterations = 0;
+    int alignments = 0, abandoned = 0;
     bool truncated = false;  // its thread's list was full
     bool skipped = false;    // out of time before it started
   };
@@ -86,6 +94,7 @@ class PoseStage {
   WorkVector<PoseEstimator> estimators_;
   WorkVector<DetectionList> found_;
   int barren_draws_ = 0;
+  double align_min_ncc_ = -1.0, align_coarse_min_ncc_ = -1.0;
 };
 
 }  // namespace kg
