@@ -40,7 +40,8 @@ Options truth_options(TruthEvalOptions& o, std::string& out_dir, bool& quiet) {
   declare_eval_settings(options, o.params, o.detector, &o.params_set,
                         "a parameter of keygraph/params.h (with --models), or a runtime option\n"
                         "of the keygraph methods' detectors: min_confidence, time_budget_ms,\n"
-                        "search_arcs_per_leaf, ransac_barren_draws");
+                        "search_arcs_per_leaf, ransac_barren_draws, upsampled_min_confidence,\n"
+                        "upsampled_scene_keypoints");
   options
       .text("-o, --out, --output", "DIR", out_dir,
             "also write the report (tables, pictures) into DIR")
