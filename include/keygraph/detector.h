@@ -140,6 +140,25 @@ struct DetectOptions {
   double align_coarse_min_ncc = kDefaultAlignCoarseMinNcc;
   static constexpr double kDefaultAlignMinNcc = 0.3;
   double align_min_ncc = kDefaultAlignMinNcc;
+  // keypoints.scene_upsample 3 only (the frame, then the frame upsampled
+  // 2x), not stored in the index:
+  // - upsampled_min_confidence: an instance that only the upsampled pass
+  //   found (its outline overlaps no detection of the frame's pass) is
+  //   dropped when its confidence is below this; [0, 1], 0 keeps it as the
+  //   pose stage accepted it. Default 0.7: on the tuning sets the upsampled
+  //   pass's own false detections were near misses of weak support, and
+  //   every right one it alone found had a confidence of 0.75 or more.
+  // - upsampled_scene_keypoints: the upsampled pass samples at most this
+  //   many scene keypoints (the strongest, as Limits::max_scene_keypoints
+  //   does), fewer than the frame's pass may: its search and joins cost in
+  //   proportion and the small instances it is there for keep their
+  //   keypoints. >= 0, 0: Limits::max_scene_keypoints; default 1000.
+  // docs/RESULTS.md, "The small-sign opt-in: its false detections and
+  // cost (issue 38)".
+  static constexpr double kDefaultUpsampledMinConfidence = 0.7;
+  double upsampled_min_confidence = kDefaultUpsampledMinConfidence;
+  static constexpr int kDefaultUpsampledSceneKeypoints = 1000;
+  int upsampled_scene_keypoints = kDefaultUpsampledSceneKeypoints;
   // Detections whose confidence (Detection::confidence, in [0, 1]) is below
   // this are dropped: 0 keeps every detection that passed the checks; 0.5
   // keeps those more likely right than wrong.

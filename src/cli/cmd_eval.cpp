@@ -62,7 +62,8 @@ void declare_eval_settings(Options& options, Params& params, DetectorSettings& d
                 return "--set " + v + ": " + s.message() +
                        " (a parameter of keygraph/params.h, as keygraph inspect lists them, "
                        "or min_confidence, time_budget_ms, search_arcs_per_leaf, "
-                       "ransac_barren_draws, align_min_ncc or align_coarse_min_ncc)";
+                       "ransac_barren_draws, align_min_ncc, align_coarse_min_ncc, "
+                       "upsampled_min_confidence or upsampled_scene_keypoints)";
               detector.options.push_back(v);
               return {};
             }
@@ -105,7 +106,8 @@ namespace {
 const char* const kSetHelp =
     "a parameter of keygraph/params.h, or a runtime option of the keygraph\n"
     "methods' detectors: min_confidence, time_budget_ms, search_arcs_per_leaf,\n"
-    "ransac_barren_draws, align_min_ncc, align_coarse_min_ncc";
+    "ransac_barren_draws, align_min_ncc, align_coarse_min_ncc,\n"
+    "upsampled_min_confidence, upsampled_scene_keypoints";
 
 const char* const kQuietHelp =
     "no progress on stderr (by default one line rewritten in place on a\n"

@@ -37,11 +37,12 @@ Options truth_options(TruthEvalOptions& o, std::string& out_dir, bool& quiet) {
              method_list_option(o.methods, &o.methods_set), methods)
       .number("--tolerance", "PX", o.tolerance, 0, 1e6, true,
               "a detection is correct when every corner is within PX pixels");
-  declare_eval_settings(options, o.params, o.detector, &o.params_set,
-                        "a parameter of keygraph/params.h (with --models), or a runtime option\n"
-                        "of the keygraph methods' detectors: min_confidence, time_budget_ms,\n"
-                        "search_arcs_per_leaf, ransac_barren_draws, align_min_ncc,\n"
-                        "align_coarse_min_ncc");
+  declare_eval_settings(
+      options, o.params, o.detector, &o.params_set,
+      "a parameter of keygraph/params.h (with --models), or a runtime option\n"
+      "of the keygraph methods' detectors: min_confidence, time_budget_ms,\n"
+      "search_arcs_per_leaf, ransac_barren_draws, align_min_ncc,\n"
+      "align_coarse_min_ncc, upsampled_min_confidence, upsampled_scene_keypoints");
   options
       .text("-o, --out, --output", "DIR", out_dir,
             "also write the report (tables, pictures) into DIR")

@@ -36,7 +36,8 @@ Options video_options(VideoEvalOptions& o, bool& json, bool& quiet) {
   declare_eval_settings(options, o.params, o.detector, &o.params_set,
                         "a parameter of keygraph/params.h (with --models), or a runtime option\n"
                         "of the detectors: min_confidence, time_budget_ms, search_arcs_per_leaf,\n"
-                        "ransac_barren_draws, align_min_ncc, align_coarse_min_ncc");
+                        "ransac_barren_draws, align_min_ncc, align_coarse_min_ncc,\n"
+                        "upsampled_min_confidence, upsampled_scene_keypoints");
   options.flag("--json", json, "the scores as one JSON object instead of the table")
       .flag("-q, --quiet", quiet,
             "no progress on stderr (by default one line rewritten in place on a\n"

@@ -64,14 +64,17 @@ DetectOptions DetectOptions::from(const ModelIndex& index) {
 }
 
 Status set_detect_option(DetectOptions& options, std::string_view name, std::string_view value) {
-  if (name == "search_arcs_per_leaf" || name == "ransac_barren_draws") {
+  if (name == "search_arcs_per_leaf" || name == "ransac_barren_draws" ||
+      name == "upsampled_scene_keypoints") {
     const std::string text(value);
     char* end = nullptr;
     const long v = std::strtol(text.c_str(), &end, 10);
     if (text.empty() || end != text.c_str() + text.size() || v < 0 || v > 1 << 20)
       return {StatusCode::kInvalidArgument, "bad value '" + text + "' for " + std::string(name)};
-    (name == "search_arcs_per_leaf" ? options.search_arcs_per_leaf : options.ransac_barren_draws) =
-        static_cast<int>(v);
+    int& field = name == "search_arcs_per_leaf"  ? options.search_arcs_per_leaf
+                 : name == "ransac_barren_draws" ? options.ransac_barren_draws
+                                                 : options.upsampled_scene_keypoints;
+    field = static_cast<int>(v);
     return Status::ok();
   }
   if (name == "align_coarse_min_ncc" || name == "align_min_ncc") {
@@ -84,13 +87,16 @@ Status set_detect_option(DetectOptions& options, std::string_view name, std::str
     (name == "align_min_ncc" ? options.align_min_ncc : options.align_coarse_min_ncc) = v;
     return Status::ok();
   }
-  if (name == "min_confidence" || name == "time_budget_ms") {
+  if (name == "min_confidence" || name == "time_budget_ms" || name == "upsampled_min_confidence") {
     const std::string text(value);
     char* end = nullptr;
     const double v = std::strtod(text.c_str(), &end);
     if (text.empty() || end != text.c_str() + text.size())
       return {StatusCode::kInvalidArgument, "bad value '" + text + "' for " + std::string(name)};
-    (name == "min_confidence" ? options.min_confidence : options.time_budget_ms) = v;
+    double& field = name == "min_confidence"   ? options.min_confidence
+                    : name == "time_budget_ms" ? options.time_budget_ms
+                                               : options.upsampled_min_confidence;
+    field = v;
     return Status::ok();
   }
   if (!is_detect_option(name)) {
@@ -123,6 +129,8 @@ std::vector<std::string> detect_option_names() {
   names.emplace_back("align_min_ncc");
   names.emplace_back("min_confidence");
   names.emplace_back("time_budget_ms");
+  names.emplace_back("upsampled_min_confidence");
+  names.emplace_back("upsampled_scene_keypoints");
   return names;
 }
 

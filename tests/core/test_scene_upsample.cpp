@@ -3,6 +3,7 @@
 // to frame pixels within a few pixels of an independent reference.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -200,6 +201,99 @@ TEST_F(SceneUpsample, BothPassesKeepOneDetectionPerInstance) {
     EXPECT_LT(test::max_corner_error(found[0], scene.truth, both_->index.model(0)), 3.0)
         << "scale " << scale;
   }
+}
+
+// scene_upsample 3's floor on instances only the upsampled pass found
+// (DetectOptions::upsampled_min_confidence, issue 38): the box at 0.35,
+// which only the upsampled pass finds, goes when the floor is above its
+// confidence and stays at the default; the box at 0.6, which the frame's
+// pass finds too, stays whatever the floor (merge() judges it).
+TEST_F(SceneUpsample, WeakUpsampledOnlyInstancesAreDropped) {
+  DetectOptions options = DetectOptions::from(both_->index);
+  EXPECT_EQ(options.upsampled_min_confidence, DetectOptions::kDefaultUpsampledMinConfidence);
+  for (const double scale : {0.35, 0.6}) {
+    const test::ScaledScene scene = test::scaled_box_scene(*box_, scale);
+    ASSERT_FALSE(scene.image.empty());
+    const Limits limits = Limits{}.for_frame(scene.image.cols, scene.image.rows);
+    DetectionList found;
+    Detector plain(off_->index, limits);
+    ASSERT_TRUE(plain.detect(test::view(scene.image), found).is_ok());
+    const bool frame_pass_finds = !found.empty();
+    EXPECT_EQ(frame_pass_finds, scale > 0.5) << "scale " << scale;
+    options.upsampled_min_confidence = DetectOptions::kDefaultUpsampledMinConfidence;
+    Detector both(both_->index, limits, options);
+    ASSERT_TRUE(both.detect(test::view(scene.image), found).is_ok());
+    ASSERT_EQ(found.size(), 1u) << "scale " << scale;
+    EXPECT_LT(test::max_corner_error(found[0], scene.truth, both_->index.model(0)), 3.0);
+    const double confidence = found[0].confidence;
+    std::printf("box at %.2f: confidence %.3f (%s)\n", scale, confidence,
+                frame_pass_finds ? "both passes" : "upsampled pass only");
+    EXPECT_GE(confidence, DetectOptions::kDefaultUpsampledMinConfidence);
+    // A floor above it: gone when only the upsampled pass found it.
+    options.upsampled_min_confidence = std::min(1.0, confidence + 1e-6);
+    ASSERT_TRUE(both.set_options(options));
+    ASSERT_TRUE(both.detect(test::view(scene.image), found).is_ok());
+    EXPECT_EQ(found.size(), frame_pass_finds ? 1u : 0u) << "scale " << scale;
+    // Off (0): as the pose stage accepted it.
+    options.upsampled_min_confidence = 0.0;
+    ASSERT_TRUE(both.set_options(options));
+    ASSERT_TRUE(both.detect(test::view(scene.image), found).is_ok());
+    EXPECT_EQ(found.size(), 1u) << "scale " << scale;
+  }
+  // Out of [0, 1], or not a number: refused.
+  Detector detector(both_->index);
+  for (const double bad : {-0.1, 1.5, std::nan("")}) {
+    options.upsampled_min_confidence = bad;
+    EXPECT_FALSE(detector.set_options(options)) << bad;
+  }
+  DetectOptions named;
+  EXPECT_TRUE(set_detect_option(named, "upsampled_min_confidence", "0.5"));
+  EXPECT_EQ(named.upsampled_min_confidence, 0.5);
+  EXPECT_FALSE(set_detect_option(named, "upsampled_min_confidence", "high"));
+}
+
+// DetectOptions::upsampled_scene_keypoints: scene_upsample 3's upsampled
+// pass samples at most that many keypoints (stats() describe that pass),
+// the strongest, and the frame's pass is untouched. On box_in_scene (the
+// box at its own size, 324x223, upsampled 648x446) the upsampled pass
+// samples over 600 keypoints; cut to 300 it still finds the box where the
+// frame's pass does, and the whole pass at 0 (no cut) does too.
+TEST_F(SceneUpsample, UpsampledSceneKeypointsCutTheSecondPassOnly) {
+  const cv::Mat scene = test::load_gray(test::opencv_data("box_in_scene.png"));
+  ASSERT_FALSE(scene.empty());
+  const Limits limits = Limits{}.for_frame(scene.cols, scene.rows);
+  DetectOptions options = DetectOptions::from(both_->index);
+  EXPECT_EQ(options.upsampled_scene_keypoints, DetectOptions::kDefaultUpsampledSceneKeypoints);
+  options.upsampled_scene_keypoints = 0;
+  Detector whole(both_->index, limits, options);
+  options.upsampled_scene_keypoints = 300;
+  Detector cut(both_->index, limits, options);
+  ASSERT_TRUE(whole.status() && cut.status());
+  DetectionList a, b;
+  ASSERT_TRUE(whole.detect(test::view(scene), a).is_ok());
+  ASSERT_TRUE(cut.detect(test::view(scene), b).is_ok());
+  const int all = whole.stats().sampled_keypoints, kept = cut.stats().sampled_keypoints;
+  std::printf(
+      "box_in_scene upsampled: %d sampled keypoints, %d with the cut; arc matches %lld -> "
+      "%lld\n",
+      all, kept, whole.stats().arc_matches, cut.stats().arc_matches);
+  EXPECT_GT(all, 600);
+  EXPECT_EQ(kept, 300);
+  EXPECT_LT(cut.stats().arc_matches, whole.stats().arc_matches);
+  ASSERT_EQ(a.size(), 1u);
+  ASSERT_EQ(b.size(), 1u);
+  EXPECT_EQ(b[0].model_id, 0);
+  // The mode-1 index's detector gives the frame's pass alone: the box there.
+  DetectionList plain_found;
+  Detector plain(off_->index, limits);
+  ASSERT_TRUE(plain.detect(test::view(scene), plain_found).is_ok());
+  ASSERT_EQ(plain_found.size(), 1u);
+  EXPECT_LT(test::max_corner_error(b[0], plain_found[0].homography, off_->index.model(0)), 3.0);
+  options.upsampled_scene_keypoints = -1;
+  EXPECT_FALSE(cut.set_options(options));
+  DetectOptions named;
+  EXPECT_TRUE(set_detect_option(named, "upsampled_scene_keypoints", "800"));
+  EXPECT_EQ(named.upsampled_scene_keypoints, 800);
 }
 
 // Both passes together keep to Limits::max_detections: two boxes side by

@@ -188,6 +188,13 @@ Status FramePipeline::check_options(const ModelIndex& index, const DetectOptions
   if (!(options.align_min_ncc >= -1.0 && options.align_min_ncc <= 1.0))
     return {StatusCode::kInvalidArgument,
             "detect options: align_min_ncc must be in [-1, 1] (-1: never)"};
+  if (!(options.upsampled_min_confidence >= 0.0 && options.upsampled_min_confidence <= 1.0))
+    return {StatusCode::kInvalidArgument,
+            "detect options: upsampled_min_confidence must be in [0, 1]"};
+  if (!(options.upsampled_scene_keypoints >= 0))
+    return {StatusCode::kInvalidArgument,
+            "detect options: upsampled_scene_keypoints must be >= 0 (0: "
+            "Limits::max_scene_keypoints)"};
   if (options.models == nullptr && options.model_count > 0)
     return {StatusCode::kInvalidArgument, "detect options: model_count without models"};
   for (std::size_t i = 0; options.models != nullptr && i < options.model_count; ++i) {
@@ -254,9 +261,14 @@ Status FramePipeline::detect(ImageView frame, DetectionList& out) {
   } else if (mode >= 2 && mode != 4 && s && !out_of_time("keypoints")) {
     DetectionList& up = mode == 3 ? upsampled_found_ : out;
     up.clear();
+    second_pass_ = mode == 3;
     s = detect_keypoints_and_run(work_frame(frame), up);
+    second_pass_ = false;
     map_to_frame(up);
-    if (mode == 3) merge(up, out);
+    if (mode == 3) {
+      drop_weak_upsampled_only(out, up);
+      merge(up, out);
+    }
   }
   apply_confidence_floor(out);
   return s;
@@ -290,11 +302,16 @@ Status FramePipeline::detect(ImageView frame, const Keypoint* keypoints, int cou
   const bool truncated = count < given;
   DetectionList& up = mode == 3 ? upsampled_found_ : out;
   up.clear();
+  second_pass_ = mode == 3;
   const Status s = run(work, keypoints, count, vertex_descriptors, up, start);
+  second_pass_ = false;
   stats_.keypoints = given;
   stats_.truncated_keypoints |= truncated;
   map_to_frame(up);
-  if (mode == 3) merge(up, out);
+  if (mode == 3) {
+    drop_weak_upsampled_only(out, up);
+    merge(up, out);
+  }
   apply_confidence_floor(out);
   return s;
 }
@@ -394,6 +411,11 @@ void FramePipeline::sample(const Keypoint* keypoints, int count, const std::uint
     stats_.truncated_keypoints = true;
     selected_.resize(static_cast<std::size_t>(limits_.max_scene_keypoints));
   }
+  // scene_upsample 3's upsampled pass keeps fewer (the strongest: the
+  // sampler visits them strongest first), by option, not as a limit.
+  const int second_most = options_.upsampled_scene_keypoints;
+  if (second_pass_ && second_most > 0 && static_cast<int>(selected_.size()) > second_most)
+    selected_.resize(static_cast<std::size_t>(second_most));
   scene_keypoints_.clear();
   scene_points_.clear();
   scene_scales_.clear();

@@ -94,6 +94,10 @@ class FramePipeline {
   void upsample_keypoints(const Keypoint*& keypoints, int& count, const std::uint8_t*& descriptors);
   void map_to_frame(DetectionList& out);
   void merge(const DetectionList& more, DetectionList& out);
+  // scene_upsample 3: drops from `up` the detections that overlap none of
+  // the frame pass's (`frame_found`) and fall below
+  // DetectOptions::upsampled_min_confidence.
+  void drop_weak_upsampled_only(const DetectionList& frame_found, DetectionList& up) const;
   // scene_upsample 4: after the frame's pass, the frame upsampled 2x around
   // the densest cluster of correspondences of models left without a pose.
   Status upsample_where_it_pays(ImageView frame, DetectionList& out);
@@ -110,6 +114,9 @@ class FramePipeline {
   ArcSearch search_;
   WorkVector<std::uint8_t> model_searched_;  // per model: 1 when searched
   bool filter_models_ = false;               // DetectOptions::models was given
+  // scene_upsample 3: the upsampled pass is running (its sampled keypoints
+  // are cut to DetectOptions::upsampled_scene_keypoints).
+  bool second_pass_ = false;
 
   Plane<std::uint8_t> upsampled_;  // the frame, with scene_upsample 2 or 3
   DetectionList upsampled_found_;  // the upsampled pass's, with scene_upsample 3

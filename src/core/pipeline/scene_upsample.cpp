@@ -9,6 +9,7 @@
 #include "core/image/upsample.h"
 #include "core/pipeline/frame_pipeline.h"
 #include "core/pose/confidence.h"
+#include "core/pose/overlap.h"
 
 namespace kg {
 
@@ -73,6 +74,24 @@ void FramePipeline::merge(const DetectionList& more, DetectionList& out) {
     out.truncate(out.size() - 1);
     stats_.truncated_detections = true;
   }
+}
+
+void FramePipeline::drop_weak_upsampled_only(const DetectionList& frame_found,
+                                             DetectionList& up) const {
+  // An instance the frame's pass found too goes to merge(), which keeps
+  // the better of the two; one the upsampled frame alone shows has only
+  // that pass's support, which a confidence floor checks (its false
+  // detections on the tuning sets were near misses of weak support).
+  const double least = options_.upsampled_min_confidence;
+  if (!(least > 0.0)) return;
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < up.size(); ++i) {
+    bool seen = false;
+    for (const Detection& d : frame_found)
+      seen = seen || outlines_overlap(d.corners, up[i].corners);
+    if (seen || up[i].confidence >= least) up[kept++] = up[i];
+  }
+  up.truncate(kept);
 }
 
 namespace {
