@@ -165,14 +165,25 @@ Params with_encoding(DescriptorEncoding e, Params p = paper_params()) {
   return p;
 }
 
+// What the format tests share, built once per process and only by the
+// tests that use it (ctest runs each test in a process of its own, 43 of
+// them ModelIndexTest's): the two models and their index in every test,
+// the index in each encoding and the small corpus where a test asks for
+// them.
 struct Corpus {
   std::string error;
   Params params = paper_params();
   std::vector<BuiltModel> models;  // box.png, a 200x200 crop of graf1.png
   Bytes bytes;                     // serialize_index(models, params): the default encoding
-  Bytes encoded[3];                // the same in each encoding (index: DescriptorEncoding)
-  // Two small crops (box.png, graf1.png) with their measured quality
-  // report: for the bit-flip sweep.
+};
+struct EncodedCorpus {
+  std::string error;
+  Bytes encoded[3];  // corpus()'s models in each encoding (index: DescriptorEncoding)
+};
+// Two small crops (box.png, graf1.png) with their measured quality
+// report: for the bit-flip sweep.
+struct SmallCorpus {
+  std::string error;
   Bytes small;
   Bytes small_encoded[3];  // the same in each encoding
   QualityReport small_quality;
@@ -199,11 +210,34 @@ const Corpus& corpus() {
       const Status s = serialize_index(k.models, k.params, k.bytes);
       if (!s) k.error = s.message();
     }
+    return k;
+  }();
+  return c;
+}
+
+const EncodedCorpus& encoded_corpus() {
+  static const EncodedCorpus c = [] {
+    EncodedCorpus k;
+    k.error = corpus().error;
     for (DescriptorEncoding e : kEncodings) {
       if (!k.error.empty()) break;
-      const Status s = serialize_index(k.models, with_encoding(e), k.encoded[static_cast<int>(e)]);
+      const Status s =
+          serialize_index(corpus().models, with_encoding(e), k.encoded[static_cast<int>(e)]);
       if (!s) k.error = s.message();
     }
+    return k;
+  }();
+  EXPECT_TRUE(c.error.empty()) << c.error;
+  return c;
+}
+
+const SmallCorpus& small_corpus() {
+  static const SmallCorpus c = [] {
+    SmallCorpus k;
+    const cv::Mat box = test::load_gray(test::opencv_data("box.png"));
+    const cv::Mat graf = test::load_gray(test::opencv_data("graf1.png"));
+    if (box.empty() || graf.empty()) k.error = "box.png or graf1.png missing (install opencv-doc)";
+    const Params params = paper_params();
     // Small enough that thousands of full validations stay fast under ASan.
     std::vector<BuiltModel> small(2);
     if (k.error.empty())
@@ -214,8 +248,8 @@ const Corpus& corpus() {
       const std::vector<cv::Mat> grays = {box(cv::Rect(100, 50, 96, 96)).clone(),
                                           graf(cv::Rect(350, 250, 80, 80)).clone()};
       k.small_models = small;
-      Status s = measure_quality(small, grays, k.params, QualityOptions{}, k.small_quality);
-      if (s) s = serialize_index(small, k.params, k.small, &k.small_quality);
+      Status s = measure_quality(small, grays, params, QualityOptions{}, k.small_quality);
+      if (s) s = serialize_index(small, params, k.small, &k.small_quality);
       if (!s) k.error = s.message();
     }
     for (DescriptorEncoding e : kEncodings) {
@@ -226,6 +260,7 @@ const Corpus& corpus() {
     }
     return k;
   }();
+  EXPECT_TRUE(c.error.empty()) << c.error;
   return c;
 }
 
@@ -238,7 +273,9 @@ class ModelIndexTest : public ::testing::Test {
   }
   const std::vector<BuiltModel>& models() const { return corpus().models; }
   const Bytes& bytes() const { return corpus().bytes; }
-  const Bytes& encoded(DescriptorEncoding e) const { return corpus().encoded[static_cast<int>(e)]; }
+  const Bytes& encoded(DescriptorEncoding e) const {
+    return encoded_corpus().encoded[static_cast<int>(e)];
+  }
 };
 
 // Writes `p`'s parameter block over the index's (serialize_params does not
@@ -929,7 +966,7 @@ TEST_F(ModelIndexTest, OpenRejectsDirectory) {
 // view() of a valid index allocates nothing, whatever its size or encoding;
 // open() maps, so its allocations do not grow with the file either.
 TEST_F(ModelIndexTest, ViewAllocatesNothing) {
-  std::vector<const Bytes*> all = {&bytes(), &corpus().small};
+  std::vector<const Bytes*> all = {&bytes(), &small_corpus().small};
   for (DescriptorEncoding e : kEncodings) all.push_back(&encoded(e));
   if (sift_corpus().error.empty()) all.push_back(&sift_corpus().bytes);
   for (const Bytes* b : all) {
@@ -954,7 +991,7 @@ TEST_F(ModelIndexTest, ViewAllocatesNothing) {
   TempDir dir;
   ASSERT_FALSE(dir.path().empty());
   long opened[2] = {0, 0};
-  const Bytes* files[2] = {&corpus().small, &bytes()};
+  const Bytes* files[2] = {&small_corpus().small, &bytes()};
   for (int i = 0; i < 2; ++i) {
     const std::string path = (dir.path() / ("f" + std::to_string(i) + ".kgi")).string();
     write_file(path, *files[i]);
@@ -2034,7 +2071,7 @@ TEST_F(ModelIndexTest, RejectsUnalignedOrNullBuffer) {
 TEST_F(ModelIndexTest, BitFlipSweep) {
   for (DescriptorEncoding e : kEncodings) {
     SCOPED_TRACE(encoding_name(e));
-    const Bytes& good = corpus().small_encoded[static_cast<int>(e)];
+    const Bytes& good = small_corpus().small_encoded[static_cast<int>(e)];
     const std::size_t n = good.size();
     std::vector<bool> covered(n, false);
     for (std::size_t i = 0; i < table_end(good); ++i) covered[i] = true;
@@ -2103,7 +2140,7 @@ TEST_F(ModelIndexTest, ResealedMutationsAreRejectedOrHarmless) {
   };
   for (DescriptorEncoding e : kEncodings) {
     SCOPED_TRACE(encoding_name(e));
-    const Bytes& good = corpus().small_encoded[static_cast<int>(e)];
+    const Bytes& good = small_corpus().small_encoded[static_cast<int>(e)];
     int rejected_count = 0, loaded = 0, detected = 0;
     for (int k = 0; k < 1500; ++k) {
       Bytes b = good;
@@ -2163,10 +2200,10 @@ TEST_F(ModelIndexTest, QualityReportRoundTrips) {
     EXPECT_EQ(index.view_quality_count(), 0u);
     EXPECT_EQ(index.look_alike_count(), 0u);
   }
-  const QualityReport& q = corpus().small_quality;
-  const std::vector<BuiltModel>& small = corpus().small_models;
+  const QualityReport& q = small_corpus().small_quality;
+  const std::vector<BuiltModel>& small = small_corpus().small_models;
   ASSERT_EQ(q.models.size(), 2u);
-  AlignedBytes buffer(corpus().small);
+  AlignedBytes buffer(small_corpus().small);
   ModelIndex index;
   const Status s = ModelIndex::view(buffer.data(), buffer.size(), index);
   ASSERT_TRUE(s) << s.message();
@@ -2234,10 +2271,10 @@ TEST(ModelIndexLargerViews, RecordsAndLoadsViewsUpToMaxScale) {
 // The small corpus with look-alike pairs written in (the writer takes any
 // valid report), so that the look-alikes section has bytes to damage.
 Bytes with_look_alikes(const std::vector<LookAlike>& pairs) {
-  QualityReport q = corpus().small_quality;
+  QualityReport q = small_corpus().small_quality;
   q.look_alikes = pairs;
   Bytes b;
-  EXPECT_TRUE(serialize_index(corpus().small_models, corpus().params, b, &q));
+  EXPECT_TRUE(serialize_index(small_corpus().small_models, corpus().params, b, &q));
   return b;
 }
 
@@ -2350,17 +2387,17 @@ TEST_F(ModelIndexTest, RejectsBadQualitySections) {
 }
 
 TEST_F(ModelIndexTest, SerializeRejectsBadQualityReport) {
-  const std::vector<BuiltModel>& small = corpus().small_models;
+  const std::vector<BuiltModel>& small = small_corpus().small_models;
   Bytes b;
-  QualityReport q = corpus().small_quality;
+  QualityReport q = small_corpus().small_quality;
   q.models.pop_back();
   EXPECT_FALSE(serialize_index(small, corpus().params, b, &q));
-  q = corpus().small_quality;
+  q = small_corpus().small_quality;
   q.look_alikes = {{1, 1}};
   EXPECT_FALSE(serialize_index(small, corpus().params, b, &q));
   q.look_alikes = {{1, 0}, {0, 1}};  // not sorted
   EXPECT_FALSE(serialize_index(small, corpus().params, b, &q));
-  q = corpus().small_quality;
+  q = small_corpus().small_quality;
   q.views.pop_back();
   EXPECT_FALSE(serialize_index(small, corpus().params, b, &q));
 }
