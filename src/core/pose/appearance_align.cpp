@@ -557,6 +557,29 @@ void warp_pixels(const WarpGrid& grid, ImageView frame, const std::uint32_t* pix
   }
 }
 
+// Sums of the plain correlation of appearance samples t with the warped
+// frame's samples s; one place for the pose's score and the coarse level's.
+struct CorrelationSums {
+  double n = 0, st = 0, si = 0, stt = 0, sii = 0, sti = 0;
+  void add(double t, double s) {
+    n += 1;
+    st += t;
+    si += s;
+    stt += t * t;
+    sii += s * s;
+    sti += t * s;
+  }
+  // False with fewer than min_samples samples, a flat appearance (nothing
+  // to compare) or a non-finite result; a flat frame correlates 0.
+  bool ncc(double min_samples, double& out) const {
+    if (n < min_samples) return false;
+    const double vt = stt - st * st / n, vi = sii - si * si / n;
+    if (!(vt > kMinVariance * n)) return false;
+    out = vi > kMinVariance * n ? (sti - st * si / n) / std::sqrt(vt * vi) : 0.0;
+    return std::isfinite(out);
+  }
+};
+
 }  // namespace
 
 AppearanceAligner::AppearanceAligner(std::pmr::memory_resource* memory)
@@ -634,24 +657,12 @@ bool AppearanceAligner::correlation(const Level& level, ImageView frame, const d
     for (int u = 1; u + 1 < w; ++u) interior_.push_back(static_cast<std::uint32_t>(v * w + u));
   if (interior_.size() < kMinScorePixels) return false;
   warp_level(level, frame, g, interior_.data(), interior_.size());
-  double n = 0, st = 0, si = 0, stt = 0, sii = 0, sti = 0;
-  for (const std::uint32_t i : interior_) {
-    if (!valid_[i]) continue;
-    const double t = level.values[i], s = warped_[i];
-    n += 1;
-    st += t;
-    si += s;
-    stt += t * t;
-    sii += s * s;
-    sti += t * s;
-  }
-  if (n < kMinInside * static_cast<double>(interior_.size())) return false;
-  const double vt = stt - st * st / n, vi = sii - si * si / n;
+  CorrelationSums sums;
+  for (const std::uint32_t i : interior_)
+    if (valid_[i]) sums.add(level.values[i], warped_[i]);
   // A flat appearance cannot be compared with anything; a flat frame where
   // the model should be is no match.
-  if (!(vt > kMinVariance * n)) return false;
-  ncc = vi > kMinVariance * n ? (sti - st * si / n) / std::sqrt(vt * vi) : 0.0;
-  return std::isfinite(ncc);
+  return sums.ncc(kMinInside * static_cast<double>(interior_.size()), ncc);
 }
 
 double AppearanceAligner::footprint(const Level& level, const double g[9]) {
@@ -844,24 +855,10 @@ int AppearanceAligner::refine_level(const Level& level, ImageView frame, double 
   if (ncc != nullptr && ncc_measured != nullptr && sampled) {
     // The last step's samples (before its update: under kConverged of a
     // level pixel away once converged), plain correlation.
-    double count = 0, st = 0, si = 0, stt = 0, sii = 0, sti = 0;
-    for (const std::uint32_t i : selected_) {
-      if (!valid_[i]) continue;
-      const double tv = t[i], s = warped_[i];
-      count += 1;
-      st += tv;
-      si += s;
-      stt += tv * tv;
-      sii += s * s;
-      sti += tv * s;
-    }
-    if (count >= kMinInside * static_cast<double>(n)) {
-      const double vt = stt - st * st / count, vi = sii - si * si / count;
-      if (vt > kMinVariance * count) {
-        *ncc = vi > kMinVariance * count ? (sti - st * si / count) / std::sqrt(vt * vi) : 0.0;
-        *ncc_measured = std::isfinite(*ncc);
-      }
-    }
+    CorrelationSums sums;
+    for (const std::uint32_t i : selected_)
+      if (valid_[i]) sums.add(t[i], warped_[i]);
+    *ncc_measured = sums.ncc(kMinInside * static_cast<double>(n), *ncc);
   }
   return iterations;
 }
