@@ -17,9 +17,17 @@
 
 usage: cli_eval_video.py KEYGRAPH OPENCV_DATA_DIR [KG_DATA_DIR] [sanitized]
   sanitized (a sanitizer build, where evaluating the 300 frames takes
-  minutes): the table, the same scores as the JSON as text, is printed for
-  24 frames of the sequence (around the end of the approach and the start of
-  the pans: two parts) instead of all 300 again; every check runs
+  minutes): the JSON run scores 56 frames of the sequence (frames 185-240:
+  the end of the occlusion and the sign leaving the frame and coming back)
+  instead of all 300, with the checks that hold for any stretch of it (the
+  counts, the parts, one id, the sign let go within 2 frames, tracking
+  finding it more often than detection alone, no more wrong detections);
+  the proportions measured over the whole sequence (tracking finds the sign
+  in 82 % of its frames, the blurred pans) are checked in the ci suite.
+  The table, the same scores as the JSON as text, is printed for 24 frames
+  (around the end of the approach and the start of the pans: two more
+  parts) instead of all 300 again. The real poster video and the bad input
+  run as in the ci suite.
 """
 import json
 import os
@@ -90,31 +98,58 @@ with tempfile.TemporaryDirectory(prefix="kg_eval_video.") as work:
     check(without >= 5, "frames without it (left the frame, covered): %d" % without)
     check(len(os.listdir(os.path.join(seq, "signs"))) == 3, "3 models")
 
-    r = run("eval", "--video", os.path.join(seq, "video.jsonl"), "--models",
-            os.path.join(seq, "signs"), "--json", "-q")
+    # The JSON run: the whole sequence, or under the sanitizers an excerpt
+    # with the sign leaving the frame and coming back.
+    json_manifest, json_frames, json_with = os.path.join(seq, "video.jsonl"), frames, with_sign
+    if SANITIZED:
+        json_manifest = os.path.join(seq, "leave.jsonl")
+        excerpt(os.path.join(seq, "video.jsonl"), json_manifest, 185, 240)
+        json_frames = frames[185:241]
+        json_with = sum(1 for f in json_frames if f.get("instances"))
+        check(sum(1 for f in json_frames if "instances" in f and not f["instances"]) >= 5,
+              "the excerpt has frames without the sign")
+    n = len(json_frames)
+    r = run("eval", "--video", json_manifest, "--models", os.path.join(seq, "signs"), "--json",
+            "-q")
     check(r.returncode == 0, "eval --video: " + r.stderr)
     if r.returncode == 0:
         s = json.loads(r.stdout)
         m = modes(s)
         t, d = m["tracking"], m["detection alone"]
         print("tracking:", t, "\ndetection alone:", d)
-        check(s["frames"] == 300 and s["with_object"] == with_sign, "counts " + r.stdout)
-        check(t["instances"] == with_sign and d["instances"] == with_sign, "instances scored")
-        # (measured when written: 228 and 195 of 257, 228 within 5 px, 198
-        # frames tracked and 102 detected, the pans 53 and 34 of 60)
-        check(t["found"] >= 0.82 * with_sign, "tracking finds the sign: %d" % t["found"])
-        check(t["found"] >= d["found"] + 0.06 * with_sign,
-              "tracking finds it clearly more often than detection alone: %d, %d"
-              % (t["found"], d["found"]))
-        check(t["found_fine"] >= 0.8 * with_sign, "within 5 px: %d" % t["found_fine"])
-        check(t["frames_tracked"] >= 1.5 * t["frames_detected"], "mostly tracked frames")
+        check(s["frames"] == n and s["with_object"] == json_with, "counts " + r.stdout)
+        check(t["instances"] == json_with and d["instances"] == json_with, "instances scored")
         tp = {p["part"]: p for p in t["parts"]}
         dp = {p["part"]: p for p in d["parts"]}
-        check(sorted(tp) == ["approach", "leave", "occlusion", "pans", "turns"], "the parts")
-        if "pans" in tp and "pans" in dp:
-            check(tp["pans"]["found"] >= dp["pans"]["found"] + 10,
-                  "the blurred pans: %d, %d" % (tp["pans"]["found"], dp["pans"]["found"]))
-        check(d["frames_tracked"] == 0 and d["frames_detected"] == 300, "detection alone")
+        if not SANITIZED:
+            # (measured when written: 228 and 195 of 257, 228 within 5 px, 198
+            # frames tracked and 102 detected, the pans 53 and 34 of 60)
+            check(t["found"] >= 0.82 * with_sign, "tracking finds the sign: %d" % t["found"])
+            check(t["found"] >= d["found"] + 0.06 * with_sign,
+                  "tracking finds it clearly more often than detection alone: %d, %d"
+                  % (t["found"], d["found"]))
+            check(t["found_fine"] >= 0.8 * with_sign, "within 5 px: %d" % t["found_fine"])
+            check(t["frames_tracked"] >= 1.5 * t["frames_detected"], "mostly tracked frames")
+            check(sorted(tp) == ["approach", "leave", "occlusion", "pans", "turns"], "the parts")
+            if "pans" in tp and "pans" in dp:
+                check(tp["pans"]["found"] >= dp["pans"]["found"] + 10,
+                      "the blurred pans: %d, %d" % (tp["pans"]["found"], dp["pans"]["found"]))
+        else:
+            # (measured when written: 22 and 18 of 24 in the sanitize build,
+            # 23 and 16 of 25 in the ci build, whose generated frames differ a
+            # little; 20 frames tracked and 36 detected in both; the sign
+            # leaving: 9 and 5 of 11, 10 and 3 of 12)
+            check(t["found"] >= 0.8 * json_with, "tracking finds the sign: %d" % t["found"])
+            check(t["found"] >= d["found"] + 2,
+                  "tracking finds it more often than detection alone: %d, %d"
+                  % (t["found"], d["found"]))
+            check(t["found_fine"] >= 0.8 * json_with, "within 5 px: %d" % t["found_fine"])
+            check(t["frames_tracked"] >= 10, "tracked frames: %d" % t["frames_tracked"])
+            check(sorted(tp) == ["leave", "occlusion"], "the parts of the excerpt")
+            if "leave" in tp and "leave" in dp:
+                check(tp["leave"]["found"] >= dp["leave"]["found"] + 2,
+                      "the sign leaving: %d, %d" % (tp["leave"]["found"], dp["leave"]["found"]))
+        check(d["frames_tracked"] == 0 and d["frames_detected"] == n, "detection alone")
         check(t["id_switches"] == 0, "no id switch")
         check(t["drop_events"] >= 1 and t["drop_frames_max"] <= 2,
               "lets go within 2 frames: %d" % t["drop_frames_max"])

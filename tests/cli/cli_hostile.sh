@@ -16,7 +16,16 @@
 # The device-node case (row 8) and the permission case (row 14) need root
 # (mknod, and setpriv to run as nobody); without root they are reported as
 # SKIPPED, never silently passed.
+#
+# KG_SANITIZED=1 in the environment (the sanitize preset's tests, where
+# every keygraph run is 5-20x slower): the cases that only need a run of
+# some length run shorter ones, with the same checks (and snapshot, below,
+# reads no file over 64 MiB): the concurrent builds of row 7 scale their
+# models to 256 px (--max-side 256), the whole JPEGs of row 11 load 15 to a
+# detect instead of one each, the detect of row 12 that outlives the change
+# to its index has 10 scenes instead of 40. Every hostile input still runs.
 set -u
+SANITIZED=${KG_SANITIZED:-0}
 
 KG=${1:?usage: cli_hostile.sh KEYGRAPH DATA_DIR desktop|device [GOLDEN_INDEX]}
 DATA=${2:?usage}
@@ -50,10 +59,20 @@ skip() {
 }
 
 # Snapshot of a directory: names, types, sizes and checksums, so a changed
-# or replaced file shows up as well as a new one.
+# or replaced file shows up as well as a new one. Sanitized: a file over 64
+# MiB (the sparse 5 GB inputs of issue 40's row 2, whose first read fills
+# the page cache with zeros: 13-17 s of system CPU each) by its size,
+# blocks, inode and modification time in nanoseconds instead of a checksum
+# (a write changes the time).
 snapshot() {
-  (cd "$1" && find . -mindepth 1 -printf '%p %y %s\n' | sort &&
-    find . -type f -exec cksum {} + 2>/dev/null | sort)
+  if [ "$SANITIZED" = 1 ]; then
+    (cd "$1" && find . -mindepth 1 -printf '%p %y %s\n' | sort &&
+      find . -type f -size -65537k -exec cksum {} + 2>/dev/null | sort &&
+      find . -type f -size +65536k -printf '%p %s %b %i %T@\n' | sort)
+  else
+    (cd "$1" && find . -mindepth 1 -printf '%p %y %s\n' | sort &&
+      find . -type f -exec cksum {} + 2>/dev/null | sort)
+  fi
 }
 
 CASE=
@@ -327,9 +346,13 @@ os.execv(sys.argv[1], sys.argv[1:])' "$KG" build "${MODELS[@]}" -o "$CASE/w.kgi"
   # Two builds to one -o at once: each writes its own temporary; both
   # succeed and the index is one of the two, whole.
   next_case
-  (cd "$CASE" && "$KG" build --name alpha "${MODELS[@]:0:3}" -o p.kgi) >"$LOG/a.out" 2>"$LOG/a.err" &
+  SIZE=()
+  [ "$SANITIZED" = 1 ] && SIZE=(--max-side 256)
+  (cd "$CASE" && "$KG" build ${SIZE[@]+"${SIZE[@]}"} --name alpha "${MODELS[@]:0:3}" -o p.kgi) \
+    >"$LOG/a.out" 2>"$LOG/a.err" &
   a=$!
-  (cd "$CASE" && "$KG" build --name bravo "${MODELS[@]:0:3}" -o p.kgi) >"$LOG/b.out" 2>"$LOG/b.err" &
+  (cd "$CASE" && "$KG" build ${SIZE[@]+"${SIZE[@]}"} --name bravo "${MODELS[@]:0:3}" -o p.kgi) \
+    >"$LOG/b.out" 2>"$LOG/b.err" &
   b=$!
   PIDS="$PIDS $a $b"
   wait "$a"
@@ -410,10 +433,24 @@ if [ "$MODE" = desktop ]; then
   done
   # The whole files still load (no false alarm on thumbnails or padding).
   next_case
-  for jpeg in "$DATA"/*.jpg; do
-    run_kg "$KG" detect --index "$INDEX" "$jpeg"
-    [ "$rc" -eq 0 ] || bad "row 11: whole JPEG $jpeg refused: $(cat "$LOG/stderr")"
-  done
+  if [ "$SANITIZED" = 1 ]; then
+    # One detect for 15 at a time (about 4 s of CPU, well inside run_kg's
+    # 60 s): one line each on stdout, exit 0 and nothing on stderr (a
+    # refused scene is a "keygraph: " line and exit 1).
+    jpegs=("$DATA"/*.jpg)
+    for ((i = 0; i < ${#jpegs[@]}; i += 15)); do
+      some=("${jpegs[@]:i:15}")
+      run_kg "$KG" detect --index "$INDEX" "${some[@]}"
+      [ "$rc" -eq 0 ] && [ ! -s "$LOG/stderr" ] &&
+        [ "$(grep -c 'detection(s)' "$LOG/stdout")" -eq "${#some[@]}" ] ||
+        bad "row 11: whole JPEGs refused: exit $rc: $(cat "$LOG/stderr")"
+    done
+  else
+    for jpeg in "$DATA"/*.jpg; do
+      run_kg "$KG" detect --index "$INDEX" "$jpeg"
+      [ "$rc" -eq 0 ] || bad "row 11: whole JPEG $jpeg refused: $(cat "$LOG/stderr")"
+    done
+  fi
 fi
 
 # --- row 12: the index changed in place while in use ------------------------------
@@ -428,8 +465,10 @@ else
   cp "$INDEX" "$IN/aaaa.kgi"
   cp "$INDEX" "$IN/bbbb.kgi"
 fi
+NSCENES=40
+[ "$SANITIZED" = 1 ] && NSCENES=10
 SCENES=()
-for i in $(seq 1 40); do SCENES+=("$SCENE"); done
+for i in $(seq 1 $NSCENES); do SCENES+=("$SCENE"); done
 for change in truncate cp; do
   cp "$IN/aaaa.kgi" "$CASE/ip.kgi"
   : >"$LOG/ip.out"
@@ -449,8 +488,8 @@ for change in truncate cp; do
   wait "$pid"
   rc=$?
   n=$(grep -c 'detection(s)' "$LOG/ip.out")
-  [ "$rc" -eq 0 ] && [ "$n" -eq 40 ] ||
-    bad "row 12: detect while the index is changed in place ($change): exit $rc, $n of 40 scenes"
+  [ "$rc" -eq 0 ] && [ "$n" -eq "$NSCENES" ] ||
+    bad "row 12: detect while the index is changed in place ($change): exit $rc, $n of $NSCENES scenes"
   if [ "$MODE" = desktop ] && grep -q bbbb "$LOG/ip.out"; then
     bad "row 12: detect switched to the other index's model names after $change"
   fi
